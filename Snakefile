@@ -1,0 +1,16 @@
+"""Free-decay pendulum identification: raw videos → frames → tracks → angles."""
+
+
+configfile: "config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/frames.smk"
+include: "workflow/rules/tracks.smk"
+include: "workflow/rules/angles.smk"
+
+
+rule all:
+    default_target: True
+    input:
+        all_targets(),

@@ -1,0 +1,37 @@
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "workflow"))
+SHARED = ROOT.parent / "shared"
+DEMO_SPEC = ROOT / "data" / "synthetic" / "demo.yaml"
+DEMO_RAW = ROOT / "data" / "raw"
+DEMO_TRUTH = ROOT / "data" / "truth"
+
+
+def demo_trials():
+    from pendulum.synthetic import load_specs
+
+    return [s.name for s in load_specs(DEMO_SPEC)]
+
+
+@pytest.fixture(scope="session")
+def hard_videos(tmp_path_factory):
+    """Short synthetic videos the demo lacks: a dark marker on a bright scene, 5 % occluded frames."""
+    from dataclasses import replace
+
+    from pendulum.synthetic import Occlusions, generate_trial, load_specs
+
+    out = tmp_path_factory.mktemp("hard_videos")
+    base = {s.name: s for s in load_specs(DEMO_SPEC)}["demo_p20"]
+    dark = replace(
+        base, name="dark_marker", seed=101, duration_s=10.0, camera=replace(base.camera, polarity="dark", roll_deg=0.7)
+    )
+    occluded = replace(
+        base, name="occluded", seed=102, duration_s=10.0, occlusions=Occlusions(fraction_of_frames=0.05, event_frames=5)
+    )
+    for spec in (dark, occluded):
+        generate_trial(spec, out, out, progress=None)
+    return out

@@ -1,0 +1,162 @@
+"""The Snakemake workflow end to end on a copy of the repository (demo videos)."""
+
+import hashlib
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from conftest import DEMO_RAW, ROOT, demo_trials
+from pendulum.trials import ConfigError, validate_config
+
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+
+
+def run(args, cwd, check=True):
+    proc = subprocess.run(SNAKEMAKE + args, cwd=cwd, capture_output=True, text=True)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"snakemake {args} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
+    return proc
+
+
+def planned_jobs(dry_run_output: str) -> set[tuple[str, str]]:
+    """(rule, trial-or-rig) pairs from a dry run."""
+    jobs, rule = set(), None
+    for line in dry_run_output.splitlines():
+        m = re.match(r"^\s*(?:local)?rule (\w+):", line)
+        if m:
+            rule = m.group(1)
+        m = re.match(r"^\s*wildcards: (?:trial|rig)=(\S+)", line)
+        if m and rule:
+            jobs.add((rule, m.group(1)))
+    return jobs
+
+
+def digest(folder: Path, patterns=("*.csv", "*.json")) -> dict:
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for pat in patterns
+        for p in sorted(folder.rglob(pat))
+    }
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory):
+    work = tmp_path_factory.mktemp("project")
+    for item in ("Snakefile", "config.yaml", "workflow", "profiles"):
+        src = ROOT / item
+        (shutil.copytree if src.is_dir() else shutil.copy)(src, work / item)
+    shutil.copytree(DEMO_RAW, work / "data" / "raw")
+    run(["-c2"], work)
+    return work
+
+
+def test_builds_tracks_and_angles_for_every_demo_video(project):
+    for trial in demo_trials():
+        for path in (
+            f"results/tracks/{trial}.csv",
+            f"results/angles/{trial}.csv",
+            f"results/frames/{trial}/timeline.csv",
+            f"results/frames/{trial}/contact_sheet.png",
+        ):
+            assert (project / path).stat().st_size > 0, path
+        header = (project / f"results/angles/{trial}.csv").read_text().splitlines()[0].split(",")
+        assert {"time_s", "theta_rad", "theta_deg", "s_m", "quality"} <= set(header)
+    assert "tracked frame" in (project / f"logs/tracks/{demo_trials()[0]}.log").read_text()
+
+
+def test_second_run_has_nothing_to_do(project):
+    assert "Nothing to be done" in run(["-n"], project).stdout
+
+
+def test_results_are_byte_identical_on_rerun(project):
+    before = digest(project / "results")
+    run(["-c2", "--forceall"], project)
+    assert digest(project / "results") == before
+
+
+def test_adding_a_video_builds_only_that_trial(project):
+    shutil.copy(project / "data/raw/demo_m05.mp4", project / "data/raw/extra_m05.mp4")
+    try:
+        jobs = planned_jobs(run(["-n"], project).stdout)
+        heavy = {(r, t) for r, t in jobs if r in ("frames", "tracks")}
+        assert heavy == {("frames", "extra_m05"), ("tracks", "extra_m05")}
+        # the estimated pivot is pooled over the rig, so the rig's cheap angle records follow it
+        assert ("angles", "extra_m05") in jobs and ("rig_geometry", "paper_rig") in jobs
+    finally:
+        (project / "data/raw/extra_m05.mp4").unlink()
+
+
+def test_broken_video_is_named_and_costs_nothing_else(tmp_path, project):
+    work = tmp_path / "p"
+    shutil.copytree(project, work, ignore=shutil.ignore_patterns("results", ".snakemake", "logs"))
+    (work / "data/raw/broken.mp4").write_bytes(b"\x00\x00\x00\x18ftypmp42 this is not a video" * 50)
+    before = digest(work / "data/raw", ("*",))
+    proc = run(["-c2"], work, check=False)
+    assert proc.returncode != 0
+    assert "broken.mp4" in proc.stdout + proc.stderr + (work / "logs/frames/broken.log").read_text()
+    for trial in demo_trials():
+        assert (work / f"results/angles/{trial}.csv").is_file()
+    assert not (work / "results/angles/broken.csv").exists()
+    assert not list((work / "results").rglob("*.tmp*"))
+    assert digest(work / "data/raw", ("*",)) == before
+
+
+def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
+    from conftest import SHARED
+
+    work = tmp_path / "p"
+    shutil.copytree(project, work, ignore=shutil.ignore_patterns(".snakemake", "logs"))
+    shutil.copy(SHARED / "data/real-air-pendulum/wooden_bob.csv", work / "data/raw/wooden_bob.csv")
+    (work / "data/raw/wooden_bob.yaml").write_text("length_m: 0.334\nfluid_density_kg_m3: 1.2\n")
+    jobs = planned_jobs(run(["-n"], work).stdout)
+    assert jobs == {("angles", "wooden_bob")}
+    run(["-c2"], work)
+    assert (work / "results/angles/wooden_bob.csv").read_text().count("\n") == 918
+
+
+@pytest.mark.parametrize(
+    "change,message",
+    [
+        (lambda c: c.update(trackng=c.pop("tracking")), "trackng"),
+        (lambda c: c["rigs"]["paper_rig"].update(mass_kg=-3.53), "mass_kg"),
+        (lambda c: c["tracking"].update(polarity="neon"), "polarity"),
+    ],
+)
+def test_config_errors_name_the_key(tmp_path, project, change, message):
+    config = yaml.safe_load((ROOT / "config.yaml").read_text())
+    change(config)
+    with pytest.raises(ConfigError, match=message):
+        validate_config(config)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(config))
+    proc = run(["-n", "--configfile", str(bad)], project, check=False)
+    assert proc.returncode != 0 and message in proc.stdout + proc.stderr
+
+
+def test_sidecar_errors_name_the_file(tmp_path, project):
+    work = tmp_path / "p"
+    shutil.copytree(project, work, ignore=shutil.ignore_patterns("results", ".snakemake", "logs"))
+    (work / "data/raw/demo_p05.yaml").write_text("marker_radius: 9\n")
+    proc = run(["-n"], work, check=False)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode != 0 and "demo_p05.yaml" in out and "marker_radius" in out
+
+
+def test_style_and_lint():
+    for cmd in (
+        [sys.executable, "-m", "snakefmt", "--check", "Snakefile", "workflow/rules"],
+        [sys.executable, "-m", "ruff", "check", "workflow", "tests"],
+        [sys.executable, "-m", "ruff", "format", "--check", "workflow", "tests"],
+    ):
+        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+        assert proc.returncode == 0, f"{cmd}:\n{proc.stdout}\n{proc.stderr}"
+    # The one lint kept: "Specify a conda environment or container for each rule". The
+    # environment is the single hashed pip lock (environment-lock.txt); target machines have no conda.
+    lint = run(["--lint"], ROOT, check=False)
+    found = {line.strip() for line in (lint.stdout + lint.stderr).splitlines() if line.strip().startswith("* ")}
+    assert found <= {"* Specify a conda environment or container for each rule.:"}, found

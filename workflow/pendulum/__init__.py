@@ -1,0 +1,1 @@
+"""Free-decay pendulum identification: physics, synthetic experiment, video to angle."""

@@ -1,0 +1,316 @@
+"""Angles stage: marker track → θ(t) about the pivot, release detection, trimming.
+
+θ = atan2(x − x_p, y − y_p) − φ, with image y pointing down, the pivot at
+(x_p, y_p) and φ the image angle of the true vertical (camera roll); θ > 0
+swings to +x. The arc displacement is s = L θ. The pivot, when not given, is
+the centre of a circle fitted to the marker path (pooled over a rig's trials);
+the vertical, when not given, is the centre of the oscillation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+
+
+@dataclass
+class CircleFit:
+    pivot_x_px: float
+    pivot_y_px: float
+    radius_px: float
+    rms_px: float
+    n_points: int
+    arc_span_deg: float
+
+
+def fit_circle(x, y) -> CircleFit:
+    """Geometric least-squares circle (algebraic Kåsa fit as the start), minimising Σ (|p − c| − R)²."""
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    good = np.isfinite(x) & np.isfinite(y)
+    x, y = x[good], y[good]
+    if x.size < 10:
+        raise ValueError(f"a circle fit needs at least 10 tracked points, got {x.size}")
+    a = np.column_stack([x, y, np.ones_like(x)])
+    b = x**2 + y**2
+    (c0, c1, c2), *_ = np.linalg.lstsq(a, b, rcond=None)
+    cx, cy = c0 / 2, c1 / 2
+    r0 = math.sqrt(max(c2 + cx**2 + cy**2, 1e-9))
+
+    def residual(p):
+        return np.hypot(x - p[0], y - p[1]) - p[2]
+
+    sol = least_squares(residual, [cx, cy, r0], x_scale="jac")
+    cx, cy, r = sol.x
+    ang = np.degrees(np.arctan2(x - cx, y - cy))
+    return CircleFit(
+        float(cx), float(cy), float(r), float(np.sqrt(np.mean(sol.fun**2))), int(x.size), float(np.ptp(ang))
+    )
+
+
+def image_angle_rad(x, y, pivot_px) -> np.ndarray:
+    """atan2(x − x_p, y − y_p): the marker's angle from the image's downward vertical."""
+    return np.arctan2(np.asarray(x, float) - pivot_px[0], np.asarray(y, float) - pivot_px[1])
+
+
+def turning_points(theta: np.ndarray, min_separation: int = 3) -> np.ndarray:
+    """Indices of the local extrema of a sampled oscillation (sign changes of the difference)."""
+    d = np.diff(theta)
+    sign = np.sign(d)
+    idx = np.flatnonzero(sign[1:] * sign[:-1] < 0) + 1
+    if idx.size == 0:
+        return idx
+    keep = [idx[0]]
+    for i in idx[1:]:
+        if i - keep[-1] >= min_separation:
+            keep.append(i)
+    return np.array(keep)
+
+
+def oscillation_centre_rad(theta: np.ndarray, noise_rad: float) -> float | None:
+    """Centre c of a decaying oscillation from extremum triplets (p₀, q, p₁), median over triplets.
+
+    Locally geometric decay, |q − c|² = |p₀ − c| |p₁ − c|, gives
+    c = (p₀ p₁ − q²) / (p₀ + p₁ − 2 q). Only swings well above the noise and
+    below 15° count. None if fewer than two triplets.
+    """
+    theta = np.asarray(theta, float)
+    finite = np.isfinite(theta)
+    if finite.sum() < 20:
+        return None
+    smooth = pd.Series(theta).interpolate(limit_direction="both").rolling(3, center=True, min_periods=1).mean()
+    values = smooth.to_numpy()
+    ext = turning_points(values)
+    ext = ext[(ext > 2) & (ext < values.size - 3)]  # an extremum needs samples on both sides
+    centres = []
+    for k in range(len(ext) - 2):
+        p0, q, p1 = values[ext[k : k + 3]]
+        swing = abs(q - 0.5 * (p0 + p1))
+        if 20 * noise_rad < swing < math.radians(15) and np.sign(p0 - q) == np.sign(p1 - q):
+            centres.append((p0 * p1 - q * q) / (p0 + p1 - 2 * q))
+    if len(centres) < 2:
+        return None
+    return float(np.median(centres))
+
+
+def noise_level(theta: np.ndarray) -> float:
+    """Sample noise σ from the MAD of third differences (insensitive to smooth motion)."""
+    d3 = np.diff(np.asarray(theta, float)[np.isfinite(theta)], 3)
+    if d3.size < 5:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d3 - np.median(d3))) / math.sqrt(20))
+
+
+@dataclass
+class Release:
+    detected: bool
+    time_s: float  # release instant in the record's own time
+    hold_angle_rad: float | None
+    first_sample: int  # first sample after the release
+
+
+def detect_release(
+    time_s: np.ndarray, theta: np.ndarray, threshold_sigmas: float = 8.0, min_threshold_rad: float = math.radians(0.05)
+) -> Release:
+    """Release instant from a held start: the first departure from the hold angle, back-extrapolated.
+
+    While held, θ = θ_h; after release θ_h − θ ≈ ½ a (t − t_r)², so √|θ − θ_h| is
+    linear in t and its zero is t_r. A record that starts already moving has no hold:
+    the release is its first sample.
+    """
+    t = np.asarray(time_s, float)
+    th = np.asarray(theta, float)
+    valid = np.flatnonzero(np.isfinite(th))
+    if valid.size < 10:
+        raise ValueError("fewer than 10 valid angle samples")
+    sigma = noise_level(th)
+    hold = float(np.median(th[valid[:5]]))
+    limit = max(threshold_sigmas * sigma, min_threshold_rad)
+    departed = valid[np.abs(th[valid] - hold) > limit]
+    if departed.size == 0:
+        raise ValueError("the pendulum never moves: no release found")
+    first_departure = int(departed[0])
+    if np.searchsorted(valid, first_departure) < 5:
+        return Release(False, float(t[valid[0]]), None, int(valid[0]))
+    held = valid[valid < first_departure]
+    hold = float(np.median(th[held[: max(5, held.size - 5)]]))  # the last held frames may already move
+    window = valid[(valid >= first_departure - 5) & (valid < first_departure + 6)]
+    dev = np.abs(th[window] - hold)
+    keep = dev > 3 * max(sigma, 1e-6)
+    t_release = float(t[held[-1]])
+    if keep.sum() >= 3:
+        slope, intercept = np.polyfit(t[window][keep], np.sqrt(dev[keep]), 1)
+        if slope > 0:
+            candidate = -intercept / slope
+            if t[max(held[0], first_departure - 10)] <= candidate <= t[first_departure]:
+                t_release = float(candidate)
+    first = int(np.searchsorted(t, t_release, side="right"))
+    return Release(True, t_release, hold, first)
+
+
+def rest_start_index(theta: np.ndarray, sigmas: float = 5.0) -> int | None:
+    """First sample of a final period at rest (|θ − θ_final| within noise to the end), or None."""
+    th = np.asarray(theta, float)
+    sigma = max(noise_level(th), 1e-6)
+    finite = np.isfinite(th)
+    tail = th[finite][-15:]
+    if tail.size < 15:
+        return None
+    final = float(np.median(tail))
+    moving = np.flatnonzero(finite & (np.abs(th - final) > sigmas * sigma))
+    if moving.size == 0:
+        return 0
+    start = int(moving[-1]) + 1
+    return start if start < th.size - 1 else None
+
+
+@dataclass
+class AngleRecordInfo:
+    source: str
+    pivot_px: list | None
+    vertical_deg: float
+    length_m: float
+    release_detected: bool
+    release_time_s: float
+    hold_angle_deg: float | None
+    first_frame: int | None
+    n_samples: int
+    n_flagged: int
+    rest_from_s: float | None
+    noise_deg: float
+
+    def to_dict(self):
+        return asdict(self)
+
+
+def angle_record(
+    time_s,
+    theta_image_rad,
+    quality,
+    flag,
+    *,
+    vertical_deg: float,
+    length_m: float,
+    source: str,
+    pivot_px=None,
+    frame=None,
+    keep_rest_s: float = 2.0,
+) -> tuple[pd.DataFrame, AngleRecordInfo]:
+    """θ relative to the vertical, trimmed to the free decay (release → shortly after coming to rest).
+
+    Output columns: ``time_s`` (since release), ``video_time_s``, ``frame``,
+    ``theta_rad``, ``theta_deg``, ``s_m`` (= L θ), ``quality``, ``flag``.
+    Flagged samples keep θ = NaN (never interpolated).
+    """
+    t = np.asarray(time_s, float)
+    flag = np.asarray(flag, dtype=object)
+    theta = np.asarray(theta_image_rad, float) - math.radians(vertical_deg)
+    usable = flag == "ok"
+    theta = np.where(usable, theta, np.nan)
+    release = detect_release(t, theta)
+    end = t.size
+    rest = rest_start_index(theta)
+    rest_from = None
+    if rest is not None and rest > release.first_sample:
+        rest_from = float(t[rest])
+        end = int(np.searchsorted(t, t[rest] + keep_rest_s, side="right"))
+    sl = slice(release.first_sample, end)
+    table = pd.DataFrame(
+        {
+            "time_s": t[sl] - release.time_s,
+            "video_time_s": t[sl],
+            "frame": (np.arange(t.size) if frame is None else np.asarray(frame))[sl],
+            "theta_rad": theta[sl],
+            "theta_deg": np.degrees(theta[sl]),
+            "s_m": length_m * theta[sl],
+            "quality": np.asarray(quality, float)[sl],
+            "flag": flag[sl],
+        }
+    )
+    info = AngleRecordInfo(
+        source=source,
+        pivot_px=None if pivot_px is None else [float(pivot_px[0]), float(pivot_px[1])],
+        vertical_deg=float(vertical_deg),
+        length_m=float(length_m),
+        release_detected=release.detected,
+        release_time_s=release.time_s,
+        hold_angle_deg=None if release.hold_angle_rad is None else math.degrees(release.hold_angle_rad),
+        first_frame=int(table.frame.iloc[0]) if len(table) else None,
+        n_samples=int(len(table)),
+        n_flagged=int((table.flag != "ok").sum()),
+        rest_from_s=rest_from,
+        noise_deg=math.degrees(noise_level(theta)),
+    )
+    return table, info
+
+
+def angles_from_track(track: pd.DataFrame, *, pivot_px, vertical_deg: float, length_m: float, source: str):
+    """Angle record of a marker track (see :func:`angle_record`)."""
+    theta_img = image_angle_rad(track.x_px, track.y_px, pivot_px)
+    return angle_record(
+        track.time_s,
+        theta_img,
+        track.quality,
+        track.flag,
+        vertical_deg=vertical_deg,
+        length_m=length_m,
+        source=source,
+        pivot_px=pivot_px,
+        frame=track.frame,
+    )
+
+
+def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_m: float, source: str):
+    """Angle record of an angle export (columns ``t_s``, ``theta_deg``, as Tracker writes)."""
+    missing = {"t_s", "theta_deg"} - set(table.columns)
+    if missing:
+        raise ValueError(f"{source}: angle CSV lacks column(s) {sorted(missing)}; expected t_s and theta_deg")
+    table = table.sort_values("t_s", kind="stable").dropna(subset=["t_s"])
+    theta = np.radians(table.theta_deg.to_numpy(float))
+    flag = np.where(np.isfinite(theta), "ok", "lost")
+    return angle_record(
+        table.t_s.to_numpy(float),
+        theta,
+        np.isfinite(theta).astype(float),
+        flag,
+        vertical_deg=vertical_deg,
+        length_m=length_m,
+        source=source,
+    )
+
+
+def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertical_deg=None) -> dict:
+    """Pivot (circle through the pooled marker paths) and vertical (pooled oscillation centre).
+
+    Values given are kept; only the missing ones are estimated.
+    """
+    result: dict = {"trials": sorted(tracks)}
+    if pivot_px is None:
+        xs = np.concatenate([t.x_px[t.flag == "ok"].to_numpy() for t in tracks.values()])
+        ys = np.concatenate([t.y_px[t.flag == "ok"].to_numpy() for t in tracks.values()])
+        circle = fit_circle(xs, ys)
+        pivot_px = [circle.pivot_x_px, circle.pivot_y_px]
+        result["pivot_source"] = "estimated: circle fitted to the pooled marker paths"
+        result["circle"] = asdict(circle)
+    else:
+        result["pivot_source"] = "given"
+    result["pivot_px"] = [float(pivot_px[0]), float(pivot_px[1])]
+    if vertical_deg is None:
+        centres = []
+        for track in tracks.values():
+            th = image_angle_rad(track.x_px.where(track.flag == "ok"), track.y_px.where(track.flag == "ok"), pivot_px)
+            c = oscillation_centre_rad(th, noise_level(th))
+            if c is not None:
+                centres.append(c)
+        if not centres:
+            raise ValueError("cannot estimate the vertical: no trial has enough clean swings; give vertical_deg")
+        vertical_deg = math.degrees(float(np.median(centres)))
+        result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
+    else:
+        result["vertical_source"] = "given"
+    result["vertical_deg"] = float(vertical_deg)
+    return result

@@ -1,0 +1,392 @@
+"""Synthetic free-decay experiment: known truth, rendered to a realistic video.
+
+The truth trajectory comes from :func:`pendulum.physics.simulate` (the same
+equations the fitter uses) with any set of effects, including ones a fitted
+model lacks. The renderer draws a monochrome camera view: a textured,
+cluttered tank background, the pivot, the rod, the vehicle and a circular
+marker dot; the exposure blur is the average of sub-exposure renders; sensor
+noise is added before lossy H.264 compression.
+
+Image geometry: x to the right, y down. With the pivot at (x_p, y_p), the
+marker at arm radius R and the camera rolled by φ, the marker is at
+``x = x_p + R sin(θ + φ)``, ``y = y_p + R cos(θ + φ)`` (θ > 0 swings to +x).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pandas as pd
+import yaml
+
+from pendulum.physics import PendulumModel, Rig, simulate
+
+
+@dataclass
+class Camera:
+    """How the synthetic camera sees the rig."""
+
+    width_px: int = 1280
+    height_px: int = 720
+    fps: float = 30.0
+    pivot_px: tuple[float, float] = (640.3, 70.6)
+    marker_arm_px: float = 560.0  # pivot to marker centre
+    marker_radius_px: float = 10.0
+    polarity: str = "bright"  # bright marker on darker scene, or "dark" on bright
+    roll_deg: float = 0.0  # camera roll: image vertical minus true vertical
+    exposure_fraction: float = 0.5  # shutter open time / frame interval
+    exposure_subsamples: int = 8
+    noise_sigma: float = 3.0  # grey levels, before compression
+    crf: int = 22  # x264 constant rate factor (lossy compression)
+    preset: str = "veryfast"
+
+
+@dataclass
+class Occlusions:
+    """Opaque objects (a hand, a bubble cloud) passing in front of the marker."""
+
+    fraction_of_frames: float = 0.0
+    event_frames: int = 6
+
+
+@dataclass
+class TrialSpec:
+    name: str
+    release_deg: float
+    rig: dict
+    truth: dict  # physical coefficients, e.g. added_mass_kg, drag_area_m2, ...
+    effects: list[str]  # terms of the true physics
+    seed: int = 0
+    hold_s: float = 1.0  # pendulum held at the release angle before release
+    duration_s: float = 25.0
+    camera: Camera = field(default_factory=Camera)
+    occlusions: Occlusions = field(default_factory=Occlusions)
+
+    @classmethod
+    def from_mapping(cls, values: dict) -> TrialSpec:
+        values = dict(values)
+        camera = dict(values.get("camera", {}))
+        if "pivot_px" in camera:
+            camera["pivot_px"] = tuple(camera["pivot_px"])
+        values["camera"] = Camera(**camera)
+        values["occlusions"] = Occlusions(**values.get("occlusions", {}))
+        return cls(**values)
+
+
+def frame_times_s(spec: TrialSpec) -> np.ndarray:
+    """Presentation time of each frame: t_i = i / fps (the exposure is centred on it)."""
+    n_frames = int(round(spec.duration_s * spec.camera.fps))
+    return np.arange(n_frames) / spec.camera.fps
+
+
+def release_time_s(spec: TrialSpec) -> float:
+    """Release instant; deliberately not on a frame boundary."""
+    rng = np.random.default_rng(spec.seed + 7919)
+    return spec.hold_s + float(rng.uniform(0.1, 0.9)) / spec.camera.fps
+
+
+def true_angle_rad(spec: TrialSpec, times_s: np.ndarray) -> np.ndarray:
+    """θ(t): held at the release angle, then the free decay of the true physics."""
+    model = PendulumModel(Rig.from_mapping(spec.rig), tuple(spec.effects))
+    t_release = release_time_s(spec)
+    theta = np.full(times_s.shape, math.radians(spec.release_deg))
+    order = np.argsort(times_s)
+    sorted_t = times_s[order]
+    after = sorted_t > t_release
+    if after.any():
+        sample_t, index = np.unique(sorted_t[after], return_inverse=True)
+        grid = np.concatenate([[t_release], sample_t])
+        th, _ = simulate(model, spec.truth, math.radians(spec.release_deg), 0.0, grid, substeps=4)
+        theta_sorted = theta[order]
+        theta_sorted[after] = th[1:][index]
+        theta[order] = theta_sorted
+    return theta
+
+
+def marker_position_px(camera: Camera, theta_rad) -> tuple[np.ndarray, np.ndarray]:
+    phi = np.asarray(theta_rad) + math.radians(camera.roll_deg)
+    x = camera.pivot_px[0] + camera.marker_arm_px * np.sin(phi)
+    y = camera.pivot_px[1] + camera.marker_arm_px * np.cos(phi)
+    return x, y
+
+
+def _smooth_noise(rng, shape, scale_px):
+    small = rng.standard_normal((max(2, shape[0] // scale_px + 2), max(2, shape[1] // scale_px + 2)))
+    return cv2.resize(small, (shape[1], shape[0]), interpolation=cv2.INTER_CUBIC)
+
+
+def render_background(camera: Camera, seed: int) -> np.ndarray:
+    """Static tank scene: lighting gradient, multi-scale texture and clutter (float32 grey)."""
+    rng = np.random.default_rng(seed)
+    h, w = camera.height_px, camera.width_px
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    bright = camera.polarity == "dark"
+    base, span = (175.0, 45.0) if bright else (75.0, 40.0)
+    img = base + 0.25 * span * ((xx / w) - 0.5) + 0.15 * span * (yy / h - 0.5)
+    for scale, amp in ((160, 0.35), (40, 0.25), (8, 0.12)):
+        img += amp * span * _smooth_noise(rng, (h, w), scale).astype(np.float32)
+    # Clutter: tank frame tubes, tiles, labels, cables.
+    for _ in range(int(rng.integers(25, 40))):
+        kind = rng.integers(0, 3)
+        shade = float(base + span * rng.uniform(-0.9, 0.9))
+        p1 = (int(rng.integers(0, w)), int(rng.integers(0, h)))
+        if kind == 0:
+            p2 = (p1[0] + int(rng.integers(20, 220)), p1[1] + int(rng.integers(10, 120)))
+            cv2.rectangle(img, p1, p2, shade, -1, cv2.LINE_AA)
+        elif kind == 1:
+            p2 = (int(rng.integers(0, w)), int(rng.integers(0, h)))
+            cv2.line(img, p1, p2, shade, int(rng.integers(2, 9)), cv2.LINE_AA)
+        else:
+            axes = (int(rng.integers(15, 90)), int(rng.integers(8, 50)))
+            cv2.ellipse(img, p1, axes, float(rng.uniform(0, 180)), 0, 360, shade, -1, cv2.LINE_AA)
+    lo, hi = (110.0, 245.0) if bright else (10.0, 150.0)
+    return np.clip(img, lo, hi).astype(np.float32)
+
+
+def _shades(camera: Camera) -> dict:
+    if camera.polarity == "dark":
+        return {"rod": 95.0, "body": 205.0, "marker": 25.0, "hub": 70.0}
+    if camera.polarity == "bright":
+        return {"rod": 40.0, "body": 55.0, "marker": 235.0, "hub": 30.0}
+    raise ValueError(f"marker polarity must be 'bright' or 'dark', got {camera.polarity!r}")
+
+
+def _draw_disk(canvas, cx, cy, radius, value):
+    """Exact-coverage anti-aliased disk (sub-pixel centre) blended into ``canvas``."""
+    x0, x1 = int(math.floor(cx - radius - 2)), int(math.ceil(cx + radius + 2))
+    y0, y1 = int(math.floor(cy - radius - 2)), int(math.ceil(cy + radius + 2))
+    x0c, y0c = max(x0, 0), max(y0, 0)
+    x1c, y1c = min(x1, canvas.shape[1]), min(y1, canvas.shape[0])
+    if x0c >= x1c or y0c >= y1c:
+        return
+    # 4×4 supersampling of the pixel footprint.
+    offs = (np.arange(4) + 0.5) / 4 - 0.5
+    ys = (np.arange(y0c, y1c)[:, None] + offs[None, :]).reshape(-1)
+    xs = (np.arange(x0c, x1c)[:, None] + offs[None, :]).reshape(-1)
+    inside = ((xs[None, :] - cx) ** 2 + (ys[:, None] - cy) ** 2) <= radius**2
+    cover = inside.reshape(y1c - y0c, 4, x1c - x0c, 4).mean(axis=(1, 3)).astype(np.float32)
+    patch = canvas[y0c:y1c, x0c:x1c]
+    patch += cover * (value - patch)
+
+
+def _draw_pendulum(canvas, camera: Camera, theta_rad: float, shades: dict):
+    phi = theta_rad + math.radians(camera.roll_deg)
+    s, c = math.sin(phi), math.cos(phi)
+    px, py = camera.pivot_px
+    arm = camera.marker_arm_px
+    shift = 4
+    scale = 1 << shift
+
+    def fixed(x, y):
+        return (int(round(x * scale)), int(round(y * scale)))
+
+    body_half_w, body_half_h = 0.17 * arm, 0.09 * arm
+    body_centre = (px + arm * s, py + arm * c)
+    rod_end = (px + (arm - body_half_h) * s, py + (arm - body_half_h) * c)
+    cv2.line(canvas, fixed(px, py), fixed(*rod_end), shades["rod"], 7, cv2.LINE_AA, shift)
+    corners = []
+    for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        lx, ly = u * body_half_w, v * body_half_h  # body frame: x across, y along the rod
+        corners.append(fixed(body_centre[0] + lx * c + ly * s, body_centre[1] - lx * s + ly * c))
+    cv2.fillConvexPoly(canvas, np.array(corners, np.int32), shades["body"], cv2.LINE_AA, shift)
+    cv2.circle(canvas, fixed(px, py), 14 * scale, shades["hub"], -1, cv2.LINE_AA, shift)
+    _draw_disk(canvas, body_centre[0], body_centre[1], camera.marker_radius_px, shades["marker"])
+
+
+def occlusion_schedule(spec: TrialSpec, n_frames: int, first_frame: int) -> list[tuple[int, int]]:
+    """Non-overlapping (start, length) occlusion events covering the requested frame fraction."""
+    occ = spec.occlusions
+    if occ.fraction_of_frames <= 0:
+        return []
+    rng = np.random.default_rng(spec.seed + 104729)
+    n_events = max(1, int(round(occ.fraction_of_frames * n_frames / occ.event_frames)))
+    slots = np.arange(first_frame + 5, n_frames - occ.event_frames - 1, occ.event_frames * 3)
+    starts = np.sort(rng.choice(slots, size=min(n_events, len(slots)), replace=False))
+    return [(int(s0), occ.event_frames) for s0 in starts]
+
+
+@dataclass
+class RenderedTrial:
+    frames: list  # uint8 grey frames
+    truth: pd.DataFrame  # per-frame truth
+
+
+def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
+    """Render every frame of a trial and return it with its per-frame truth."""
+    cam = spec.camera
+    shades = _shades(cam)
+    times = frame_times_s(spec)
+    n = times.size
+    exposure_s = cam.exposure_fraction / cam.fps
+    k = cam.exposure_subsamples
+    sub_offsets = ((np.arange(k) + 0.5) / k - 0.5) * exposure_s
+    sub_times = times[:, None] + sub_offsets[None, :]
+    theta_sub = true_angle_rad(spec, sub_times.reshape(-1)).reshape(n, k)
+    theta_mid = true_angle_rad(spec, times)
+    mx, my = marker_position_px(cam, theta_sub)
+    truth = pd.DataFrame(
+        {
+            "frame": np.arange(n),
+            "time_s": times,
+            "theta_rad": theta_mid,
+            "marker_x_px": mx.mean(axis=1),  # centroid of the exposure-blurred disk
+            "marker_y_px": my.mean(axis=1),
+            "occluded_fraction": 0.0,
+        }
+    )
+    background = render_background(cam, spec.seed)
+    rng = np.random.default_rng(spec.seed + 15485863)
+    noise_bank = [rng.standard_normal(background.shape).astype(np.float32) * cam.noise_sigma for _ in range(4)]
+    release_frame = int(np.searchsorted(times, release_time_s(spec)))
+    events = occlusion_schedule(spec, n, release_frame)
+    occluder_value = 0.5 * (shades["marker"] + shades["body"])
+    frames = []
+    accum = np.empty_like(background)
+    canvas = np.empty_like(background)
+    for i in range(n):
+        if i > 0 and np.array_equal(theta_sub[i], theta_sub[i - 1]):
+            acc = accum  # the held pendulum: identical exposure
+        else:
+            accum.fill(0.0)
+            for j in range(k):
+                np.copyto(canvas, background)
+                _draw_pendulum(canvas, cam, float(theta_sub[i, j]), shades)
+                accum += canvas
+            accum /= k
+            acc = accum
+        frame = acc.copy()
+        for start, length in events:
+            if start <= i < start + length:
+                # Occluder slides across the marker during the event.
+                u = (i - start + 0.5) / length
+                r_occ = 1.6 * cam.marker_radius_px
+                ox = truth.marker_x_px[i] + (4 * u - 2) * r_occ * 0.9
+                oy = truth.marker_y_px[i] + 0.3 * r_occ
+                cv2.circle(
+                    frame,
+                    (int(round(ox * 16)), int(round(oy * 16))),
+                    int(r_occ * 16),
+                    occluder_value,
+                    -1,
+                    cv2.LINE_AA,
+                    4,
+                )
+                d = math.hypot(ox - truth.marker_x_px[i], oy - truth.marker_y_px[i])
+                truth.loc[i, "occluded_fraction"] = _disk_overlap_fraction(cam.marker_radius_px, r_occ, d)
+        frame += noise_bank[i % len(noise_bank)] if i % 2 == 0 else np.flip(noise_bank[i % len(noise_bank)], axis=1)
+        frames.append(np.clip(np.rint(frame), 0, 255).astype(np.uint8))
+        if progress and (i % 100 == 0 or i == n - 1):
+            progress(f"{spec.name}: rendered frame {i + 1}/{n}")
+    return RenderedTrial(frames, truth)
+
+
+def _disk_overlap_fraction(r_marker: float, r_other: float, distance: float) -> float:
+    """Fraction of a disk of radius r_marker covered by a disk of radius r_other at ``distance``."""
+    r, big, d = r_marker, r_other, distance
+    if d >= r + big:
+        return 0.0
+    if d <= abs(big - r):
+        return 1.0 if big >= r else (big / r) ** 2
+    a1 = r * r * math.acos((d * d + r * r - big * big) / (2 * d * r))
+    a2 = big * big * math.acos((d * d + big * big - r * r) / (2 * d * big))
+    a3 = 0.5 * math.sqrt((-d + r + big) * (d + r - big) * (d - r + big) * (d + r + big))
+    return (a1 + a2 - a3) / (math.pi * r * r)
+
+
+def write_video(frames: list, path: Path, fps: float, crf: int, preset: str) -> None:
+    """Encode grey frames as H.264 (yuv420p) in MP4, deterministically (one encoder thread)."""
+    from fractions import Fraction
+
+    import av
+
+    path = Path(path)
+    tmp = path.with_name(path.name + ".part")
+    with av.open(str(tmp), mode="w", format="mp4") as container:
+        stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1001))
+        stream.width = frames[0].shape[1]
+        stream.height = frames[0].shape[0]
+        stream.pix_fmt = "yuv420p"
+        stream.thread_count = 1
+        keyint = str(max(1, int(round(2 * fps))))  # a key frame every 2 s, as cameras do
+        stream.options = {"crf": str(crf), "preset": preset, "threads": "1", "g": keyint}
+        for img in frames:
+            vf = av.VideoFrame.from_ndarray(img, format="gray")
+            for packet in stream.encode(vf):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    tmp.replace(path)
+
+
+def truth_record(spec: TrialSpec) -> dict:
+    """Everything known about a trial, for data/truth/<trial>.yaml."""
+    cam = asdict(spec.camera)
+    cam["pivot_px"] = list(spec.camera.pivot_px)
+    return {
+        "trial": spec.name,
+        "release_deg": spec.release_deg,
+        "release_time_s": round(release_time_s(spec), 9),
+        "rig": spec.rig,
+        "truth": spec.truth,
+        "effects": list(spec.effects),
+        "camera": cam,
+        "occlusions": asdict(spec.occlusions),
+        "seed": spec.seed,
+        "hold_s": spec.hold_s,
+        "duration_s": spec.duration_s,
+    }
+
+
+def generate_trial(spec: TrialSpec, video_dir: Path, truth_dir: Path, progress=print) -> Path:
+    """Render ``spec`` to ``video_dir/<name>.mp4``; truth to ``truth_dir/<name>.yaml|.csv``."""
+    video_dir, truth_dir = Path(video_dir), Path(truth_dir)
+    video_dir.mkdir(parents=True, exist_ok=True)
+    truth_dir.mkdir(parents=True, exist_ok=True)
+    rendered = render_trial(spec, progress=progress)
+    video = video_dir / f"{spec.name}.mp4"
+    write_video(rendered.frames, video, spec.camera.fps, spec.camera.crf, spec.camera.preset)
+    rendered.truth.to_csv(truth_dir / f"{spec.name}.csv", index=False, float_format="%.9g")
+    with open(truth_dir / f"{spec.name}.yaml", "w") as fh:
+        yaml.safe_dump(truth_record(spec), fh, sort_keys=False)
+    return video
+
+
+def load_specs(path: Path) -> list[TrialSpec]:
+    """Trial specs from a YAML file with ``defaults`` merged (one level deep) into each of ``trials``."""
+    doc = yaml.safe_load(Path(path).read_text())
+    defaults = doc.get("defaults", {})
+    specs = []
+    for trial in doc["trials"]:
+        merged = dict(defaults)
+        for key, value in trial.items():
+            if isinstance(value, dict) and isinstance(merged.get(key), dict):
+                merged[key] = {**merged[key], **value}
+            else:
+                merged[key] = value
+        specs.append(TrialSpec.from_mapping(merged))
+    return specs
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description="Render synthetic free-decay pendulum videos with known truth.")
+    parser.add_argument("spec", type=Path, help="YAML trial specification (see data/synthetic/demo.yaml)")
+    parser.add_argument("--videos", type=Path, default=Path("data/raw"))
+    parser.add_argument("--truth", type=Path, default=Path("data/truth"))
+    parser.add_argument("--only", nargs="*", help="render only these trial names")
+    args = parser.parse_args(argv)
+    for spec in load_specs(args.spec):
+        if args.only and spec.name not in args.only:
+            continue
+        path = generate_trial(spec, args.videos, args.truth, progress=lambda m: print(m, file=sys.stderr))
+        print(f"{path}  {path.stat().st_size / 1e6:.2f} MB")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,31 @@
+rule rig_geometry:
+    """Pivot and vertical of one rig, estimated from its trials' pooled marker paths."""
+    input:
+        tracks=rig_tracks,
+    output:
+        geometry="results/geometry/{rig}.json",
+    log:
+        "logs/geometry/{rig}.log",
+    threads: 1
+    params:
+        pivot_px=lambda wc: config["rigs"][wc.rig].get("pivot_px"),
+        vertical_deg=lambda wc: config["rigs"][wc.rig].get("vertical_deg"),
+    script:
+        "../scripts/rig_geometry.py"
+
+
+rule angles:
+    """θ(t) about the pivot, arc displacement s = Lθ, trimmed from release to rest."""
+    input:
+        unpack(angles_inputs),
+    output:
+        angles="results/angles/{trial}.csv",
+        summary="results/angles/{trial}.json",
+    log:
+        "logs/angles/{trial}.log",
+    threads: 1
+    params:
+        settings=angles_settings,
+        keep_rest_s=config["angles"]["keep_rest_s"],
+    script:
+        "../scripts/angles.py"

@@ -1,0 +1,86 @@
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(workflow.basedir) / "workflow"))
+
+from pendulum.trials import (  # noqa: E402
+    discover_trials,
+    needs_rig_geometry,
+    pooled_trials,
+    rig_name,
+    trial_settings,
+    validate_config,
+)
+
+validate_config(
+    config, source="the configuration (config.yaml and any --configfile/--config)"
+)
+
+TRIALS = discover_trials(config["raw_dir"])
+VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
+RIGS_NEEDING_GEOMETRY = sorted(
+    {
+        rig_name(config, TRIALS[n])
+        for n in VIDEO_TRIALS
+        if needs_rig_geometry(config, TRIALS[n])
+    }
+)
+
+
+wildcard_constraints:
+    trial=r"[A-Za-z0-9][A-Za-z0-9_.+-]*",
+    rig=r"[A-Za-z0-9_.+-]+",
+
+
+def all_targets():
+    """Every result the workflow builds for the trials found in the raw folder."""
+    targets = []
+    for name in VIDEO_TRIALS:
+        targets += [
+            f"results/frames/{name}/timeline.csv",
+            f"results/frames/{name}/contact_sheet.png",
+            f"results/tracks/{name}.csv",
+        ]
+        if config["frames"]["keep_images"]:
+            targets.append(f"results/frames/{name}/images")
+    targets += [f"results/angles/{name}.csv" for name in sorted(TRIALS)]
+    return targets
+
+
+def raw_video(wildcards):
+    trial = TRIALS[wildcards.trial]
+    if trial.kind != "video":
+        raise ValueError(f"{trial.path} is not a video")
+    return trial.path
+
+
+def sidecar_files(wildcards):
+    path = TRIALS[wildcards.trial].sidecar_path
+    return [path] if path else []
+
+
+def tracking_settings(wildcards):
+    return trial_settings(config, TRIALS[wildcards.trial])["tracking"]
+
+
+def rig_tracks(wildcards):
+    return [
+        f"results/tracks/{name}.csv"
+        for name in pooled_trials(config, TRIALS, wildcards.rig)
+    ]
+
+
+def angles_inputs(wildcards):
+    trial = TRIALS[wildcards.trial]
+    if trial.kind == "angles":
+        inputs = {"table": trial.path}
+    else:
+        inputs = {"track": f"results/tracks/{trial.name}.csv"}
+        if needs_rig_geometry(config, trial):
+            inputs["geometry"] = f"results/geometry/{rig_name(config, trial)}.json"
+    inputs["sidecar"] = sidecar_files(wildcards)
+    return inputs
+
+
+def angles_settings(wildcards):
+    return trial_settings(config, TRIALS[wildcards.trial])

@@ -1,0 +1,15 @@
+rule tracks:
+    """Sub-pixel marker centre and quality flag per frame (one decode pass)."""
+    input:
+        video=raw_video,
+        sidecar=sidecar_files,
+    output:
+        track="results/tracks/{trial}.csv",
+        summary="results/tracks/{trial}.json",
+    log:
+        "logs/tracks/{trial}.log",
+    threads: 1
+    params:
+        tracking=tracking_settings,
+    script:
+        "../scripts/tracks.py"
