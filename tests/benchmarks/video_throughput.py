@@ -1,0 +1,95 @@
+"""Benchmark: decode-only vs frames+tracks+angles throughput on one 1920×1080, 60 fps H.264 video.
+
+    .venv/bin/python tests/benchmarks/video_throughput.py [--seconds 10] [--repeats 3]
+
+Renders the video once (synthetic, known truth), then alternates the two
+measurements on the same file and prints frames/s for each and their ratio,
+plus the tracking error against the truth.
+"""
+
+import argparse
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "workflow"))
+
+from pendulum.geometry import angles_from_track, estimate_rig_geometry  # noqa: E402
+from pendulum.synthetic import generate_trial, load_specs  # noqa: E402
+from pendulum.tracking import TrackerSettings, track_video  # noqa: E402
+from pendulum.video import contact_sheet, frame_timeline, iter_luma  # noqa: E402
+
+
+def decode_only(path):
+    n = 0
+    for _ in iter_luma(path):
+        n += 1
+    return n
+
+
+def pipeline(path, settings):
+    frame_timeline(path)
+    contact_sheet(path)
+    track = track_video(path, settings)
+    geometry = estimate_rig_geometry({"bench": track}, vertical_deg=0.0)
+    angles_from_track(track, pivot_px=geometry["pivot_px"], vertical_deg=0.0, length_m=0.76, source="bench")
+    return len(track), track
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument(
+        "--crf", type=int, default=17, help="x264 quality; 17 gives ~21 Mb/s on this noisy scene, as a phone records"
+    )
+    args = parser.parse_args()
+    base = {s.name: s for s in load_specs(ROOT / "data/synthetic/demo.yaml")}["demo_p20"]
+    camera = replace(
+        base.camera,
+        width_px=1920,
+        height_px=1080,
+        fps=60.0,
+        pivot_px=(960.4, 100.3),
+        marker_arm_px=840.0,
+        marker_radius_px=12.0,
+        exposure_subsamples=4,
+        crf=args.crf,
+    )
+    spec = replace(base, name="bench_1080p60", duration_s=args.seconds, camera=camera)
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        video = generate_trial(spec, Path(tmp), Path(tmp), progress=None)
+        size = video.stat().st_size
+        print(
+            f"rendered {video.name}: {size / 1e6:.1f} MB ({size * 8 / args.seconds / 1e6:.1f} Mb/s)"
+            f" in {time.perf_counter() - t0:.0f} s"
+        )
+        settings = TrackerSettings(marker_radius_px=12.0)
+        decode_rates, pipe_rates = [], []
+        for _ in range(args.repeats):
+            t0 = time.perf_counter()
+            n = decode_only(video)
+            decode_rates.append(n / (time.perf_counter() - t0))
+            t0 = time.perf_counter()
+            n, track = pipeline(video, settings)
+            pipe_rates.append(n / (time.perf_counter() - t0))
+        truth = pd.read_csv(Path(tmp) / "bench_1080p60.csv")
+        ok = track.flag == "ok"
+        err = np.hypot(track.x_px - truth.marker_x_px, track.y_px - truth.marker_y_px)[ok]
+    dec, pipe = np.median(decode_rates), np.median(pipe_rates)
+    print(f"frames: {n} at 1920x1080, 60 fps, H.264")
+    print(f"decode only:              {dec:7.1f} frames/s  (runs: {', '.join(f'{r:.0f}' for r in decode_rates)})")
+    print(f"frames+tracks+angles:     {pipe:7.1f} frames/s  (runs: {', '.join(f'{r:.0f}' for r in pipe_rates)})")
+    print(f"ratio pipeline/decode:    {pipe / dec:7.2f}")
+    print(f"tracking RMS error:       {np.sqrt(np.mean(err**2)):7.3f} px over {ok.sum()} ok frames")
+
+
+if __name__ == "__main__":
+    main()
