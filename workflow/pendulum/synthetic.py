@@ -250,17 +250,14 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     accum = np.empty_like(background)
     canvas = np.empty_like(background)
     for i in range(n):
-        if i > 0 and np.array_equal(theta_sub[i], theta_sub[i - 1]):
-            acc = accum  # the held pendulum: identical exposure
-        else:
+        if i == 0 or not np.array_equal(theta_sub[i], theta_sub[i - 1]):  # held: reuse the exposure
             accum.fill(0.0)
             for j in range(k):
                 np.copyto(canvas, background)
                 _draw_pendulum(canvas, cam, float(theta_sub[i, j]), shades)
                 accum += canvas
             accum /= k
-            acc = accum
-        frame = acc.copy()
+        frame = accum.copy()
         for start, length in events:
             if start <= i < start + length:
                 # Occluder slides across the marker during the event.
@@ -312,7 +309,6 @@ def write_video(frames: list, path: Path, fps: float, crf: int, preset: str) -> 
         stream.width = frames[0].shape[1]
         stream.height = frames[0].shape[0]
         stream.pix_fmt = "yuv420p"
-        stream.thread_count = 1
         keyint = str(max(1, int(round(2 * fps))))  # a key frame every 2 s, as cameras do
         stream.options = {"crf": str(crf), "preset": preset, "threads": "1", "g": keyint}
         for img in frames:
