@@ -1,4 +1,4 @@
-"""Free-decay pendulum identification: raw videos → frames → tracks → angles."""
+"""Free-decay pendulum identification: raw videos → frames → tracks → angles → fits."""
 
 
 configfile: "config.yaml"
@@ -8,6 +8,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/frames.smk"
 include: "workflow/rules/tracks.smk"
 include: "workflow/rules/angles.smk"
+include: "workflow/rules/fits.smk"
 
 
 rule all:

@@ -88,7 +88,7 @@ class Term:
 
 
 def _quadratic_drag_shape(rig: Rig, theta, omega):
-    return -0.5 * rig.fluid_density_kg_m3 * rig.length_m**3 * omega * np.abs(omega)
+    return -0.5 * rig.fluid_density_kg_m3 * rig.length_m**3 * omega * abs(omega)
 
 
 def _linear_damping_shape(rig: Rig, theta, omega):
@@ -198,30 +198,48 @@ def simulate(
     omega0_rad_s: float,
     times_s: Sequence[float],
     substeps: int = 8,
+    max_step_s: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Exact-physics trajectory θ(t), θ̇(t) sampled at ``times_s`` (t[0] is the start).
 
-    Fixed-step RK4 between samples, with every velocity reversal located as an
-    event so that each integrated segment is smooth (θ̇|θ̇| and sgn θ̇ are not).
-    At a reversal the Coulomb stick condition is checked: if the remaining
-    torque |−(mg−B)L sin θ| ≤ τ_f the pendulum stays at rest for good (no
-    chattering; nothing else can set it moving in a free decay).
+    Fixed-step RK4 between samples (``substeps`` steps per sample interval, or
+    as many as keep each step under ``max_step_s``), with every velocity
+    reversal located as an event so that each integrated segment is smooth
+    (θ̇|θ̇| and sgn θ̇ are not). At a reversal the Coulomb stick condition is
+    checked: if the remaining torque |−(mg−B)L sin θ| ≤ τ_f the pendulum stays
+    at rest for good (no chattering; nothing else can set it moving in a free
+    decay). Because the steps are fixed and the events exact, θ(t) is a smooth
+    function of the parameters and the initial state: finite-difference
+    Jacobians of a fit through it are honest.
     """
     times = np.asarray(times_s, dtype=float)
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
         raise ValueError("times_s must be a strictly increasing 1-D sequence")
     inertia = float(model.inertia_kg_m2(params))
     tau_f = model.friction_torque_nm(params)
-    scalar_params = {k: float(v) for k, v in params.items()}
+    rig = model.rig
+    restoring = rig.restoring_torque_nm
+    smooth_terms = [(float(params[TERMS[t].parameter]), TERMS[t].shape) for t in model.terms if not TERMS[t].coulomb]
+    sin = math.sin
+
+    def smooth_torque(theta, omega):  # scalar twin of PendulumModel.smooth_torque_nm
+        torque = -restoring * sin(theta)
+        for coefficient, shape in smooth_terms:
+            torque = torque + coefficient * shape(rig, theta, omega)
+        return torque
 
     def accel_for(direction):
+        friction = tau_f * direction
+
         def accel(theta, omega):
-            return (model.smooth_torque_nm(scalar_params, theta, omega) - tau_f * direction) / inertia
+            return (smooth_torque(theta, omega) - friction) / inertia
 
         return accel
 
+    accelerations = {d: accel_for(d) for d in (-1, 1)}
+
     def direction_at_rest(theta):
-        torque = float(model.smooth_torque_nm(scalar_params, theta, 0.0))
+        torque = smooth_torque(theta, 0.0)
         if abs(torque) <= tau_f:
             return 0
         return 1 if torque > 0 else -1
@@ -231,15 +249,23 @@ def simulate(
     out_theta = np.empty_like(times)
     out_omega = np.empty_like(times)
     out_theta[0], out_omega[0] = theta, omega
+    intervals = np.diff(times)
+    if max_step_s is not None:
+        counts = np.maximum(1, np.ceil(intervals / max_step_s - 1e-9)).astype(int)
+    else:
+        counts = np.full(intervals.size, int(substeps))
     for i in range(1, times.size):
-        h = (times[i] - times[i - 1]) / substeps
-        for _ in range(substeps):
+        n_steps = int(counts[i - 1])
+        h = float(intervals[i - 1]) / n_steps
+        for _ in range(n_steps):
+            if direction == 0:
+                break
             remaining = h
             while remaining > 0 and direction != 0:
-                accel = accel_for(direction)
+                accel = accelerations[direction]
                 new_theta, new_omega = _rk4_step(accel, theta, omega, remaining)
                 if new_omega * direction > 0:
-                    theta, omega, remaining = new_theta, new_omega, 0.0
+                    theta, omega = new_theta, new_omega
                     break
 
                 # Velocity reaches zero inside this step: locate the reversal.

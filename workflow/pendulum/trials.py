@@ -20,11 +20,13 @@ RIG_KEYS = (
     "fluid_density_kg_m3",
     "gravity_m_s2",
     "body_inertia_kg_m2",
+    "characteristic_length_m",
 )
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px")
 ANGLE_TABLE_EXTENSIONS = (".csv",)
 TRIAL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
+RESERVED_NAMES = ("joint", "summary")  # file names of the aggregate fits
 
 
 class ConfigError(ValueError):
@@ -46,6 +48,9 @@ def _validate(document: dict, schema_name: str, source: str) -> None:
 def validate_config(config: dict, source: str = "config.yaml") -> None:
     """Schema check plus cross-references (default rig exists)."""
     _validate(config, "config.schema.yaml", source)
+    empty = [name for name, terms in config["variants"].items() if terms is None]
+    if empty:
+        raise ConfigError(f"{source}: variants {empty} have no term list (use [] for added mass only)")
     if config["default_rig"] not in config["rigs"]:
         raise ConfigError(
             f"{source}: default_rig {config['default_rig']!r} is not one of rigs {sorted(config['rigs'])}"
@@ -74,6 +79,8 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         name = path.stem
         if not TRIAL_NAME.match(name):
             raise ConfigError(f"{path}: trial names may hold letters, digits and _ . + - only")
+        if name in RESERVED_NAMES:
+            raise ConfigError(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
         if name in trials:
             raise ConfigError(f"{path}: trial {name!r} also comes from {trials[name].path}; rename one")
         kind = "video" if suffix in VIDEO_EXTENSIONS else "angles"
@@ -90,6 +97,14 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
             trial.sidecar, trial.sidecar_path = doc, str(sidecar)
         trials[name] = trial
     return trials
+
+
+def rig_trials(config: dict, trials: dict[str, Trial]) -> dict[str, list[str]]:
+    """Trial names of each rig (every trial, video or angle table)."""
+    by_rig: dict[str, list[str]] = {}
+    for name in sorted(trials):
+        by_rig.setdefault(rig_name(config, trials[name]), []).append(name)
+    return by_rig
 
 
 def rig_name(config: dict, trial: Trial) -> str:

@@ -8,6 +8,7 @@ from pendulum.trials import (  # noqa: E402
     needs_rig_geometry,
     pooled_trials,
     rig_name,
+    rig_trials,
     trial_settings,
     validate_config,
 )
@@ -28,8 +29,9 @@ RIGS_NEEDING_GEOMETRY = sorted(
 
 
 wildcard_constraints:
-    trial=r"[A-Za-z0-9][A-Za-z0-9_.+-]*",
+    trial=r"(?!(?:joint|summary)$)[A-Za-z0-9][A-Za-z0-9_.+-]*",
     rig=r"[A-Za-z0-9_.+-]+",
+    variant=r"[A-Za-z0-9_.+-]+",
 
 
 def all_targets():
@@ -44,6 +46,8 @@ def all_targets():
         if config["frames"]["keep_images"]:
             targets.append(f"results/frames/{name}/images")
     targets += [f"results/angles/{name}.csv" for name in sorted(TRIALS)]
+    if TRIALS:
+        targets.append("results/fits/summary.csv")
     return targets
 
 
@@ -84,3 +88,32 @@ def angles_inputs(wildcards):
 
 def angles_settings(wildcards):
     return trial_settings(config, TRIALS[wildcards.trial])
+
+
+def variant_terms(wildcards):
+    if wildcards.variant not in config["variants"]:
+        raise ValueError(
+            f"model variant {wildcards.variant!r} is not in config variants"
+        )
+    return list(config["variants"][wildcards.variant])
+
+
+def fit_rig(wildcards):
+    settings = trial_settings(config, TRIALS[wildcards.trial])
+    return {"name": settings["rig_name"], "values": settings["rig"]}
+
+
+def joint_rigs(wildcards):
+    """Rig name → {trial: that trial's rig values} (sidecars may override rig values)."""
+    return {
+        rig: {name: trial_settings(config, TRIALS[name])["rig"] for name in names}
+        for rig, names in rig_trials(config, TRIALS).items()
+    }
+
+
+def summary_inputs(wildcards):
+    return [
+        f"results/fits/{variant}/{name}.json"
+        for variant in sorted(config["variants"])
+        for name in sorted(TRIALS) + ["joint"]
+    ]

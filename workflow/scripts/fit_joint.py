@@ -1,0 +1,28 @@
+"""Snakemake adapter: one model variant fitted jointly to every trial of each rig."""
+
+import json
+from pathlib import Path
+
+import pandas as pd
+
+import _setup  # noqa: F401
+from pendulum.fitting import FitSettings, fit_document, fit_joint, load_record
+from pendulum.io import script_logger, write_json
+
+sm = snakemake  # noqa: F821
+log = script_logger(sm.log[0], "fit_joint")
+variant = sm.wildcards.variant
+settings = FitSettings(**sm.params.fitting)
+angles = {Path(p).stem: p for p in sm.input.angles}
+fits = {Path(p).stem: json.loads(Path(p).read_text()) for p in sm.input.fits}
+rigs = {}
+for rig, trial_rigs in sm.params.rigs.items():
+    names = sorted(trial_rigs)
+    records = [load_record(pd.read_csv(angles[n]), n, trial_rigs[n], settings) for n in names]
+    log.info("rig %s, variant %s: joint fit of %d trial(s) %s", rig, variant, len(names), names)
+    joint = fit_joint(records, sm.params.terms, {n: fits[n] for n in names}, settings)
+    log.info("rig %s, variant %s: consistency %s", rig, variant, joint["consistency"]["verdict"])
+    rigs[rig] = fit_document(
+        joint, variant=variant, rig={"name": rig}, sources=[angles[n] for n in names], settings=settings
+    )
+write_json({"variant": variant, "rigs": rigs}, sm.output.joint)

@@ -1,0 +1,24 @@
+"""Snakemake adapter: one model variant fitted to one trial's angle record."""
+
+import pandas as pd
+
+import _setup  # noqa: F401
+from pendulum.fitting import FitSettings, fit_document, fit_trials, load_record
+from pendulum.io import script_logger, write_json
+
+sm = snakemake  # noqa: F821
+log = script_logger(sm.log[0], "fit_trial")
+trial, variant = sm.wildcards.trial, sm.wildcards.variant
+settings = FitSettings(**sm.params.fitting)
+try:
+    record = load_record(pd.read_csv(sm.input.angles), trial, sm.params.rig["values"], settings)
+    log.info("trial %s, variant %s (%s): %d samples", trial, variant, "+".join(sm.params.terms), record.n_samples)
+    fit = fit_trials([record], sm.params.terms, settings)
+except Exception as exc:
+    log.error("%s: %s", sm.input.angles, exc)
+    raise
+document = fit_document(fit, variant=variant, rig=sm.params.rig, sources=[sm.input.angles], settings=settings)
+for warning in fit["warnings"]:
+    log.warning("trial %s, variant %s: %s", trial, variant, warning)
+log.info("trial %s, variant %s: rms %.4f deg, %s", trial, variant, fit["rms_deg"], fit["optimiser"]["message"])
+write_json({"trial": trial, **document}, sm.output.fit)
