@@ -1,6 +1,7 @@
 """The Snakemake workflow end to end on a copy of the repository (demo videos)."""
 
 import hashlib
+import json
 import re
 import shutil
 import subprocess
@@ -91,6 +92,41 @@ def test_adding_a_video_builds_only_that_trial(project):
         (project / "data/raw/extra_m05.mp4").unlink()
 
 
+TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
+
+
+def test_fits_every_variant_and_the_demo_reproduces_the_paper_symptom(project):
+    summary = (project / "results/fits/summary.csv").read_text().splitlines()
+    assert len(summary) == 1 + 3 * (len(demo_trials()) + 1)
+    for variant in ("quadratic", "linear", "friction"):
+        for trial in demo_trials():
+            fit = json.loads((project / f"results/fits/{variant}/{trial}.json").read_text())
+            assert {"rms_rad", "rms_deg", "rms_arc_m", "aic", "bic", "n_samples", "correlation"} <= set(fit)
+            assert fit["keulegan_carpenter_number"] > 0
+    friction = json.loads((project / "results/fits/friction/joint.json").read_text())["rigs"]["paper_rig"]
+    for name, true in TRUTH.items():
+        low, high = friction["parameters"][name]["ci95"]
+        assert low <= true <= high, (name, friction["parameters"][name])
+    quadratic = json.loads((project / "results/fits/quadratic/joint.json").read_text())["rigs"]["paper_rig"]
+    assert quadratic["consistency"]["verdict"] == "inconsistent"
+    assert "drag_area_m2" in quadratic["consistency"]["inconsistent_parameters"]
+    scale = quadratic["consistency"]["parameters"]["drag_area_m2"]["scale_factor"]
+    assert scale > 2 * friction["consistency"]["parameters"]["drag_area_m2"]["scale_factor"]
+
+
+def test_adding_a_variant_fits_only_that_variant(tmp_path, project):
+    config = yaml.safe_load((project / "config.yaml").read_text())
+    config["variants"]["drag_only_linear"] = ["linear_damping"]
+    extra = tmp_path / "extra.yaml"
+    extra.write_text(yaml.safe_dump({"variants": config["variants"]}))
+    out = run(["-n", "--configfile", str(extra)], project).stdout
+    rules = re.findall(r"^\s*(?:local)?rule (\w+):", out, flags=re.M)
+    variants = set(re.findall(r"variant=([\w.+-]+)", out))
+    assert variants == {"drag_only_linear"}
+    assert sorted(set(rules)) == ["all", "fit_joint", "fit_summary", "fit_trial"]
+    assert rules.count("fit_trial") == len(demo_trials())
+
+
 def test_broken_video_is_named_and_costs_nothing_else(tmp_path, project):
     work = tmp_path / "p"
     shutil.copytree(project, work, ignore=shutil.ignore_patterns("results", ".snakemake", "logs"))
@@ -112,11 +148,26 @@ def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
     work = tmp_path / "p"
     shutil.copytree(project, work, ignore=shutil.ignore_patterns(".snakemake", "logs"))
     shutil.copy(SHARED / "data/real-air-pendulum/wooden_bob.csv", work / "data/raw/wooden_bob.csv")
-    (work / "data/raw/wooden_bob.yaml").write_text("length_m: 0.334\nfluid_density_kg_m3: 1.2\n")
+    (work / "data/raw/wooden_bob.yaml").write_text("rig: air_wooden\n")
+    config = yaml.safe_load((work / "config.yaml").read_text())
+    d = 0.03805
+    config["rigs"]["air_wooden"] = {
+        "mass_kg": 0.015,
+        "length_m": 0.315 + d / 2,
+        "frontal_area_m2": 3.1416 * d**2 / 4,
+        "fluid_density_kg_m3": 1.2,
+        "characteristic_length_m": d,
+    }
+    (work / "config.yaml").write_text(yaml.safe_dump(config))
     jobs = planned_jobs(run(["-n"], work).stdout)
     assert jobs == {("angles", "wooden_bob")}
     run(["-c2"], work)
     assert (work / "results/angles/wooden_bob.csv").read_text().count("\n") == 918
+    joint = json.loads((work / "results/fits/quadratic/joint.json").read_text())
+    assert sorted(joint["rigs"]) == ["air_wooden", "paper_rig"]
+    assert joint["rigs"]["air_wooden"]["consistency"]["verdict"] == "not testable"  # one trial
+    fit = json.loads((work / "results/fits/quadratic/wooden_bob.json").read_text())
+    assert 0.2 < fit["parameters"]["drag_coefficient"]["value"] < 1.5
 
 
 @pytest.mark.parametrize(

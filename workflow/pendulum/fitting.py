@@ -55,6 +55,7 @@ class FitSettings:
     identifiable_max_relative_stderr: float = 0.5  # above: flagged not identifiable
     consistency_alpha: float = 0.05
     max_ar_order: int = 10  # highest order of the residual-noise AR model behind the intervals
+    added_mass_lower_kg: float = 0.0  # < 0 only for calibration swings (e.g. in air): an inertia correction
 
 
 @dataclass
@@ -171,7 +172,7 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
         inertia = rig.pivot_inertia_kg_m2 + rig.fluid_density_kg_m3 * rig.displaced_volume_m3 * rig.length_m**2
         period0 = 2 * math.pi * math.sqrt(inertia / K)
     added_mass = (inertia - rig.pivot_inertia_kg_m2) / rig.length_m**2
-    start[ADDED_MASS] = max(added_mass, 0.0)
+    start[ADDED_MASS] = added_mass
     inertia = rig.pivot_inertia_kg_m2 + start[ADDED_MASS] * rig.length_m**2
     omega0 = 2 * math.pi / period0
     columns = {
@@ -387,6 +388,7 @@ def fit_trials(records: list[AngleRecord], terms, settings: FitSettings = FitSet
     phys0 = _phys_start(model, starts)
     x0 = np.array([phys0[n] for n in names] + [s[k] for s in starts for k in NUISANCE])
     lower = np.array([0.0] * len(names) + [-np.inf] * (3 * len(records)))
+    lower[0] = settings.added_mass_lower_kg
     problem = _Problem(model_for, records, names, settings.max_step_s)
     sol = problem.solve(x0, lower)
     # one pass of outlier rejection (mis-tracked points), then refit from the solution
@@ -461,6 +463,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
                 "unit": "1",
                 "derived_from": "drag_area_m2 / frontal_area_m2",
             }
+    warnings += _rig_checks(rig, params[ADDED_MASS], starts)
     sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     corr = cov / np.outer(sd, sd)
     labels = names + [f"{k}[{r.trial}]" for r in records for k in NUISANCE]
@@ -538,6 +541,24 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         "trials": trials,
         "warnings": warnings,
     }
+
+
+def _rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
+    """Warnings when the measured period and the rig values cannot both be right."""
+    bare = 2 * math.pi * math.sqrt(rig.pivot_inertia_kg_m2 / rig.restoring_torque_nm)
+    measured = float(np.median([s["period_s"] for s in starts]))
+    out = []
+    if added_mass["at_bound"]:
+        out.append(
+            f"measured small-amplitude period {measured:.4g} s is shorter than the rig values allow with no added "
+            f"mass ({bare:.4g} s): length_m or body_inertia_kg_m2 overstate the pendulum's own inertia"
+        )
+    elif added_mass["value"] > 5 * rig.mass_kg:
+        out.append(
+            f"fitted added mass is {added_mass['value'] / rig.mass_kg:.0f}× the body mass (period {measured:.4g} s "
+            f"against {bare:.4g} s for the rig alone): check length_m, mass_kg and the record's time base"
+        )
+    return out
 
 
 def _unit(name):
@@ -630,7 +651,8 @@ def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], set
         if entry["scale_factor"] > 1.0:
             se = entry["stderr"] * entry["scale_factor"]
             entry["stderr"] = se
-            entry["ci95"] = [max(entry["value"] - Z95 * se, 0.0), entry["value"] + Z95 * se]  # coefficients ≥ 0
+            floor = settings.added_mass_lower_kg if name == ADDED_MASS else 0.0
+            entry["ci95"] = [max(entry["value"] - Z95 * se, floor), entry["value"] + Z95 * se]
     return joint
 
 

@@ -1,0 +1,70 @@
+"""Wall time of the fits: one per-trial fit of each variant and each variant's joint fit.
+
+Run: .venv/bin/python tests/benchmarks/fit_speed.py
+Uses the demo's angle records (results/angles, after `snakemake -c2`) when present,
+else model-generated records of the demo releases; plus one 20 s, 60 fps record
+of the friction variant (target: under 2 s on one core).
+"""
+
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "workflow"))
+
+from pendulum.fitting import FitSettings, fit_trials, load_record  # noqa: E402
+from pendulum.physics import PendulumModel, Rig  # noqa: E402
+from pendulum.synthetic import synthetic_angle_table  # noqa: E402
+
+RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
+VARIANTS = {
+    "quadratic": ("quadratic_drag",),
+    "linear": ("quadratic_drag", "linear_damping"),
+    "friction": ("quadratic_drag", "linear_damping", "coulomb_friction"),
+}
+TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
+RELEASES = {"demo_p75": 75, "demo_p20": 20, "demo_m15": -15, "demo_p05": 5, "demo_m05": -5}
+
+
+def timed(fn, repeats=3):
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - start)
+    return best, result
+
+
+def main():
+    settings = FitSettings()
+    model = PendulumModel(Rig(**RIG), VARIANTS["friction"])
+    records = []
+    for name, release in RELEASES.items():
+        path = ROOT / "results" / "angles" / f"{name}.csv"
+        if path.is_file():
+            table, source = pd.read_csv(path), "demo video"
+        else:
+            table = synthetic_angle_table(model, TRUTH, release, rng=np.random.default_rng(1))
+            source = "model-generated"
+        records.append(load_record(table, name, RIG, settings))
+    print(f"demo records ({source}): {[r.n_samples for r in records]} samples")
+    for variant, terms in VARIANTS.items():
+        seconds, _ = timed(lambda terms=terms: fit_trials([records[1]], terms, settings))
+        joint, _ = timed(lambda terms=terms: fit_trials(records, terms, settings), repeats=1)
+        print(f"{variant:>10}: per-trial fit (demo_p20) {seconds:6.3f} s   joint fit of 5 trials {joint:6.3f} s")
+    long = synthetic_angle_table(model, TRUTH, 20, fps=60, duration_s=20, rng=np.random.default_rng(2))
+    record = load_record(long, "p20_60fps", RIG, settings)
+    seconds, fit = timed(lambda: fit_trials([record], VARIANTS["friction"], settings))
+    print(
+        f"friction per-trial fit, 20 s at 60 fps ({record.n_samples} samples): {seconds:.3f} s "
+        f"({fit['optimiser']['evaluations']} evaluations); target < 2 s"
+    )
+
+
+if __name__ == "__main__":
+    main()
