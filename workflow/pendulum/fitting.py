@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 from scipy.optimize import least_squares, nnls
+from scipy.signal import lfilter
 
 from pendulum.geometry import noise_level, oscillation_centre_rad, turning_points
 from pendulum.physics import ADDED_MASS, TERMS, PendulumModel, Rig, keulegan_carpenter_number, simulate
@@ -255,11 +256,13 @@ class _Problem:
         theta, _ = simulate(self.models[k], phys, nuis_k[0], nuis_k[1], r.time_s, max_step_s=self.max_step_s)
         return theta + nuis_k[2]
 
+    def trial_residual(self, k, phys, nuis_k):
+        """Simulated minus measured θ on trial k's samples in use."""
+        return (self.simulate_trial(k, phys, nuis_k) - self.records[k].theta_rad)[self.masks[k]]
+
     def trial_residuals(self, x):
         phys, nuis = self.split(x)
-        return [
-            (self.simulate_trial(k, phys, nuis[k]) - r.theta_rad)[self.masks[k]] for k, r in enumerate(self.records)
-        ]
+        return [self.trial_residual(k, phys, nuis[k]) for k in range(len(self.records))]
 
     def residuals(self, x):
         key = x.tobytes()
@@ -280,16 +283,14 @@ class _Problem:
             moved = dict(phys)
             moved[name] = x[j] + step
             for k in range(len(self.records)):
-                sim = self.simulate_trial(k, moved, nuis[k])[self.masks[k]] - self.records[k].theta_rad[self.masks[k]]
-                jac[rows[k] : rows[k + 1], j] = (sim - base_parts[k]) / step
+                jac[rows[k] : rows[k + 1], j] = (self.trial_residual(k, moved, nuis[k]) - base_parts[k]) / step
         for k in range(len(self.records)):
             col = self.n_phys + 3 * k
             for i in range(2):
                 step = max(1e-6 * abs(nuis[k][i]), self.steps[self.n_phys + 2 * k + i])
                 moved = nuis[k].copy()
                 moved[i] += step
-                sim = self.simulate_trial(k, phys, moved)[self.masks[k]] - self.records[k].theta_rad[self.masks[k]]
-                jac[rows[k] : rows[k + 1], col + i] = (sim - base_parts[k]) / step
+                jac[rows[k] : rows[k + 1], col + i] = (self.trial_residual(k, phys, moved) - base_parts[k]) / step
             jac[rows[k] : rows[k + 1], col + 2] = 1.0
         return jac
 
@@ -320,6 +321,8 @@ def fit_ar(r: np.ndarray, max_order: int = 10) -> tuple[np.ndarray, float, int]:
     n = r.size
     best = (np.zeros(0), float(r @ r) / n, 0)
     best_aic = n * math.log(best[1])
+    if max_order < 1:
+        return best
     lags = np.column_stack([r[max_order - i - 1 : n - i - 1] for i in range(max_order)])
     target = r[max_order:]
     for order in range(1, max_order + 1):
@@ -335,8 +338,6 @@ def fit_ar(r: np.ndarray, max_order: int = 10) -> tuple[np.ndarray, float, int]:
 
 def ar_meat(jac: np.ndarray, r: np.ndarray, max_order: int = 10) -> tuple[np.ndarray, dict]:
     """Jᵀ Ω J for AR(p) noise: Ω = σ_e² Φ⁻¹ Φ⁻ᵀ, Φ the whitening filter, so Jᵀ Ω J = σ_e² ZᵀZ, Z = Φ⁻ᵀ J."""
-    from scipy.signal import lfilter
-
     phi, var, order = fit_ar(r, max_order)
     z = lfilter([1.0], np.concatenate([[1.0], -phi]), jac[::-1], axis=0)[::-1]
     return var * (z.T @ z), {"ar_order": order, "ar_coefficients": phi.tolist()}
