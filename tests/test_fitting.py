@@ -8,10 +8,13 @@ import pandas as pd
 import pytest
 
 from conftest import SHARED
-from pendulum.fitting import FitSettings, consistency_test, decay_analysis, fit_joint, fit_trials, load_record
+from pendulum.decay import decay_analysis
+from pendulum.fitting import fit_joint, fit_trials
 from pendulum.io import write_json
 from pendulum.physics import PendulumModel, Rig
+from pendulum.records import FitSettings, load_record
 from pendulum.synthetic import synthetic_angle_table
+from pendulum.uncertainty import consistency_test
 
 PAPER_RIG = {
     "mass_kg": 3.53,

@@ -31,182 +31,16 @@ bootstrap needs hundreds of refits. Coverage measured on synthetic records
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
 
 import numpy as np
-import pandas as pd
-from scipy import stats
-from scipy.optimize import least_squares, nnls
-from scipy.signal import lfilter
+from scipy.optimize import least_squares
 
-from pendulum.geometry import noise_level, oscillation_centre_rad, turning_points
+from pendulum.decay import decay_analysis
 from pendulum.physics import ADDED_MASS, TERMS, PendulumModel, Rig, keulegan_carpenter_number, simulate
+from pendulum.records import AngleRecord, FitSettings
+from pendulum.uncertainty import Z95, _lag1, consistency_test, sandwich_covariance
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
-Z95 = stats.norm.ppf(0.975)
-
-
-@dataclass(frozen=True)
-class FitSettings:
-    """Numerical choices of a fit (config ``fitting``)."""
-
-    release_skip_s: float = 0.25  # samples before this (time since release) are not fitted
-    max_step_s: float = 0.02  # RK4 step limit of the simulation inside the fit
-    outlier_sigmas: float = 6.0  # one pass: samples further than this (robust σ) are dropped, refit
-    identifiable_max_relative_stderr: float = 0.5  # above: flagged not identifiable
-    consistency_alpha: float = 0.05
-    max_ar_order: int = 10  # highest order of the residual-noise AR model behind the intervals
-    added_mass_lower_kg: float = 0.0  # < 0 only for calibration swings (e.g. in air): an inertia correction
-
-
-@dataclass
-class AngleRecord:
-    """The samples of one trial that a fit uses (valid, after the release transient)."""
-
-    trial: str
-    rig: Rig
-    time_s: np.ndarray  # since release
-    theta_rad: np.ndarray
-    characteristic_length_m: float
-    dropped: dict = field(default_factory=dict)
-
-    @property
-    def n_samples(self) -> int:
-        return int(self.time_s.size)
-
-
-def characteristic_length_m(rig_values: dict) -> float:
-    """D of the Keulegan–Carpenter number: given, else the diameter of a disc of the frontal area."""
-    given = rig_values.get("characteristic_length_m")
-    if given:
-        return float(given)
-    return math.sqrt(4 * float(rig_values["frontal_area_m2"]) / math.pi)
-
-
-def load_record(table: pd.DataFrame, trial: str, rig_values: dict, settings: FitSettings) -> AngleRecord:
-    """Angle-CSV rows (``time_s``, ``theta_rad``, ``flag``) → the samples to fit."""
-    for column in ("time_s", "theta_rad"):
-        if column not in table.columns:
-            raise ValueError(f"trial {trial}: angle table lacks column {column!r}")
-    t = table.time_s.to_numpy(float)
-    th = table.theta_rad.to_numpy(float)
-    ok = np.isfinite(t) & np.isfinite(th)
-    if "flag" in table.columns:
-        ok &= table.flag.to_numpy(object) == "ok"
-    n_flagged = int((~ok).sum())
-    early = t < settings.release_skip_s
-    use = ok & ~early
-    t, th = t[use], th[use]
-    order = np.argsort(t, kind="stable")
-    t, th = t[order], th[order]
-    keep = np.concatenate([[True], np.diff(t) > 0])  # repeated time stamps: keep the first
-    t, th = t[keep], th[keep]
-    if t.size < 30:
-        raise ValueError(f"trial {trial}: only {t.size} usable angle samples after the release transient")
-    rig = Rig.from_mapping(rig_values)
-    return AngleRecord(
-        trial,
-        rig,
-        t,
-        th,
-        characteristic_length_m(rig_values),
-        dropped={
-            "flagged_or_missing": n_flagged,
-            "release_transient": int((early & ok).sum()),
-            "repeated_time": int((~keep).sum()),
-        },
-    )
-
-
-# ---------------------------------------------------------------------------
-# Starting values from classical decay analysis
-
-
-def _extrema(t, theta):
-    """Times and signed values of the swing extrema, refined by a parabola through 5 samples."""
-    smooth = pd.Series(theta).rolling(3, center=True, min_periods=1).mean().to_numpy()
-    idx = turning_points(smooth, min_separation=3)
-    times, values = [], []
-    for i in idx:
-        if i < 2 or i > t.size - 3:
-            continue
-        tt, yy = t[i - 2 : i + 3] - t[i], theta[i - 2 : i + 3]
-        a, b, c = np.polyfit(tt, yy, 2)
-        if a == 0 or abs(-b / (2 * a)) > 2 * (tt[-1] - tt[0]):
-            continue
-        tv = -b / (2 * a)
-        times.append(t[i] + tv)
-        values.append(c - b * b / (4 * a))
-    return np.array(times), np.array(values)
-
-
-def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
-    """Starting values: period → inertia → added mass; extinction curve → damping coefficients.
-
-    With A the swing amplitude, the small-damping energy balance over one half
-    cycle gives the amplitude loss ΔA = 2τ_f/K + (π c / 2Iω₀) A + (4 D / 3I) A²,
-    K = (mg − B)L, D = ½ρ C_dA L³. The large-amplitude period is
-    T = T₀ (1 + A²/16 + 11A⁴/3072), T₀ = 2π √(I/K).
-    """
-    rig = model.rig
-    t, th = record.time_s, record.theta_rad
-    sigma = noise_level(th)
-    centre = oscillation_centre_rad(th, sigma)
-    if centre is None:
-        centre = float(np.median(th[-max(10, th.size // 5) :]))
-    x = th - centre
-    K = rig.restoring_torque_nm
-    ext_t, ext_v = _extrema(t, x)
-    big = np.abs(ext_v) > max(20 * sigma, 1e-4)
-    ext_t, ext_v = ext_t[big], ext_v[big]
-    alternating = np.sign(ext_v[1:]) != np.sign(ext_v[:-1])
-    half_t = np.diff(ext_t)[alternating]
-    amp = np.abs(ext_v)
-    mean_amp = (0.5 * (amp[1:] + amp[:-1]))[alternating]
-    loss = (amp[:-1] - amp[1:])[alternating]
-    start = {}
-    if half_t.size >= 1:
-        correction = 1 + mean_amp**2 / 16 + 11 * mean_amp**4 / 3072
-        period0 = float(np.median(2 * half_t / correction))
-        inertia = K * (period0 / (2 * math.pi)) ** 2
-    else:  # less than half a swing: assume the added mass equals the displaced mass
-        inertia = rig.pivot_inertia_kg_m2 + rig.fluid_density_kg_m3 * rig.displaced_volume_m3 * rig.length_m**2
-        period0 = 2 * math.pi * math.sqrt(inertia / K)
-    added_mass = (inertia - rig.pivot_inertia_kg_m2) / rig.length_m**2
-    start[ADDED_MASS] = added_mass
-    inertia = rig.pivot_inertia_kg_m2 + start[ADDED_MASS] * rig.length_m**2
-    omega0 = 2 * math.pi / period0
-    columns = {
-        "coulomb_friction": np.ones_like(mean_amp),
-        "linear_damping": mean_amp,
-        "quadratic_drag": mean_amp**2,
-    }
-    to_coefficient = {
-        "coulomb_friction": K / 2,
-        "linear_damping": 2 * inertia * omega0 / math.pi,
-        "quadratic_drag": 3 * inertia / 4 / (0.5 * rig.fluid_density_kg_m3 * rig.length_m**3),
-    }
-    terms = list(model.terms)
-    coefficients = np.zeros(len(terms))
-    if loss.size >= len(terms) + 1:
-        a = np.column_stack([columns[name] for name in terms])
-        scale = np.abs(a).max(axis=0)
-        scale[scale == 0] = 1.0
-        solution, _ = nnls(a / scale, loss)
-        coefficients = solution / scale
-    for name, value in zip(terms, coefficients, strict=True):
-        start[TERMS[name].parameter] = float(value * to_coefficient[name])
-    # initial state at the first sample: local quadratic through the first samples
-    n0 = min(7, t.size)
-    poly = np.polyfit(t[:n0] - t[0], x[:n0], 2)
-    return {
-        "physical": start,
-        "theta0_rad": float(poly[2]),
-        "omega0_rad_s": float(poly[1]),
-        "rest_offset_rad": float(centre),
-        "period_s": period0,
-        "n_half_cycles": int(half_t.size),
-    }
 
 
 # ---------------------------------------------------------------------------
@@ -315,57 +149,6 @@ class _Problem:
 # Uncertainty
 
 
-def fit_ar(r: np.ndarray, max_order: int = 10) -> tuple[np.ndarray, float, int]:
-    """AR(p) model of a residual series by least squares, p ≤ max_order chosen by AIC: (φ, σ_e², p)."""
-    r = r - r.mean()
-    n = r.size
-    best = (np.zeros(0), float(r @ r) / n, 0)
-    best_aic = n * math.log(best[1])
-    if max_order < 1:
-        return best
-    lags = np.column_stack([r[max_order - i - 1 : n - i - 1] for i in range(max_order)])
-    target = r[max_order:]
-    for order in range(1, max_order + 1):
-        phi, *_ = np.linalg.lstsq(lags[:, :order], target, rcond=None)
-        e = target - lags[:, :order] @ phi
-        var = float(e @ e) / e.size
-        aic = n * math.log(var) + 2 * order
-        roots = np.abs(np.roots(np.concatenate([[1.0], -phi])))
-        if aic < best_aic and (roots.size == 0 or roots.max() < 0.995):
-            best, best_aic = (phi, var, order), aic
-    return best
-
-
-def ar_meat(jac: np.ndarray, r: np.ndarray, max_order: int = 10) -> tuple[np.ndarray, dict]:
-    """Jᵀ Ω J for AR(p) noise: Ω = σ_e² Φ⁻¹ Φ⁻ᵀ, Φ the whitening filter, so Jᵀ Ω J = σ_e² ZᵀZ, Z = Φ⁻ᵀ J."""
-    phi, var, order = fit_ar(r, max_order)
-    z = lfilter([1.0], np.concatenate([[1.0], -phi]), jac[::-1], axis=0)[::-1]
-    return var * (z.T @ z), {"ar_order": order, "ar_coefficients": phi.tolist()}
-
-
-def sandwich_covariance(jac_parts, res_parts, max_ar_order: int = 10) -> tuple[np.ndarray, dict]:
-    """(JᵀJ)⁻¹ (Σ_k J_kᵀ Ω_k J_k) (JᵀJ)⁻¹ with Ω_k the AR(p) noise covariance of trial k (trials independent)."""
-    p = jac_parts[0].shape[1]
-    bread = np.zeros((p, p))
-    meat = np.zeros((p, p))
-    details = []
-    for jk, rk in zip(jac_parts, res_parts, strict=True):
-        bread += jk.T @ jk
-        used = np.flatnonzero(np.any(jk != 0, axis=0))
-        s_k, info = ar_meat(jk[:, used], rk, max_ar_order)
-        meat[np.ix_(used, used)] += s_k
-        details.append(info)
-    n_total = sum(r.size for r in res_parts)
-    meat *= n_total / max(n_total - p, 1)  # degrees-of-freedom correction
-    inv = np.linalg.pinv(bread)
-    return inv @ meat @ inv, {"noise_models": details}
-
-
-def _lag1(r: np.ndarray) -> float:
-    r = r - r.mean()
-    return float(np.dot(r[1:], r[:-1]) / np.dot(r, r)) if np.dot(r, r) > 0 else 0.0
-
-
 # ---------------------------------------------------------------------------
 # Public entry points
 
@@ -378,8 +161,9 @@ def _phys_start(model, starts):
     return {n: float(np.median([s["physical"][n] for s in starts])) for n in model.parameter_names}
 
 
-def fit_trials(records: list[AngleRecord], terms, settings: FitSettings = FitSettings()) -> dict:
+def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None = None) -> dict:
     """Fit one model variant to one or more trials (shared coefficients, per-trial nuisance)."""
+    settings = settings or FitSettings()
     if not records:
         raise ValueError("no trials to fit")
     model_for = _model_factory(terms)
@@ -571,76 +355,9 @@ def _unit(name):
     return ""
 
 
-def consistency_test(per_trial: dict[str, dict], joint: dict, alpha: float = 0.05) -> dict:
-    """χ² test of the per-trial estimates against the joint one, per physical parameter.
-
-    χ²_j = Σ_k ((p̂_kj − p̂_j)/σ_kj)² over the N_j trials where parameter j is
-    identifiable and not at a bound, N_j − 1 degrees of freedom. Bonferroni
-    over parameters: the set is consistent if every p-value exceeds α / (number
-    tested). The scale factor S_j = √(χ²_j / (N_j − 1)) (the Particle Data
-    Group's, or Birge ratio) says how much wider the per-trial intervals would
-    have to be for the estimates to agree.
-    """
-    result = {}
-    names = [n for n in joint["parameters"] if n != "drag_coefficient"]
-    tested = []
-    for name in names:
-        ref = joint["parameters"][name]["value"]
-        used, excluded, chi2 = [], {}, 0.0
-        values = []
-        for trial, fit in sorted(per_trial.items()):
-            entry = fit["parameters"][name]
-            if entry["at_bound"]:
-                excluded[trial] = "at bound"
-            elif not entry["identifiable"]:
-                excluded[trial] = "not identifiable"
-            elif not entry["stderr"] or not math.isfinite(entry["stderr"]):
-                excluded[trial] = "no standard error"
-            else:
-                used.append(trial)
-                values.append(entry["value"])
-                chi2 += ((entry["value"] - ref) / entry["stderr"]) ** 2
-        dof = len(used) - 1
-        item = {"trials_used": used, "trials_excluded": excluded, "dof": dof}
-        if dof > 0:
-            item.update(
-                chi2=chi2,
-                p_value=float(stats.chi2.sf(chi2, dof)),
-                scale_factor=math.sqrt(chi2 / dof),
-                relative_spread=float(np.std(values, ddof=1) / abs(ref)) if ref else None,
-            )
-            tested.append(name)
-        else:
-            item.update(chi2=None, p_value=None, scale_factor=None, relative_spread=None)
-        result[name] = item
-    threshold = alpha / max(len(tested), 1)
-    inconsistent = [n for n in tested if result[n]["p_value"] < threshold]
-    if not tested:
-        verdict, explanation = "not testable", "fewer than two trials determine any parameter"
-    elif inconsistent:
-        worst = max(inconsistent, key=lambda n: result[n]["scale_factor"])
-        verdict = "inconsistent"
-        explanation = (
-            f"per-trial estimates of {', '.join(inconsistent)} disagree beyond their own intervals "
-            f"(worst: {worst}, scatter {result[worst]['scale_factor']:.1f}× what the intervals allow, "
-            f"{100 * result[worst]['relative_spread']:.1f} % relative spread): the model misses physics "
-            "that changes between trials, or the angle records carry systematic errors"
-        )
-    else:
-        verdict = "consistent"
-        explanation = "per-trial estimates agree with the joint estimate within their uncertainties"
-    return {
-        "verdict": verdict,
-        "alpha": alpha,
-        "per_parameter_threshold": threshold,
-        "inconsistent_parameters": inconsistent,
-        "parameters": result,
-        "explanation": explanation,
-    }
-
-
-def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], settings: FitSettings = FitSettings()):
+def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], settings: FitSettings | None = None):
     """Joint fit plus the consistency test; intervals widened by the scale factor S when S > 1 (PDG rule)."""
+    settings = settings or FitSettings()
     joint = fit_trials(records, terms, settings)
     consistency = consistency_test(per_trial, joint, settings.consistency_alpha)
     joint["consistency"] = consistency
@@ -655,53 +372,3 @@ def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], set
             floor = settings.added_mass_lower_kg if name == ADDED_MASS else 0.0
             entry["ci95"] = [max(entry["value"] - Z95 * se, floor), entry["value"] + Z95 * se]
     return joint
-
-
-def fit_document(fit: dict, *, variant: str, rig: dict, sources: list[str], settings: FitSettings) -> dict:
-    """A fit as written to results/fits: what was fitted, to what, with which settings, then the fit."""
-    return {
-        "variant": variant,
-        "terms": fit["terms"],
-        "rig": rig,
-        "sources": list(sources),
-        "settings": asdict(settings),
-        **{k: v for k, v in fit.items() if k != "terms"},
-    }
-
-
-PHYSICAL_COLUMNS = (ADDED_MASS, "drag_area_m2", "drag_coefficient", "linear_damping_nm_s", "friction_torque_nm")
-
-
-def summary_table(documents: list[dict]) -> pd.DataFrame:
-    """One row per (variant, trial or joint fit): the paper's Tables 2 and 3 with intervals and flags."""
-    rows = []
-    for doc in documents:
-        fits = [(doc["trial"], doc)] if "trial" in doc else [(f"joint:{rig}", d) for rig, d in doc["rigs"].items()]
-        for label, fit in fits:
-            kc = fit["keulegan_carpenter_number"]
-            first = next(iter(fit["trials"].values()))
-            row = {
-                "variant": fit["variant"],
-                "fit": label,
-                "n_trials": len(fit["trials"]),
-                "theta0_deg": first["theta0_deg"] if len(fit["trials"]) == 1 else None,
-                "kc_min": min(kc) if isinstance(kc, list) else kc,
-                "kc_max": max(kc) if isinstance(kc, list) else kc,
-                "n_samples": fit["n_samples"],
-                "rms_deg": fit["rms_deg"],
-                "rms_arc_m": fit["rms_arc_m"],
-                "aic": fit["aic"],
-                "bic": fit["bic"],
-                "consistency": fit.get("consistency", {}).get("verdict"),
-                "n_warnings": len(fit["warnings"]),
-            }
-            for name in PHYSICAL_COLUMNS:
-                entry = fit["parameters"].get(name)
-                row[name] = entry["value"] if entry else None
-                row[f"{name}_stderr"] = entry["stderr"] if entry else None
-                row[f"{name}_ci95_low"] = entry["ci95"][0] if entry else None
-                row[f"{name}_ci95_high"] = entry["ci95"][1] if entry else None
-                row[f"{name}_at_bound"] = entry["at_bound"] if entry else None
-                row[f"{name}_identifiable"] = entry["identifiable"] if entry else None
-            rows.append(row)
-    return pd.DataFrame(rows)

@@ -25,6 +25,8 @@ class CircleFit:
     rms_px: float
     n_points: int
     arc_span_deg: float
+    pivot_covariance_px2: list | None = None  # 2×2 covariance of (x_p, y_p), for the error budget
+    effective_points: float | None = None  # n corrected for the residuals' autocorrelation
 
 
 def fit_circle(x, y) -> CircleFit:
@@ -47,8 +49,22 @@ def fit_circle(x, y) -> CircleFit:
     sol = least_squares(residual, [cx, cy, r0], x_scale="jac")
     cx, cy, r = sol.x
     ang = np.degrees(np.arctan2(x - cx, y - cy))
+    # Covariance σ² (JᵀJ)⁻¹, with n replaced by an effective count n (1 − ρ)/(1 + ρ):
+    # neighbouring track points share their errors (texture, blur), ρ is the lag-1 correlation.
+    res = sol.fun
+    rho = float(np.clip(np.corrcoef(res[1:], res[:-1])[0, 1], 0.0, 0.99)) if res.size > 3 else 0.0
+    n_eff = max(x.size * (1 - rho) / (1 + rho), 4.0)
+    sigma2 = float(res @ res) / max(x.size - 3, 1)
+    cov = np.linalg.pinv(sol.jac.T @ sol.jac) * sigma2 * x.size / n_eff
     return CircleFit(
-        float(cx), float(cy), float(r), float(np.sqrt(np.mean(sol.fun**2))), int(x.size), float(np.ptp(ang))
+        float(cx),
+        float(cy),
+        float(r),
+        float(np.sqrt(np.mean(res**2))),
+        int(x.size),
+        float(np.ptp(ang)),
+        cov[:2, :2].tolist(),
+        float(n_eff),
     )
 
 
@@ -182,6 +198,8 @@ class AngleRecordInfo:
     n_flagged: int
     rest_from_s: float | None
     noise_deg: float
+    arm_radius_px: float | None = None  # pivot to marker, median over the tracked samples
+    pivot_covariance_px2: list | None = None  # of an estimated pivot (None: given, taken as exact)
 
     def to_dict(self):
         return asdict(self)
@@ -199,6 +217,8 @@ def angle_record(
     pivot_px=None,
     frame=None,
     keep_rest_s: float = 2.0,
+    arm_radius_px: float | None = None,
+    pivot_covariance_px2=None,
 ) -> tuple[pd.DataFrame, AngleRecordInfo]:
     """θ relative to the vertical, trimmed to the free decay (release → shortly after coming to rest).
 
@@ -244,13 +264,19 @@ def angle_record(
         n_flagged=int((table.flag != "ok").sum()),
         rest_from_s=rest_from,
         noise_deg=math.degrees(noise_level(theta)),
+        arm_radius_px=arm_radius_px,
+        pivot_covariance_px2=pivot_covariance_px2,
     )
     return table, info
 
 
-def angles_from_track(track: pd.DataFrame, *, pivot_px, vertical_deg: float, length_m: float, source: str):
+def angles_from_track(
+    track: pd.DataFrame, *, pivot_px, vertical_deg: float, length_m: float, source: str, pivot_covariance_px2=None
+):
     """Angle record of a marker track (see :func:`angle_record`)."""
     theta_img = image_angle_rad(track.x_px, track.y_px, pivot_px)
+    ok = (track.flag == "ok").to_numpy()
+    radius = np.hypot(track.x_px.to_numpy(float) - pivot_px[0], track.y_px.to_numpy(float) - pivot_px[1])[ok]
     return angle_record(
         track.time_s,
         theta_img,
@@ -261,6 +287,8 @@ def angles_from_track(track: pd.DataFrame, *, pivot_px, vertical_deg: float, len
         source=source,
         pivot_px=pivot_px,
         frame=track.frame,
+        arm_radius_px=float(np.median(radius)) if radius.size else None,
+        pivot_covariance_px2=pivot_covariance_px2,
     )
 
 
@@ -296,6 +324,7 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         pivot_px = [circle.pivot_x_px, circle.pivot_y_px]
         result["pivot_source"] = "estimated: circle fitted to the pooled marker paths"
         result["circle"] = asdict(circle)
+        result["pivot_covariance_px2"] = circle.pivot_covariance_px2
     else:
         result["pivot_source"] = "given"
     result["pivot_px"] = [float(pivot_px[0]), float(pivot_px[1])]

@@ -21,6 +21,7 @@ RIG_KEYS = (
     "gravity_m_s2",
     "body_inertia_kg_m2",
     "characteristic_length_m",
+    "kinematic_viscosity_m2_s",
 )
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px")
@@ -126,6 +127,7 @@ def trial_settings(config: dict, trial: Trial) -> dict:
     return {
         "rig_name": rig,
         "rig": {k: merged_rig[k] for k in RIG_KEYS if k in merged_rig},
+        "tolerances": dict(config["rigs"][rig].get("tolerances") or {}),
         "pivot_px": merged_rig.get("pivot_px"),
         "vertical_deg": merged_rig.get("vertical_deg"),
         "geometry_from_sidecar": any(k in trial.sidecar for k in GEOMETRY_KEYS),

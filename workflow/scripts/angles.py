@@ -27,12 +27,21 @@ try:
             summary = json.loads(Path(track_path).with_suffix(".json").read_text())
             raise ValueError(f"{summary['video']}: no marker track: {summary['error']}")
         pivot, vertical = settings["pivot_px"], settings["vertical_deg"]
+        pivot_cov = None
         if "geometry" in sm.input.keys():
             geometry = json.loads(Path(sm.input.geometry).read_text())
-            pivot = pivot if pivot is not None else geometry["pivot_px"]
+            if pivot is None:
+                pivot, pivot_cov = geometry["pivot_px"], geometry.get("pivot_covariance_px2")
             vertical = vertical if vertical is not None else geometry["vertical_deg"]
         source = track_path
-        table, info = angles_from_track(track, pivot_px=pivot, vertical_deg=vertical, length_m=length_m, source=source)
+        table, info = angles_from_track(
+            track,
+            pivot_px=pivot,
+            vertical_deg=vertical,
+            length_m=length_m,
+            source=source,
+            pivot_covariance_px2=pivot_cov,
+        )
 except Exception as exc:
     log.error("trial %s: %s", sm.wildcards.trial, exc)
     raise

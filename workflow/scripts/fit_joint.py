@@ -6,8 +6,10 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.fitting import FitSettings, fit_document, fit_joint, load_record
+from pendulum.fitting import fit_joint
 from pendulum.io import script_logger, write_json
+from pendulum.records import FitSettings, load_record
+from pendulum.summary import fit_document
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "fit_joint")

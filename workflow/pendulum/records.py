@@ -1,0 +1,143 @@
+"""Angle records as the fitter uses them, and the numerical settings of a fit."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from pendulum.physics import Rig
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """Numerical choices of a fit (config ``fitting``)."""
+
+    release_skip_s: float = 0.25  # samples before this (time since release) are not fitted
+    max_step_s: float = 0.02  # RK4 step limit of the simulation inside the fit
+    outlier_sigmas: float = 6.0  # one pass: samples further than this (robust σ) are dropped, refit
+    identifiable_max_relative_stderr: float = 0.5  # above: flagged not identifiable
+    consistency_alpha: float = 0.05
+    max_ar_order: int = 10  # highest order of the residual-noise AR model behind the intervals
+    added_mass_lower_kg: float = 0.0  # < 0 only for calibration swings (e.g. in air): an inertia correction
+
+
+# Standard uncertainty (1σ) of each measured rig value, relative to the value, used when a
+# rig's ``tolerances`` block does not state it (absolute values there override these).
+DEFAULT_RELATIVE_TOLERANCES = {
+    "mass_kg": 0.002,  # kitchen/lab scale on a few kg
+    "length_m": 0.002,  # tape measure, pivot to centre of the body: ≈1.5 mm on 0.76 m
+    "frontal_area_m2": 0.02,  # from drawings or a photograph
+    "displaced_volume_m3": 0.01,  # from CAD or displacement
+    "body_inertia_kg_m2": 0.02,  # from CAD or a bifilar swing (only when given)
+    "fluid_density_kg_m3": 0.002,  # fresh water 0–30 °C
+    "gravity_m_s2": 0.0,
+}
+WATER_KINEMATIC_VISCOSITY_M2_S = 1.0e-6  # 20 °C
+
+
+def rig_tolerances(rig_values: dict, stated: dict | None = None) -> dict:
+    """Absolute 1σ uncertainty of every rig value that enters the model: stated, else the default fraction."""
+    stated = stated or {}
+    out = {}
+    for name, fraction in DEFAULT_RELATIVE_TOLERANCES.items():
+        value = rig_values.get(name)
+        if value is None and name == "body_inertia_kg_m2":
+            continue  # point mass: I_p = m L² follows mass and length
+        if name in stated:
+            out[name] = float(stated[name])
+        elif value is not None:
+            out[name] = fraction * abs(float(value))
+    return out
+
+
+@dataclass
+class AngleRecord:
+    """The samples of one trial that a fit uses (valid, after the release transient).
+
+    Besides the samples it carries what the systematic error budget needs: the
+    rig values as stated with their 1σ ``tolerances``, and the geometry of the
+    angle measurement (marker arm radius in pixels and the covariance of an
+    estimated pivot, both None for angle tables that did not come from a track).
+    """
+
+    trial: str
+    rig: Rig
+    time_s: np.ndarray  # since release
+    theta_rad: np.ndarray
+    characteristic_length_m: float
+    dropped: dict = field(default_factory=dict)
+    rig_values: dict = field(default_factory=dict)
+    tolerances: dict = field(default_factory=dict)
+    arm_radius_px: float | None = None
+    pivot_covariance_px2: list | None = None
+    vertical_rad: float = 0.0  # image angle of the vertical: θ_image = θ + vertical
+    kinematic_viscosity_m2_s: float = WATER_KINEMATIC_VISCOSITY_M2_S
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.time_s.size)
+
+
+def characteristic_length_m(rig_values: dict) -> float:
+    """D of the Keulegan–Carpenter number: given, else the diameter of a disc of the frontal area."""
+    given = rig_values.get("characteristic_length_m")
+    if given:
+        return float(given)
+    return math.sqrt(4 * float(rig_values["frontal_area_m2"]) / math.pi)
+
+
+def load_record(
+    table: pd.DataFrame,
+    trial: str,
+    rig_values: dict,
+    settings: FitSettings,
+    *,
+    tolerances: dict | None = None,
+    angle_info: dict | None = None,
+) -> AngleRecord:
+    """Angle-CSV rows (``time_s``, ``theta_rad``, ``flag``) → the samples to fit.
+
+    ``tolerances``: the rig's stated 1σ uncertainties (config ``rigs.<rig>.tolerances``);
+    ``angle_info``: the angles stage's JSON (arm radius, pivot covariance, vertical).
+    """
+    for column in ("time_s", "theta_rad"):
+        if column not in table.columns:
+            raise ValueError(f"trial {trial}: angle table lacks column {column!r}")
+    t = table.time_s.to_numpy(float)
+    th = table.theta_rad.to_numpy(float)
+    ok = np.isfinite(t) & np.isfinite(th)
+    if "flag" in table.columns:
+        ok &= table.flag.to_numpy(object) == "ok"
+    n_flagged = int((~ok).sum())
+    early = t < settings.release_skip_s
+    use = ok & ~early
+    t, th = t[use], th[use]
+    order = np.argsort(t, kind="stable")
+    t, th = t[order], th[order]
+    keep = np.concatenate([[True], np.diff(t) > 0])  # repeated time stamps: keep the first
+    t, th = t[keep], th[keep]
+    if t.size < 30:
+        raise ValueError(f"trial {trial}: only {t.size} usable angle samples after the release transient")
+    rig = Rig.from_mapping(rig_values)
+    info = angle_info or {}
+    return AngleRecord(
+        trial,
+        rig,
+        t,
+        th,
+        characteristic_length_m(rig_values),
+        dropped={
+            "flagged_or_missing": n_flagged,
+            "release_transient": int((early & ok).sum()),
+            "repeated_time": int((~keep).sum()),
+        },
+        rig_values=dict(rig_values),
+        tolerances=rig_tolerances(rig_values, tolerances),
+        arm_radius_px=info.get("arm_radius_px"),
+        pivot_covariance_px2=info.get("pivot_covariance_px2"),
+        vertical_rad=math.radians(info.get("vertical_deg") or 0.0),
+        kinematic_viscosity_m2_s=float(rig_values.get("kinematic_viscosity_m2_s") or WATER_KINEMATIC_VISCOSITY_M2_S),
+    )
