@@ -294,6 +294,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             "keulegan_carpenter_number": keulegan_carpenter_number(peak_speed, period, rec.characteristic_length_m),
             "start_values": starts[k],
             "dropped_samples": rec.dropped,
+            "outlier_times_s": [float(v) for v in rec.time_s[~problem.masks[k]]],
         }
     inflation = {
         name: float(math.sqrt(cov[j, j] / white_cov[j, j])) if white_cov[j, j] > 0 else None
