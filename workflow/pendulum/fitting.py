@@ -30,6 +30,7 @@ bootstrap needs hundreds of refits. Coverage measured on synthetic records
 
 from __future__ import annotations
 
+import hashlib
 import math
 
 import numpy as np
@@ -38,7 +39,7 @@ from scipy.optimize import least_squares
 from pendulum.decay import decay_analysis
 from pendulum.physics import ADDED_MASS, TERMS, PendulumModel, Rig, keulegan_carpenter_number, simulate
 from pendulum.records import AngleRecord, FitSettings
-from pendulum.uncertainty import Z95, _lag1, consistency_test, sandwich_covariance
+from pendulum.uncertainty import Z95, _lag1, consistency_test, interval95, sandwich_covariance, systematic_shifts
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
 
@@ -67,6 +68,7 @@ class _Problem:
 
     def __init__(self, model_for, records, names, max_step_s):
         self.records = records
+        self.model_for = model_for
         self.models = [model_for(r.rig) for r in records]
         self.names = list(names)
         self.n_phys = len(names)
@@ -85,14 +87,15 @@ class _Problem:
         nuis = x[self.n_phys :].reshape(len(self.records), 3)
         return phys, nuis
 
-    def simulate_trial(self, k, phys, nuis_k):
+    def simulate_trial(self, k, phys, nuis_k, rig_values=None):
         r = self.records[k]
-        theta, _ = simulate(self.models[k], phys, nuis_k[0], nuis_k[1], r.time_s, max_step_s=self.max_step_s)
+        model = self.models[k] if rig_values is None else self.model_for(Rig.from_mapping(rig_values))
+        theta, _ = simulate(model, phys, nuis_k[0], nuis_k[1], r.time_s, max_step_s=self.max_step_s)
         return theta + nuis_k[2]
 
-    def trial_residual(self, k, phys, nuis_k):
-        """Simulated minus measured θ on trial k's samples in use."""
-        return (self.simulate_trial(k, phys, nuis_k) - self.records[k].theta_rad)[self.masks[k]]
+    def trial_residual(self, k, phys, nuis_k, rig_values=None):
+        """Simulated minus measured θ on trial k's samples in use (optionally with other rig values)."""
+        return (self.simulate_trial(k, phys, nuis_k, rig_values) - self.records[k].theta_rad)[self.masks[k]]
 
     def trial_residuals(self, x):
         phys, nuis = self.split(x)
@@ -173,7 +176,7 @@ def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None =
     phys0 = _phys_start(model, starts)
     x0 = np.array([phys0[n] for n in names] + [s[k] for s in starts for k in NUISANCE])
     lower = np.array([0.0] * len(names) + [-np.inf] * (3 * len(records)))
-    lower[0] = settings.added_mass_lower_kg
+    lower[0] = _added_mass_lower_kg(records, settings)
     problem = _Problem(model_for, records, names, settings.max_step_s)
     sol = problem.solve(x0, lower)
     # one pass of outlier rejection (mis-tracked points), then refit from the solution
@@ -195,15 +198,24 @@ def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None =
     residual = np.concatenate(res_parts)
     n = residual.size
     white_cov = np.linalg.pinv(jac.T @ jac) * float(residual @ residual) / max(n - sol.x.size, 1)
+    hac_info["systematic_shifts"] = systematic_shifts(problem, sol.x, jac, np.asarray(sol.active_mask) == 0)
     return _summarise(
         model, records, problem, sol, cov, white_cov, res_parts, starts, n_outliers, hac_info, settings, lower
     )
+
+
+def _added_mass_lower_kg(records, settings) -> float:
+    """The configured lower bound, raised if needed so that I_p + m_a L² stays positive (≥ 1 % of I_p)."""
+    floor = max(-0.99 * r.rig.pivot_inertia_kg_m2 / r.rig.length_m**2 for r in records)
+    return max(settings.added_mass_lower_kg, floor)
 
 
 def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, n_outliers, hac_info, settings, lower):
     names = list(model.parameter_names)
     x = sol.x
     stderr = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    shifts = hac_info.pop("systematic_shifts")
+    stderr_sys = np.sqrt(sum((d**2 for d in shifts.values()), np.zeros(x.size)))
     active = np.asarray(sol.active_mask) != 0
     rig = records[0].rig
     warnings = []
@@ -217,11 +229,15 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         at_bound = bool(active[j] or value <= lower[j] + 1e-9 * max(se, 1e-300))
         if at_bound:
             value = float(lower[j])
-        lo, hi = value - Z95 * se, value + Z95 * se
+        combined = math.hypot(se, float(stderr_sys[j]))
         entry = {
             "value": value,
-            "stderr": se,
-            "ci95": [max(lo, float(lower[j])), hi],
+            "stderr": combined,
+            "ci95": interval95(value, combined, float(lower[j]), at_bound),
+            "stderr_statistical": se,
+            "stderr_systematic": float(stderr_sys[j]),
+            "error_budget": {key: float(d[j]) for key, d in shifts.items()},
+            "lower_bound": float(lower[j]),
             "at_bound": at_bound,
             "identifiable": True,
             "unit": _unit(name),
@@ -239,15 +255,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             warnings.append(f"{name} is not identifiable from this record ({rel * 100:.0f} % standard error)")
         params[name] = entry
         if name == "drag_area_m2":
-            area = rig.frontal_area_m2
-            params["drag_coefficient"] = {
-                **entry,
-                "value": value / area,
-                "stderr": se / area,
-                "ci95": [v / area for v in entry["ci95"]],
-                "unit": "1",
-                "derived_from": "drag_area_m2 / frontal_area_m2",
-            }
+            params["drag_coefficient"] = _drag_coefficient(entry, records[0])
     warnings += _rig_checks(rig, params[ADDED_MASS], starts)
     sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     corr = cov / np.outer(sd, sd)
@@ -309,6 +317,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         "aic": n * math.log(rss / n) + 2 * k_params,
         "bic": n * math.log(rss / n) + k_params * math.log(n),
         "n_samples": int(n),
+        "samples_digest": _samples_digest(records, problem.masks),
         "n_parameters": int(x.size),
         "correlation": {"parameters": names, "matrix": corr[: len(names), : len(names)].tolist()},
         "keulegan_carpenter_number": [
@@ -318,8 +327,11 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         if len(trials) > 1
         else next(iter(trials.values()))["keulegan_carpenter_number"],
         "uncertainty": {
-            "method": "least-squares sandwich covariance with an AR(p) model of the residual noise "
-            "(p by AIC); normal 95 % intervals",
+            "method": "statistical: least-squares sandwich covariance with an AR(p) model of the residual "
+            "noise (p by AIC); systematic: each rig value's stated 1σ tolerance and the estimated pivot's "
+            "covariance propagated by a linearised refit (error_budget); combined in quadrature; normal 95 % "
+            "intervals, one-sided at a bound",
+            "systematic_inputs": _systematic_inputs(records),
             "stderr_over_white_noise_stderr": inflation,
             **hac_info,
         },
@@ -347,6 +359,50 @@ def _rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
     return out
 
 
+def _samples_digest(records, masks) -> str:
+    """SHA-256 of the (trial, time) pairs fitted: AIC/BIC compare only fits with the same digest."""
+    h = hashlib.sha256()
+    for rec, mask in zip(records, masks, strict=True):
+        h.update(rec.trial.encode() + b"\0")
+        h.update(np.round(rec.time_s[mask], 9).tobytes())
+    return h.hexdigest()[:16]
+
+
+def _systematic_inputs(records) -> dict:
+    """What the systematic budget propagated: each rig value's 1σ and the pivot covariance per trial."""
+    first = records[0]
+    return {
+        "rig_tolerances": dict(first.tolerances),
+        "pivot_covariance_px2": {r.trial: r.pivot_covariance_px2 for r in records},
+        "arm_radius_px": {r.trial: r.arm_radius_px for r in records},
+    }
+
+
+def _drag_coefficient(drag_area: dict, record: AngleRecord) -> dict:
+    """C_d = C_dA / A: every input of the drag area's budget divided by A, plus A's own tolerance."""
+    area = record.rig.frontal_area_m2
+    value = drag_area["value"] / area
+    budget = {key: shift / area for key, shift in drag_area["error_budget"].items()}
+    area_sigma = record.tolerances.get("frontal_area_m2", 0.0)
+    if area_sigma:
+        budget["frontal_area_m2"] = -value * area_sigma / area
+    stat = drag_area["stderr_statistical"] / area
+    sys = math.sqrt(sum(v * v for v in budget.values()))
+    combined = math.hypot(stat, sys)
+    return {
+        **drag_area,
+        "value": value,
+        "stderr": combined,
+        "ci95": interval95(value, combined, drag_area["lower_bound"] / area, drag_area["at_bound"]),
+        "stderr_statistical": stat,
+        "stderr_systematic": sys,
+        "error_budget": budget,
+        "lower_bound": drag_area["lower_bound"] / area,
+        "unit": "1",
+        "derived_from": "drag_area_m2 / frontal_area_m2",
+    }
+
+
 def _unit(name):
     if name == ADDED_MASS:
         return "kg"
@@ -357,7 +413,14 @@ def _unit(name):
 
 
 def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], settings: FitSettings | None = None):
-    """Joint fit plus the consistency test; intervals widened by the scale factor S when S > 1 (PDG rule)."""
+    """Joint fit plus the consistency test.
+
+    When the per-trial estimates scatter more than their statistical intervals
+    allow (scale factor S > 1), the joint fit's statistical error is widened by S
+    (the Particle Data Group's rule); the systematic part (rig values, pivot: one
+    measurement shared by all trials) is added after, unscaled:
+    σ = √((S σ_stat)² + σ_sys²).
+    """
     settings = settings or FitSettings()
     joint = fit_trials(records, terms, settings)
     consistency = consistency_test(per_trial, joint, settings.consistency_alpha)
@@ -365,11 +428,9 @@ def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], set
     for name, entry in joint["parameters"].items():
         source = "drag_area_m2" if name == "drag_coefficient" else name
         scale = consistency["parameters"][source]["scale_factor"]
-        entry["stderr_statistical"] = entry["stderr"]
         entry["scale_factor"] = max(1.0, scale) if scale else 1.0
         if entry["scale_factor"] > 1.0:
-            se = entry["stderr"] * entry["scale_factor"]
+            se = math.hypot(entry["stderr_statistical"] * entry["scale_factor"], entry["stderr_systematic"])
             entry["stderr"] = se
-            floor = settings.added_mass_lower_kg if name == ADDED_MASS else 0.0
-            entry["ci95"] = [max(entry["value"] - Z95 * se, floor), entry["value"] + Z95 * se]
+            entry["ci95"] = interval95(entry["value"], se, entry["lower_bound"], entry["at_bound"])
     return joint

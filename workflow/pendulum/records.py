@@ -100,7 +100,9 @@ def load_record(
 ) -> AngleRecord:
     """Angle-CSV rows (``time_s``, ``theta_rad``, ``flag``) → the samples to fit.
 
-    ``tolerances``: the rig's stated 1σ uncertainties (config ``rigs.<rig>.tolerances``);
+    ``tolerances``: the rig's stated 1σ uncertainties (config ``rigs.<rig>.tolerances``;
+    values not stated take :data:`DEFAULT_RELATIVE_TOLERANCES`; None: the rig values
+    are exact, no systematic budget — for records generated from known values);
     ``angle_info``: the angles stage's JSON (arm radius, pivot covariance, vertical).
     """
     for column in ("time_s", "theta_rad"):
@@ -135,7 +137,7 @@ def load_record(
             "repeated_time": int((~keep).sum()),
         },
         rig_values=dict(rig_values),
-        tolerances=rig_tolerances(rig_values, tolerances),
+        tolerances={} if tolerances is None else rig_tolerances(rig_values, tolerances),
         arm_radius_px=info.get("arm_radius_px"),
         pivot_covariance_px2=info.get("pivot_covariance_px2"),
         vertical_rad=math.radians(info.get("vertical_deg") or 0.0),

@@ -63,46 +63,60 @@ def _lag1(r: np.ndarray) -> float:
 
 
 def consistency_test(per_trial: dict[str, dict], joint: dict, alpha: float = 0.05) -> dict:
-    """χ² test of the per-trial estimates against the joint one, per physical parameter.
+    """χ² test of the per-trial estimates against each other, per physical parameter.
 
-    χ²_j = Σ_k ((p̂_kj − p̂_j)/σ_kj)² over the N_j trials where parameter j is
-    identifiable and not at a bound, N_j − 1 degrees of freedom. Bonferroni
-    over parameters: the set is consistent if every p-value exceeds α / (number
-    tested). The scale factor S_j = √(χ²_j / (N_j − 1)) (the Particle Data
-    Group's, or Birge ratio) says how much wider the per-trial intervals would
-    have to be for the estimates to agree.
+    χ²_j = Σ_k ((p̂_kj − p̄_j)/σ_kj)² over the N_j trials where parameter j is
+    identifiable and not at a bound, p̄_j their inverse-variance weighted mean,
+    N_j − 1 degrees of freedom (one mean fitted). σ_kj is the *statistical*
+    standard error: the systematic part (rig values, pivot) is one measurement
+    shared by every trial of the rig and moves them together, so it cannot make
+    them disagree. Bonferroni over parameters: the set is consistent if every
+    p-value exceeds α / (number tested). The scale factor S_j = √(χ²_j / (N_j − 1))
+    (the Particle Data Group's, or Birge ratio) says how much wider the per-trial
+    intervals would have to be for the estimates to agree. The joint estimate
+    is reported beside the weighted mean.
     """
     result = {}
     names = [n for n in joint["parameters"] if n != "drag_coefficient"]
     tested = []
     for name in names:
-        ref = joint["parameters"][name]["value"]
-        used, excluded, chi2 = [], {}, 0.0
-        values = []
+        used, excluded, values, errors = [], {}, [], []
         for trial, fit in sorted(per_trial.items()):
-            entry = fit["parameters"][name]
-            if entry["at_bound"]:
+            entry = (fit.get("parameters") or {}).get(name)
+            se = None if entry is None else entry.get("stderr_statistical", entry.get("stderr"))
+            if entry is None or entry.get("value") is None:
+                excluded[trial] = "no estimate"
+            elif entry.get("at_bound"):
                 excluded[trial] = "at bound"
-            elif not entry["identifiable"]:
+            elif not entry.get("identifiable", True):
                 excluded[trial] = "not identifiable"
-            elif not entry["stderr"] or not math.isfinite(entry["stderr"]):
+            elif not se or not math.isfinite(se):
                 excluded[trial] = "no standard error"
             else:
                 used.append(trial)
-                values.append(entry["value"])
-                chi2 += ((entry["value"] - ref) / entry["stderr"]) ** 2
+                values.append(float(entry["value"]))
+                errors.append(float(se))
         dof = len(used) - 1
-        item = {"trials_used": used, "trials_excluded": excluded, "dof": dof}
+        item = {
+            "trials_used": used,
+            "trials_excluded": excluded,
+            "dof": dof,
+            "joint_value": joint["parameters"][name].get("value"),
+        }
         if dof > 0:
+            v, w = np.array(values), 1.0 / np.array(errors) ** 2
+            mean = float(np.sum(w * v) / np.sum(w))
+            chi2 = float(np.sum(w * (v - mean) ** 2))
             item.update(
+                weighted_mean=mean,
                 chi2=chi2,
                 p_value=float(stats.chi2.sf(chi2, dof)),
                 scale_factor=math.sqrt(chi2 / dof),
-                relative_spread=float(np.std(values, ddof=1) / abs(ref)) if ref else None,
+                relative_spread=float(np.std(v, ddof=1) / abs(mean)) if mean else None,
             )
             tested.append(name)
         else:
-            item.update(chi2=None, p_value=None, scale_factor=None, relative_spread=None)
+            item.update(weighted_mean=None, chi2=None, p_value=None, scale_factor=None, relative_spread=None)
         result[name] = item
     threshold = alpha / max(len(tested), 1)
     inconsistent = [n for n in tested if result[n]["p_value"] < threshold]
@@ -110,16 +124,17 @@ def consistency_test(per_trial: dict[str, dict], joint: dict, alpha: float = 0.0
         verdict, explanation = "not testable", "fewer than two trials determine any parameter"
     elif inconsistent:
         worst = max(inconsistent, key=lambda n: result[n]["scale_factor"])
+        spread = result[worst]["relative_spread"]
+        spread_text = f", {100 * spread:.1f} % relative spread" if spread is not None else ""
         verdict = "inconsistent"
         explanation = (
             f"per-trial estimates of {', '.join(inconsistent)} disagree beyond their own intervals "
-            f"(worst: {worst}, scatter {result[worst]['scale_factor']:.1f}× what the intervals allow, "
-            f"{100 * result[worst]['relative_spread']:.1f} % relative spread): the model misses physics "
-            "that changes between trials, or the angle records carry systematic errors"
+            f"(worst: {worst}, scatter {result[worst]['scale_factor']:.1f}× what the intervals allow{spread_text}): "
+            "the model misses physics that changes between trials, or the angle records carry systematic errors"
         )
     else:
         verdict = "consistent"
-        explanation = "per-trial estimates agree with the joint estimate within their uncertainties"
+        explanation = "per-trial estimates agree with each other within their statistical uncertainties"
     return {
         "verdict": verdict,
         "alpha": alpha,
@@ -128,3 +143,86 @@ def consistency_test(per_trial: dict[str, dict], joint: dict, alpha: float = 0.0
         "parameters": result,
         "explanation": explanation,
     }
+
+
+# ---------------------------------------------------------------------------
+# Systematic errors: rig values and the estimated pivot, propagated by a linearised refit
+
+Z95_ONE_SIDED = stats.norm.ppf(0.95)
+
+
+def interval95(value: float, stderr: float, lower: float, at_bound: bool) -> list[float]:
+    """Normal 95 % interval value ± 1.96σ, cut at the lower bound.
+
+    A coefficient that ends on its bound gets the one-sided 95 % upper limit
+    [b, b + 1.645σ] instead (the estimate is censored there: P(truth ≤ b + 1.645σ) = 0.95
+    for a normal estimator that the bound would have clipped).
+    """
+    if at_bound:
+        return [lower, lower + Z95_ONE_SIDED * stderr]
+    return [max(value - Z95 * stderr, lower), value + Z95 * stderr]
+
+
+def linear_response(jac: np.ndarray, free: np.ndarray, delta_residual: np.ndarray) -> np.ndarray:
+    """Shift of the least-squares estimate when the residuals move by δr: δx = −J⁺ δr (parameters at a bound stay)."""
+    dx = np.zeros(jac.shape[1])
+    dx[free] = np.linalg.lstsq(jac[:, free], -delta_residual, rcond=None)[0]
+    return dx
+
+
+def pivot_angle_gradient(theta_image_rad: np.ndarray, arm_radius_px: float) -> np.ndarray:
+    """∂θ/∂(x_p, y_p) for θ = atan2(x − x_p, y − y_p): (−cos θ, sin θ) / R, one row per sample."""
+    return np.column_stack([-np.cos(theta_image_rad), np.sin(theta_image_rad)]) / arm_radius_px
+
+
+def systematic_shifts(problem, x: np.ndarray, jac: np.ndarray, free: np.ndarray) -> dict[str, np.ndarray]:
+    """1σ shift of every fitted value caused by each systematic input (name → δx).
+
+    Rig values: each record's value moved by ± its 1σ tolerance (the same
+    input for all records of the fit: one rig, one measurement), δr the central
+    difference of the residuals, δx = −J⁺ δr. The estimated pivot: its
+    covariance C = Σ λ_i v_i v_iᵀ gives independent inputs √λ_i v_i; the measured
+    angles move by δθ = ∇θ · √λ_i v_i, so δr = −δθ. A wrong vertical only adds
+    a constant to θ, which the fitted rest offset absorbs exactly: no input.
+    """
+    phys, nuis = problem.split(x)
+    records = problem.records
+    shifts: dict[str, np.ndarray] = {}
+    keys = sorted(set().union(*(r.tolerances for r in records)))
+    for key in keys:
+        parts = []
+        for k, rec in enumerate(records):
+            sigma = rec.tolerances.get(key, 0.0)
+            if not sigma or rec.rig_values.get(key) is None:
+                parts.append(np.zeros(int(problem.masks[k].sum())))
+                continue
+            moved = []
+            for sign in (1.0, -1.0):
+                values = dict(rec.rig_values)
+                values[key] = float(values[key]) + sign * sigma
+                moved.append(problem.trial_residual(k, phys, nuis[k], rig_values=values))
+            parts.append(0.5 * (moved[0] - moved[1]))
+        delta = np.concatenate(parts)
+        if np.any(delta):
+            shifts[key] = linear_response(jac, free, delta)
+    groups: dict[tuple, list[int]] = {}
+    for k, rec in enumerate(records):
+        if rec.pivot_covariance_px2 is not None and rec.arm_radius_px:
+            groups.setdefault(tuple(np.ravel(rec.pivot_covariance_px2)), []).append(k)
+    for g, (cov_key, members) in enumerate(sorted(groups.items())):
+        lam, vec = np.linalg.eigh(np.reshape(cov_key, (2, 2)))
+        for i in range(2):
+            if lam[i] <= 0:
+                continue
+            step = math.sqrt(lam[i]) * vec[:, i]
+            parts = []
+            for k, rec in enumerate(records):
+                mask = problem.masks[k]
+                if k in members:
+                    grad = pivot_angle_gradient(rec.theta_rad[mask] + rec.vertical_rad, rec.arm_radius_px)
+                    parts.append(-(grad @ step))
+                else:
+                    parts.append(np.zeros(int(mask.sum())))
+            label = "pivot_px" if len(groups) == 1 else f"pivot_px[{g}]"
+            shifts[f"{label} (axis {i + 1})"] = linear_response(jac, free, np.concatenate(parts))
+    return shifts
