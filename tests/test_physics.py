@@ -4,44 +4,18 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from independent_eom import Pendulum, integrate
 
 from pendulum.physics import PendulumModel, Rig, simulate, small_angle_period_s, stick_angle_bound_rad
 
 PAPER_RIG = Rig(mass_kg=3.53, length_m=0.76, frontal_area_m2=0.0322, displaced_volume_m3=0.0025)
 TRUTH = dict(added_mass_kg=2.5, drag_area_m2=0.02576, linear_damping_nm_s=0.15, friction_torque_nm=0.02)
-
-
-def reference(model, params, theta0, times):
-    """solve_ivp DOP853 at rtol 1e-10, restarted at every velocity reversal, with the stick test."""
-    inertia = float(model.inertia_kg_m2(params))
-    tau = model.friction_torque_nm(params)
-    out = np.full(times.size, np.nan)
-    t0, y0 = times[0], np.array([theta0, 0.0])
-    direction = -np.sign(math.sin(theta0))
-    while t0 < times[-1]:
-
-        def rhs(t, y, d=direction):
-            return [y[1], (model.smooth_torque_nm(params, y[0], y[1]) - tau * d) / inertia]
-
-        def reversal(t, y, d=direction, start=t0):
-            return y[1] * d if t > start else 1.0
-
-        reversal.terminal, reversal.direction = True, -1
-        sel = times >= t0
-        sol = solve_ivp(
-            rhs, (t0, times[-1]), y0, method="DOP853", rtol=1e-10, atol=1e-13, t_eval=times[sel], events=reversal
-        )
-        out[np.flatnonzero(sel)[: sol.y.shape[1]]] = sol.y[0]
-        if sol.status != 1:
-            break
-        t0, y0 = sol.t_events[0][0], np.array([sol.y_events[0][0][0], 0.0])
-        torque = model.smooth_torque_nm(params, y0[0], 0.0)
-        if abs(torque) <= tau:
-            out[times > t0] = y0[0]
-            break
-        direction = np.sign(torque)
-    return out
+FIELDS = dict(
+    added_mass_kg="added_mass",
+    drag_area_m2="drag_area",
+    linear_damping_nm_s="linear_damping",
+    friction_torque_nm="friction",
+)
 
 
 @pytest.mark.parametrize(
@@ -58,7 +32,9 @@ def test_simulator_matches_tight_reference(terms, release_deg):
     params = {k: TRUTH[k] for k in model.parameter_names}
     times = np.arange(0, 20, 1 / 30)
     theta, _ = simulate(model, params, math.radians(release_deg), 0.0, times)
-    ref = reference(model, params, math.radians(release_deg), times)
+    # the equation of motion typed in again, not through pendulum.physics (more cases: test_physics_reference.py)
+    independent = Pendulum(**{FIELDS[k]: v for k, v in params.items()})
+    ref, _ = integrate(independent, math.radians(release_deg), 0.0, times)
     assert np.max(np.abs(theta - ref)) < 1e-6
 
 
