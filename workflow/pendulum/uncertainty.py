@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from scipy import stats
 from scipy.signal import lfilter
+
+from pendulum.physics import Rig
 
 Z95 = stats.norm.ppf(0.975)
 
@@ -175,36 +178,28 @@ def pivot_angle_gradient(theta_image_rad: np.ndarray, arm_radius_px: float) -> n
     return np.column_stack([-np.cos(theta_image_rad), np.sin(theta_image_rad)]) / arm_radius_px
 
 
-def systematic_shifts(problem, x: np.ndarray, jac: np.ndarray, free: np.ndarray) -> dict[str, np.ndarray]:
-    """1σ shift of every fitted value caused by each systematic input (name → δx).
+def systematic_perturbations(records) -> dict[str, list]:
+    """Each systematic input moved by its 1σ: input name → the records as they would then be.
 
-    Rig values: each record's value moved by ± its 1σ tolerance (the same
-    input for all records of the fit: one rig, one measurement), δr the central
-    difference of the residuals, δx = −J⁺ δr. The estimated pivot: its
-    covariance C = Σ λ_i v_i v_iᵀ gives independent inputs √λ_i v_i; the measured
-    angles move by δθ = ∇θ · √λ_i v_i, so δr = −δθ. A wrong vertical only adds
-    a constant to θ, which the fitted rest offset absorbs exactly: no input.
+    Rig values: every record's value moved by its stated 1σ tolerance (one
+    input for all records of a fit: one rig, one measurement). The estimated
+    pivot: its covariance C = Σ λ_i v_i v_iᵀ gives independent inputs √λ_i v_i,
+    which move the measured angles by δθ = ∇θ · √λ_i v_i (records sharing one
+    pooled pivot move together). A wrong vertical only adds a constant to θ,
+    which the fitted rest offset absorbs exactly: it is no input.
     """
-    phys, nuis = problem.split(x)
-    records = problem.records
-    shifts: dict[str, np.ndarray] = {}
-    keys = sorted(set().union(*(r.tolerances for r in records)))
-    for key in keys:
-        parts = []
-        for k, rec in enumerate(records):
+    out: dict[str, list] = {}
+    for key in sorted(set().union(*(r.tolerances for r in records))):
+        moved, changed = [], False
+        for rec in records:
             sigma = rec.tolerances.get(key, 0.0)
-            if not sigma or rec.rig_values.get(key) is None:
-                parts.append(np.zeros(int(problem.masks[k].sum())))
-                continue
-            moved = []
-            for sign in (1.0, -1.0):
-                values = dict(rec.rig_values)
-                values[key] = float(values[key]) + sign * sigma
-                moved.append(problem.trial_residual(k, phys, nuis[k], rig_values=values))
-            parts.append(0.5 * (moved[0] - moved[1]))
-        delta = np.concatenate(parts)
-        if np.any(delta):
-            shifts[key] = linear_response(jac, free, delta)
+            if sigma and rec.rig_values.get(key) is not None:
+                values = dict(rec.rig_values, **{key: float(rec.rig_values[key]) + sigma})
+                rec = replace(rec, rig=Rig.from_mapping(values), rig_values=values)
+                changed = True
+            moved.append(rec)
+        if changed and key != "frontal_area_m2":  # A enters only C_d = C_dA / A, not the fit
+            out[key] = moved
     groups: dict[tuple, list[int]] = {}
     for k, rec in enumerate(records):
         if rec.pivot_covariance_px2 is not None and rec.arm_radius_px:
@@ -215,14 +210,12 @@ def systematic_shifts(problem, x: np.ndarray, jac: np.ndarray, free: np.ndarray)
             if lam[i] <= 0:
                 continue
             step = math.sqrt(lam[i]) * vec[:, i]
-            parts = []
+            moved = []
             for k, rec in enumerate(records):
-                mask = problem.masks[k]
                 if k in members:
-                    grad = pivot_angle_gradient(rec.theta_rad[mask] + rec.vertical_rad, rec.arm_radius_px)
-                    parts.append(-(grad @ step))
-                else:
-                    parts.append(np.zeros(int(mask.sum())))
+                    grad = pivot_angle_gradient(rec.theta_rad + rec.vertical_rad, rec.arm_radius_px)
+                    rec = replace(rec, theta_rad=rec.theta_rad + grad @ step)
+                moved.append(rec)
             label = "pivot_px" if len(groups) == 1 else f"pivot_px[{g}]"
-            shifts[f"{label} (axis {i + 1})"] = linear_response(jac, free, np.concatenate(parts))
-    return shifts
+            out[f"{label} (axis {i + 1})"] = moved
+    return out

@@ -1,0 +1,160 @@
+"""Interval mechanics and the systematic error budget, against refits and known truth."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from pendulum.fitting import _added_mass_lower_kg, fit_trials
+from pendulum.geometry import image_angle_rad
+from pendulum.physics import PendulumModel, Rig
+from pendulum.records import FitSettings, load_record, rig_tolerances
+from pendulum.synthetic import synthetic_angle_table
+from pendulum.uncertainty import consistency_test, interval95
+
+RIG = {
+    "mass_kg": 3.53,
+    "length_m": 0.76,
+    "frontal_area_m2": 0.0322,
+    "displaced_volume_m3": 0.0025,
+    "fluid_density_kg_m3": 1000.0,
+    "gravity_m_s2": 9.81,
+}
+TERMS = ("quadratic_drag", "linear_damping", "coulomb_friction")
+TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
+PHYSICAL = tuple(TRUTH) + ("drag_coefficient",)
+SETTINGS = FitSettings()
+
+
+def table(release_deg, seed, rig=RIG, **kwargs):
+    model = PendulumModel(Rig(**rig), TERMS)
+    return synthetic_angle_table(model, TRUTH, release_deg, rng=np.random.default_rng(seed), **kwargs)
+
+
+def test_interval_is_two_sided_inside_and_one_sided_at_the_bound():
+    assert interval95(1.0, 0.1, 0.0, False) == pytest.approx([1.0 - 0.196, 1.0 + 0.196], abs=1e-3)
+    assert interval95(0.1, 0.1, 0.0, False)[0] == 0.0  # cut at the bound, upper end unchanged
+    low, high = interval95(0.0, 0.1, 0.0, True)
+    assert low == 0.0 and high == pytest.approx(stats.norm.ppf(0.95) * 0.1)
+
+
+@pytest.mark.parametrize("key", ["length_m", "mass_kg", "displaced_volume_m3", "fluid_density_kg_m3"])
+def test_budget_predicts_the_shift_of_a_refit_with_a_wrong_rig_value(key):
+    """Stating a rig value 1σ off moves every coefficient by its budget entry (linearised refit vs real refit)."""
+    data = table(20, seed=11)
+    fit = fit_trials([load_record(data, "a", RIG, SETTINGS, tolerances={})], TERMS, SETTINGS)
+    sigma = rig_tolerances(RIG)[key]
+    moved = dict(RIG, **{key: RIG[key] + sigma})
+    refit = fit_trials([load_record(data, "a", moved, SETTINGS, tolerances={})], TERMS, SETTINGS)
+    for name in PHYSICAL:
+        predicted = fit["parameters"][name]["error_budget"][key]
+        actual = refit["parameters"][name]["value"] - fit["parameters"][name]["value"]
+        # linear response: agreement to the second-order term (a few % of the shift) or the fit's own noise
+        assert actual == pytest.approx(predicted, rel=0.1, abs=0.05 * fit["parameters"][name]["stderr_statistical"])
+
+
+def test_frontal_area_enters_only_the_drag_coefficient():
+    fit = fit_trials([load_record(table(20, seed=12), "a", RIG, SETTINGS, tolerances={})], TERMS, SETTINGS)
+    params = fit["parameters"]
+    assert "frontal_area_m2" not in params["drag_area_m2"]["error_budget"]
+    cd = params["drag_coefficient"]
+    sigma_a = rig_tolerances(RIG)["frontal_area_m2"]
+    assert cd["error_budget"]["frontal_area_m2"] == pytest.approx(-cd["value"] * sigma_a / RIG["frontal_area_m2"])
+    # combined = statistical ⊕ systematic, and the interval is built from the combined error
+    for entry in params.values():
+        assert entry["stderr"] == pytest.approx(math.hypot(entry["stderr_statistical"], entry["stderr_systematic"]))
+        assert entry["ci95"][1] == pytest.approx(entry["value"] + 1.959964 * entry["stderr"])
+
+
+def test_exact_rig_values_give_no_systematic_part():
+    fit = fit_trials([load_record(table(20, seed=13), "a", RIG, SETTINGS)], TERMS, SETTINGS)
+    for entry in fit["parameters"].values():
+        assert entry["stderr_systematic"] == 0.0 and entry["error_budget"] == {}
+
+
+def test_pivot_budget_predicts_the_shift_from_a_wrong_pivot():
+    """Angles measured about a pivot 2 px off: the budget's pivot axis predicts the change of every coefficient."""
+    data = table(30, seed=14)
+    radius_px, pivot = 560.0, np.array([640.0, 70.0])
+    x = pivot[0] + radius_px * np.sin(data.theta_rad.to_numpy())
+    y = pivot[1] + radius_px * np.cos(data.theta_rad.to_numpy())
+    offset = np.array([0.0, 2.0])  # vertical pivot error: the angle scale error of a pooled circle fit
+    wrong = data.assign(theta_rad=image_angle_rad(x, y, pivot + offset))
+    info = {"arm_radius_px": radius_px, "pivot_covariance_px2": [[0.0, 0.0], [0.0, 4.0]], "vertical_deg": 0.0}
+    fit = fit_trials([load_record(data, "a", RIG, SETTINGS, angle_info=info)], TERMS, SETTINGS)
+    refit = fit_trials([load_record(wrong, "a", RIG, SETTINGS, angle_info=info)], TERMS, SETTINGS)
+    for name in PHYSICAL:
+        budget = fit["parameters"][name]["error_budget"]
+        (axis,) = [v for k, v in budget.items() if k.startswith("pivot_px") and abs(v) > 0]
+        actual = refit["parameters"][name]["value"] - fit["parameters"][name]["value"]
+        # the eigenvector's sign is arbitrary: compare magnitudes, and the sign through another coefficient
+        assert abs(actual) == pytest.approx(
+            abs(axis), rel=0.1, abs=0.05 * fit["parameters"][name]["stderr_statistical"]
+        )
+
+
+def test_combined_interval_covers_when_the_stated_rig_is_off_by_its_tolerance():
+    """The study a user's lab is: rig values measured with the stated 1σ, records with tracking-like noise.
+
+    n = 40 realisations, each with its own draw of every stated rig value
+    (truth + N(0, tolerance)). For a true 95 % interval the number covering is
+    Binomial(40, 0.95); P(X ≤ 33) = 0.014, so ≥ 34 hits is required per
+    coefficient (a 90 % interval, too narrow, would fail this about 40 % of the time).
+    """
+    n, need = 40, int(stats.binom.ppf(0.01, 40, 0.95))
+    assert need == 34
+    tolerances = rig_tolerances(RIG)
+    hits = dict.fromkeys(PHYSICAL, 0)
+    truth_cd = TRUTH["drag_area_m2"] / RIG["frontal_area_m2"]
+    for seed in range(n):
+        rng = np.random.default_rng(5000 + seed)
+        data = table(25, seed=5000 + seed)
+        stated = {k: v + (rng.normal(0.0, tolerances[k]) if k in tolerances else 0.0) for k, v in RIG.items()}
+        fit = fit_trials([load_record(data, f"s{seed}", stated, SETTINGS, tolerances={})], TERMS, SETTINGS)
+        for name in PHYSICAL:
+            true = truth_cd if name == "drag_coefficient" else TRUTH[name]
+            low, high = fit["parameters"][name]["ci95"]
+            hits[name] += low <= true <= high
+    print("hits of", n, hits)
+    for name, h in hits.items():
+        assert h >= need, (name, hits)
+
+
+def test_consistency_test_survives_bounds_missing_values_and_uses_statistical_errors():
+    def fit(value, se, at_bound=False, identifiable=True, systematic=0.0):
+        entry = {
+            "value": value,
+            "stderr": math.hypot(se, systematic),
+            "stderr_statistical": se,
+            "at_bound": at_bound,
+            "identifiable": identifiable,
+        }
+        return {"parameters": {"added_mass_kg": entry, "friction_torque_nm": dict(entry, value=0.0, at_bound=True)}}
+
+    per = {
+        "a": fit(1.0, 0.1, systematic=5.0),  # a large shared systematic error must not hide a disagreement
+        "b": fit(2.0, 0.1, systematic=5.0),
+        "c": fit(0.0, 0.1, at_bound=True),
+        "d": {"parameters": {}},  # a trial whose fit lacks the parameter
+    }
+    joint = {"parameters": {"added_mass_kg": {"value": 1.5}, "friction_torque_nm": {"value": 0.0}}}
+    result = consistency_test(per, joint)
+    item = result["parameters"]["added_mass_kg"]
+    assert item["trials_used"] == ["a", "b"] and item["dof"] == 1
+    assert item["trials_excluded"] == {"c": "at bound", "d": "no estimate"}
+    assert item["weighted_mean"] == pytest.approx(1.5) and item["chi2"] == pytest.approx(50.0)
+    assert result["verdict"] == "inconsistent"
+    assert result["parameters"]["friction_torque_nm"]["chi2"] is None  # every trial at its bound: not tested
+    # a zero weighted mean gives no relative spread, and the explanation still reads
+    zero = consistency_test({"a": fit(-0.1, 0.01), "b": fit(0.1, 0.01)}, joint)
+    assert zero["parameters"]["added_mass_kg"]["relative_spread"] is None and "disagree" in zero["explanation"]
+
+
+def test_added_mass_bound_keeps_the_inertia_positive():
+    settings = FitSettings(added_mass_lower_kg=-100.0)
+    rec = load_record(table(20, seed=15), "a", RIG, settings)
+    floor = _added_mass_lower_kg([rec], settings)
+    inertia = rec.rig.pivot_inertia_kg_m2 + floor * rec.rig.length_m**2
+    assert inertia == pytest.approx(0.01 * rec.rig.pivot_inertia_kg_m2)
+    assert _added_mass_lower_kg([rec], FitSettings(added_mass_lower_kg=-0.5)) == -0.5
