@@ -46,6 +46,13 @@ def all_targets():
         if config["frames"]["keep_images"]:
             targets.append(f"results/frames/{name}/images")
     targets += [f"results/angles/{name}.csv" for name in sorted(TRIALS)]
+    for variant in sorted(config["variants"]):
+        for name in sorted(TRIALS):
+            targets += [
+                f"results/fits/{variant}/{name}.curve.csv",
+                f"results/fits/{variant}/{name}.cycles.csv",
+            ]
+        targets += joint_fits(variant)
     if TRIALS:
         targets.append("results/fits/summary.csv")
     return targets
@@ -103,17 +110,46 @@ def fit_rig(wildcards):
     return {"name": settings["rig_name"], "values": settings["rig"]}
 
 
-def joint_rigs(wildcards):
-    """Rig name → {trial: that trial's rig values} (sidecars may override rig values)."""
+def fit_tolerances(wildcards):
+    return trial_settings(config, TRIALS[wildcards.trial])["tolerances"]
+
+
+def joint_fits(variant):
+    """The per-rig joint fits of one variant: one file per rig that has trials."""
+    return [
+        f"results/fits/{variant}/joint/{rig}.json"
+        for rig in sorted(rig_trials(config, TRIALS))
+    ]
+
+
+def joint_trials(wildcards):
+    """Trials of the rig of a joint fit (only these are its inputs)."""
+    names = rig_trials(config, TRIALS).get(wildcards.rig)
+    if not names:
+        raise ValueError(f"rig {wildcards.rig!r} has no trials in {config['raw_dir']}")
+    return names
+
+
+def joint_trial_rigs(wildcards):
+    """Trial → its rig values (sidecars may override rig values) for one rig's joint fit."""
     return {
-        rig: {name: trial_settings(config, TRIALS[name])["rig"] for name in names}
-        for rig, names in rig_trials(config, TRIALS).items()
+        name: trial_settings(config, TRIALS[name])["rig"]
+        for name in joint_trials(wildcards)
+    }
+
+
+def joint_tolerances(wildcards):
+    """Trial → the rig's stated 1σ tolerances, for one rig's joint fit."""
+    return {
+        name: trial_settings(config, TRIALS[name])["tolerances"]
+        for name in joint_trials(wildcards)
     }
 
 
 def summary_inputs(wildcards):
     return [
-        f"results/fits/{variant}/{name}.json"
+        path
         for variant in sorted(config["variants"])
-        for name in sorted(TRIALS) + ["joint"]
+        for path in [f"results/fits/{variant}/{name}.json" for name in sorted(TRIALS)]
+        + joint_fits(variant)
     ]

@@ -2,6 +2,7 @@ rule fit_trial:
     """One model variant fitted to one trial: coefficients, 95 % intervals, diagnostics."""
     input:
         angles="results/angles/{trial}.csv",
+        angle_info="results/angles/{trial}.json",
     output:
         fit="results/fits/{variant}/{trial}.json",
     log:
@@ -10,33 +11,56 @@ rule fit_trial:
     params:
         terms=variant_terms,
         rig=fit_rig,
+        tolerances=fit_tolerances,
         fitting=config["fitting"],
     script:
         "../scripts/fit_trial.py"
 
 
-rule fit_joint:
-    """One variant fitted jointly to all trials of each rig, with the per-trial consistency test."""
+rule fit_curve:
+    """One trial's fitted curve (every sample, with residual and flag) and half-cycle table under one variant."""
     input:
-        angles=[f"results/angles/{name}.csv" for name in sorted(TRIALS)],
-        fits=lambda wc: [
-            f"results/fits/{wc.variant}/{name}.json" for name in sorted(TRIALS)
-        ],
+        angles="results/angles/{trial}.csv",
+        fit="results/fits/{variant}/{trial}.json",
     output:
-        joint="results/fits/{variant}/joint.json",
+        curve="results/fits/{variant}/{trial}.curve.csv",
+        cycles="results/fits/{variant}/{trial}.cycles.csv",
     log:
-        "logs/fits/{variant}/joint.log",
+        "logs/fits/{variant}/{trial}.curve.log",
     threads: 1
     params:
         terms=variant_terms,
-        rigs=joint_rigs,
+        rig=fit_rig,
+    script:
+        "../scripts/fit_curve.py"
+
+
+rule fit_joint:
+    """One variant fitted jointly to all trials of one rig, with the per-trial consistency test."""
+    input:
+        angles=lambda wc: [f"results/angles/{name}.csv" for name in joint_trials(wc)],
+        angle_info=lambda wc: [
+            f"results/angles/{name}.json" for name in joint_trials(wc)
+        ],
+        fits=lambda wc: [
+            f"results/fits/{wc.variant}/{name}.json" for name in joint_trials(wc)
+        ],
+    output:
+        joint="results/fits/{variant}/joint/{rig}.json",
+    log:
+        "logs/fits/{variant}/joint/{rig}.log",
+    threads: 1
+    params:
+        terms=variant_terms,
+        trial_rigs=joint_trial_rigs,
+        tolerances=joint_tolerances,
         fitting=config["fitting"],
     script:
         "../scripts/fit_joint.py"
 
 
 rule fit_summary:
-    """Every variant's per-trial and joint estimates in one table (the paper's Tables 2 and 3)."""
+    """Every variant's per-trial and per-rig joint estimates in one table (the paper's Tables 2 and 3)."""
     input:
         fits=summary_inputs,
     output:

@@ -1,5 +1,8 @@
 """Snakemake adapter: one model variant fitted to one trial's angle record."""
 
+import json
+from pathlib import Path
+
 import pandas as pd
 
 import _setup  # noqa: F401
@@ -13,7 +16,14 @@ log = script_logger(sm.log[0], "fit_trial")
 trial, variant = sm.wildcards.trial, sm.wildcards.variant
 settings = FitSettings(**sm.params.fitting)
 try:
-    record = load_record(pd.read_csv(sm.input.angles), trial, sm.params.rig["values"], settings)
+    record = load_record(
+        pd.read_csv(sm.input.angles),
+        trial,
+        sm.params.rig["values"],
+        settings,
+        tolerances=sm.params.tolerances,
+        angle_info=json.loads(Path(sm.input.angle_info).read_text()),
+    )
     log.info("trial %s, variant %s (%s): %d samples", trial, variant, "+".join(sm.params.terms), record.n_samples)
     fit = fit_trials([record], sm.params.terms, settings)
 except Exception as exc:
