@@ -1,4 +1,7 @@
-"""Fitting against known truth: recovery, interval coverage, bounds, identifiability, real data."""
+"""Fitting: consistency bookkeeping, determinism, refusals, real data.
+
+Statistical claims (recovery, coverage, bounds, identifiability) are in test_fitting_statistics.py.
+"""
 
 import json
 import math
@@ -8,8 +11,7 @@ import pandas as pd
 import pytest
 
 from conftest import SHARED
-from pendulum.decay import decay_analysis
-from pendulum.fitting import fit_joint, fit_trials
+from pendulum.fitting import fit_trials
 from pendulum.io import write_json
 from pendulum.physics import PendulumModel, Rig
 from pendulum.records import FitSettings, load_record
@@ -42,110 +44,6 @@ def record(release_deg, terms, seed, **kwargs):
     rng = None if seed is None else np.random.default_rng(seed)
     table = synthetic_angle_table(model, truth_for(terms), release_deg, rng=rng, **kwargs)
     return load_record(table, f"r{release_deg:+g}s{seed}", PAPER_RIG, SETTINGS)
-
-
-def test_decay_analysis_gives_starting_values_near_the_truth():
-    terms = VARIANTS["friction"]
-    start = decay_analysis(PendulumModel(Rig(**PAPER_RIG), terms), record(20, terms, 1, rest_offset_deg=0.3))
-    assert start["physical"]["added_mass_kg"] == pytest.approx(2.5, rel=0.05)
-    assert start["rest_offset_rad"] == pytest.approx(math.radians(0.3), abs=math.radians(0.02))
-    # the extinction curve separates the damping terms only roughly: a start, not an answer
-    for name in ("drag_area_m2", "linear_damping_nm_s", "friction_torque_nm"):
-        assert 0.3 * TRUTH[name] < start["physical"][name] < 3 * TRUTH[name], name
-
-
-@pytest.mark.parametrize("variant", sorted(VARIANTS))
-@pytest.mark.parametrize("release_deg", [75, 20, -15])
-def test_recovers_the_generating_coefficients(variant, release_deg):
-    """One fixed noise realisation per case (a 95 % interval misses 1 time in 20; coverage is tested below)."""
-    terms = VARIANTS[variant]
-    fit = fit_trials([record(release_deg, terms, seed=2, rest_offset_deg=-0.2)], terms, SETTINGS)
-    for name, true in truth_for(terms).items():
-        entry = fit["parameters"][name]
-        low, high = entry["ci95"]
-        assert low <= true <= high, (name, entry)
-        assert not entry["at_bound"] and entry["identifiable"]
-    assert fit["parameters"]["added_mass_kg"]["value"] == pytest.approx(2.5, rel=0.02)
-    assert fit["parameters"]["drag_area_m2"]["value"] == pytest.approx(0.02576, rel=0.05)
-    assert fit["parameters"]["drag_coefficient"]["value"] == pytest.approx(0.8, rel=0.05)
-    assert fit["rms_deg"] == pytest.approx(0.005, rel=0.3)  # the noise, nothing systematic left
-    assert fit["trials"][next(iter(fit["trials"]))]["rest_offset_deg"] == pytest.approx(-0.2, abs=0.01)
-
-
-def test_interval_coverage_over_noise_realisations():
-    """60 realisations of a 20° friction-variant trial with coloured (AR) tracking-like noise."""
-    terms = VARIANTS["friction"]
-    n, hits = 60, dict.fromkeys(TRUTH, 0)
-    for seed in range(n):
-        fit = fit_trials([record(20, terms, seed=1000 + seed)], terms, SETTINGS)
-        for name, true in TRUTH.items():
-            low, high = fit["parameters"][name]["ci95"]
-            hits[name] += low <= true <= high
-    coverage = {k: v / n for k, v in hits.items()}
-    print("coverage", coverage)
-    for name, c in coverage.items():
-        assert 0.85 <= c <= 0.99, (name, coverage)
-
-
-def test_white_noise_intervals_would_be_too_narrow():
-    """The AR correction matters: on coloured noise the sandwich errors exceed the white-noise ones."""
-    terms = VARIANTS["friction"]
-    fit = fit_trials([record(20, terms, seed=7, correlation=0.9)], terms, SETTINGS)
-    ratios = fit["uncertainty"]["stderr_over_white_noise_stderr"]
-    assert all(r > 1.5 for r in ratios.values()), ratios
-
-
-def test_parameter_at_its_bound_is_flagged_and_printed_as_the_bound(tmp_path):
-    """No linear damping in the truth: the fitted c often wants to go negative and stops at 0."""
-    terms = VARIANTS["linear"]
-    model = PendulumModel(Rig(**PAPER_RIG), terms)
-    truth = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.0}
-    at_bound = 0
-    for seed in range(6):
-        table = synthetic_angle_table(model, truth, 20, rng=np.random.default_rng(seed))
-        fit = fit_trials([load_record(table, "nolin", PAPER_RIG, SETTINGS)], terms, SETTINGS)
-        entry = fit["parameters"]["linear_damping_nm_s"]
-        if entry["at_bound"]:
-            at_bound += 1
-            assert entry["value"] == 0.0 and entry["ci95"][0] == 0.0 and entry["ci95"][1] > 0
-            assert any("lower bound" in w for w in fit["warnings"])
-            write_json(fit, tmp_path / "fit.json")
-            written = json.loads((tmp_path / "fit.json").read_text())["parameters"]["linear_damping_nm_s"]
-            assert written["value"] == 0.0 and written["at_bound"] is True  # never 4.3e-14
-        else:
-            assert entry["value"] > 0
-    assert at_bound >= 1
-
-
-def test_drag_at_a_small_release_with_paper_like_noise_is_not_identifiable():
-    terms = VARIANTS["friction"]
-    rec = record(5, terms, seed=3, white_deg=0.2, correlated_deg=0.0, duration_s=12.0)  # paper: RMS 0.08–0.4°
-    fit = fit_trials([rec], terms, SETTINGS)
-    drag = fit["parameters"]["drag_area_m2"]
-    assert drag["at_bound"] or not drag["identifiable"]
-    if not drag["identifiable"]:
-        assert "too small" in drag["reason"]
-    assert any("drag_area_m2" in w for w in fit["warnings"])
-
-
-def test_joint_fit_and_consistency_on_the_true_and_the_paper_model():
-    """Friction truth: the friction joint fit agrees with its trials; the paper's model does not."""
-    terms = VARIANTS["friction"]
-    records = [record(r, terms, seed=s) for r, s in ((75, 1), (20, 2), (-15, 3), (5, 4))]
-    for variant, expected in (("friction", "consistent"), ("quadratic", "inconsistent")):
-        per_trial = {r.trial: fit_trials([r], VARIANTS[variant], SETTINGS) for r in records}
-        joint = fit_joint(records, VARIANTS[variant], per_trial, SETTINGS)
-        assert joint["consistency"]["verdict"] == expected, joint["consistency"]
-        assert joint["n_samples"] == sum(r.n_samples for r in records)
-        assert set(joint["trials"]) == {r.trial for r in records}
-        if variant == "friction":
-            for name, true in TRUTH.items():
-                low, high = joint["parameters"][name]["ci95"]
-                assert low <= true <= high, (name, joint["parameters"][name])
-        else:
-            assert "drag_area_m2" in joint["consistency"]["inconsistent_parameters"]
-            drags = [f["parameters"]["drag_area_m2"]["value"] for f in per_trial.values()]
-            assert max(drags) > 1.5 * min(drags)  # the paper's symptom: drag swings with the release
 
 
 def test_consistency_test_counts_only_usable_estimates():
@@ -211,7 +109,12 @@ def test_real_wooden_bob_in_air_fits_sensibly():
     # a sphere's added mass in air (½ρV ≈ 0.02 g) is nothing: the inertia correction stays within 3 % of m
     assert abs(fit["parameters"]["added_mass_kg"]["value"]) < 0.03 * 0.015
     drag = fit["parameters"]["drag_coefficient"]
-    assert drag["identifiable"] and 0.2 < drag["value"] < 1.5  # sphere at Re ≈ 5000 (plus the string)
+    # sphere at Re ≈ 5000 (plus the string). Pinned to the measured C_d = 0.672, stderr 0.0035:
+    # ± 3 stderr (0.0106) for a change of method that moves the estimate within its interval, plus
+    # 0.003 for the fitting settings (release_skip_s 0.1–1.0 s gives 0.6715–0.6748; max_step_s
+    # 0.005–0.02 s, max_ar_order 0–10 and outlier_sigmas 4–10 move it < 1e-4). A lost ½ or L² for L³
+    # in the drag torque would give 0.34 or 0.22 here, both inside the old 0.2–1.5.
+    assert drag["identifiable"] and drag["value"] == pytest.approx(0.672, abs=3 * 0.0035 + 0.003)
     # the paper's rig prior (no negative added mass) is flagged, not silently reported as 0
     strict = fit_trials([rec], VARIANTS["quadratic"], SETTINGS)
     assert strict["parameters"]["added_mass_kg"]["at_bound"]
