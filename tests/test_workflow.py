@@ -37,6 +37,19 @@ def planned_jobs(dry_run_output: str) -> set[tuple[str, str]]:
     return jobs
 
 
+def planned_wildcards(dry_run_output: str) -> list[tuple[str, dict]]:
+    """(rule, {wildcard: value}) of every job in a dry run."""
+    jobs, rule = [], None
+    for line in dry_run_output.splitlines():
+        m = re.match(r"^\s*(?:local)?rule (\w+):", line)
+        if m:
+            rule = m.group(1)
+        m = re.match(r"^\s*wildcards: (.+)$", line)
+        if m and rule:
+            jobs.append((rule, dict(item.split("=", 1) for item in m.group(1).split(", "))))
+    return jobs
+
+
 def digest(folder: Path, patterns=("*.csv", "*.json")) -> dict:
     return {
         str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
@@ -103,11 +116,12 @@ def test_fits_every_variant_and_the_demo_reproduces_the_paper_symptom(project):
             fit = json.loads((project / f"results/fits/{variant}/{trial}.json").read_text())
             assert {"rms_rad", "rms_deg", "rms_arc_m", "aic", "bic", "n_samples", "correlation"} <= set(fit)
             assert fit["keulegan_carpenter_number"] > 0
-    friction = json.loads((project / "results/fits/friction/joint.json").read_text())["rigs"]["paper_rig"]
+    friction = json.loads((project / "results/fits/friction/joint/paper_rig.json").read_text())
+    assert friction["rig"]["name"] == "paper_rig" and sorted(friction["trials"]) == sorted(demo_trials())
     for name, true in TRUTH.items():
         low, high = friction["parameters"][name]["ci95"]
         assert low <= true <= high, (name, friction["parameters"][name])
-    quadratic = json.loads((project / "results/fits/quadratic/joint.json").read_text())["rigs"]["paper_rig"]
+    quadratic = json.loads((project / "results/fits/quadratic/joint/paper_rig.json").read_text())
     assert quadratic["consistency"]["verdict"] == "inconsistent"
     assert "drag_area_m2" in quadratic["consistency"]["inconsistent_parameters"]
     scale = quadratic["consistency"]["parameters"]["drag_area_m2"]["scale_factor"]
@@ -123,8 +137,41 @@ def test_adding_a_variant_fits_only_that_variant(tmp_path, project):
     rules = re.findall(r"^\s*(?:local)?rule (\w+):", out, flags=re.M)
     variants = set(re.findall(r"variant=([\w.+-]+)", out))
     assert variants == {"drag_only_linear"}
-    assert sorted(set(rules)) == ["all", "fit_joint", "fit_summary", "fit_trial"]
-    assert rules.count("fit_trial") == len(demo_trials())
+    assert sorted(set(rules)) == ["all", "fit_curve", "fit_joint", "fit_summary", "fit_trial"]
+    assert rules.count("fit_trial") == rules.count("fit_curve") == len(demo_trials())
+    assert rules.count("fit_joint") == 1
+
+
+def test_curve_cycles_and_joint_files_for_every_trial_variant_and_rig(project):
+    import pandas as pd
+
+    for variant in ("quadratic", "linear", "friction"):
+        assert (project / f"results/fits/{variant}/joint/paper_rig.json").is_file()
+        assert not (project / f"results/fits/{variant}/joint.json").exists()
+        for trial in demo_trials():
+            fit = json.loads((project / f"results/fits/{variant}/{trial}.json").read_text())
+            curve = pd.read_csv(project / f"results/fits/{variant}/{trial}.curve.csv")
+            angles = pd.read_csv(project / f"results/angles/{trial}.csv")
+            assert list(curve.columns) == ["time_s", "theta_measured_rad", "theta_fitted_rad", "residual_rad", "flag"]
+            assert len(curve) == len(angles)
+            used = curve.flag == "fitted"
+            assert used.sum() == fit["n_samples"]
+            rms = float((curve.residual_rad[used] ** 2).mean() ** 0.5)
+            assert rms == pytest.approx(fit["rms_rad"], rel=1e-6), (variant, trial)
+            cycles = pd.read_csv(project / f"results/fits/{variant}/{trial}.cycles.csv")
+            assert len(cycles) >= 5, (variant, trial)
+            for column in (
+                "peak_time_s",
+                "amplitude_rad",
+                "amplitude_loss_rad",
+                "half_period_s",
+                "keulegan_carpenter_number",
+                "reynolds_number",
+                "equivalent_linear_damping_nm_s",
+                "local_drag_coefficient",
+                "predicted_amplitude_loss_rad",
+            ):
+                assert cycles[column].notna().sum() >= 5, (variant, trial, column)
 
 
 def test_broken_video_is_named_and_costs_nothing_else(tmp_path, project):
@@ -159,13 +206,21 @@ def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
         "characteristic_length_m": d,
     }
     (work / "config.yaml").write_text(yaml.safe_dump(config))
-    jobs = planned_jobs(run(["-n"], work).stdout)
+    dry_run = run(["-n"], work).stdout
+    jobs = planned_jobs(dry_run)
     assert jobs == {("angles", "wooden_bob")}
+    # a trial of a second rig refits only that rig's joint fits, never paper_rig's
+    joints = {(w["variant"], w["rig"]) for rule, w in planned_wildcards(dry_run) if rule == "fit_joint"}
+    assert joints == {(v, "air_wooden") for v in ("quadratic", "linear", "friction")}
+    fitted = {w["trial"] for rule, w in planned_wildcards(dry_run) if rule in ("fit_trial", "fit_curve")}
+    assert fitted == {"wooden_bob"}
     run(["-c2"], work)
     assert (work / "results/angles/wooden_bob.csv").read_text().count("\n") == 918
-    joint = json.loads((work / "results/fits/quadratic/joint.json").read_text())
-    assert sorted(joint["rigs"]) == ["air_wooden", "paper_rig"]
-    assert joint["rigs"]["air_wooden"]["consistency"]["verdict"] == "not testable"  # one trial
+    joint = json.loads((work / "results/fits/quadratic/joint/air_wooden.json").read_text())
+    assert joint["rig"]["name"] == "air_wooden" and sorted(joint["trials"]) == ["wooden_bob"]
+    assert joint["consistency"]["verdict"] == "not testable"  # one trial
+    assert (work / "results/fits/quadratic/wooden_bob.cycles.csv").is_file()
+    assert json.loads((work / "results/fits/quadratic/joint/paper_rig.json").read_text())["rig"]["name"] == "paper_rig"
     fit = json.loads((work / "results/fits/quadratic/wooden_bob.json").read_text())
     assert 0.2 < fit["parameters"]["drag_coefficient"]["value"] < 1.5
 
