@@ -98,10 +98,12 @@ def _trial_entry(document: dict, trial: str | None) -> tuple[str, dict]:
     return trial, trials[trial]
 
 
-def fitted_physical(document: dict) -> dict:
-    """The fitted physical parameters (added mass and one coefficient per term) of a fit document."""
-    model_names = {ADDED_MASS} | {n for n in document["parameters"] if n != "drag_coefficient"}
-    return {n: float(document["parameters"][n]["value"]) for n in model_names}
+def fitted_physical(document: dict, model: PendulumModel) -> dict:
+    """The model's physical parameters (added mass and one coefficient per term) as fitted in a document."""
+    missing = [n for n in model.parameter_names if n not in document["parameters"]]
+    if missing:
+        raise ValueError(f"the fit document has no {missing}: it is not a fit of terms {list(model.terms)}")
+    return {n: float(document["parameters"][n]["value"]) for n in model.parameter_names}
 
 
 def fitted_curve(
@@ -133,7 +135,7 @@ def fitted_curve(
     settings = _settings(fit_document)
     record = load_record(angle_table, trial, rig_values, settings)
     model = PendulumModel(Rig.from_mapping(rig_values), tuple(terms))
-    params = fitted_physical(fit_document)
+    params = fitted_physical(fit_document, model)
     theta0 = math.radians(entry["theta0_deg"])
     omega0 = math.radians(entry["omega0_deg_s"])
     offset = math.radians(entry["rest_offset_deg"])
@@ -206,7 +208,7 @@ def cycle_table(
     rig_values = rig_values if rig_values is not None else fit_document["rig"]["values"]
     terms = list(terms if terms is not None else fit_document["terms"])
     model = PendulumModel(Rig.from_mapping(rig_values), tuple(terms))
-    params = fitted_physical(fit_document)
+    params = fitted_physical(fit_document, model)
     offset = math.radians(entry["rest_offset_deg"])
     length = characteristic_length_m(rig_values)
     nu = float(rig_values.get("kinematic_viscosity_m2_s") or 1e-6)
