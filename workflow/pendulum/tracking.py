@@ -40,10 +40,20 @@ class TrackerSettings:
     jump_floor_px: float = 1.0  # smallest leave-one-out residual that counts as a jump
     jump_sigmas: float = 6.0
     reacquire_after_frames: int = 10
+    max_centroid_disagreement_px: float = 0.4  # linear vs thresholded centroid; more: "occluded"
+    centroid: str = "linear"
+    # Shutter-open time / frame interval, for the exposure-centre correction; None: measured
+    # from the streaks (needs ≥ 10 frames moving more than half a marker radius, else 0.5),
+    # 0: no correction.
+    exposure_fraction: float | None = (
+        None  # "linear": Σ (I − b) x in a soft streak mask; "threshold": Σ max(I − T, 0) x
+    )
 
     def __post_init__(self):
         if self.polarity not in ("bright", "dark"):
             raise ValueError(f"marker polarity must be 'bright' or 'dark', got {self.polarity!r}")
+        if self.centroid not in ("linear", "threshold"):
+            raise ValueError(f"centroid must be 'linear' or 'threshold', got {self.centroid!r}")
         if not self.marker_radius_px > 0:
             raise ValueError("marker_radius_px must be positive")
 
@@ -87,9 +97,11 @@ class Measurement:
     level: float  # marker brightness the threshold was set from
     background: float
     at_edge: bool
+    disagreement_px: float = 0.0  # |linear − thresholded centroid|: large when something intrudes
+    streak2_px2: float = math.nan  # squared length of the exposure streak (linear centroid only)
 
 
-def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0.0, marker_level=None):
+def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0.0, marker_level=None, direction=None):
     """Sub-pixel intensity-weighted centroid of the marker near (x_guess, y_guess).
 
     ``blur_px`` (expected streak length) widens the ROI and the mask. Returns
@@ -130,8 +142,102 @@ def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0
         cx, cy = float(col @ xs[0]) / total, float(row @ ys[:, 0]) / total
     inside = (xs - cx) ** 2 + (ys - cy) ** 2 <= mask_r2
     signal = float(((roi - background) * inside).sum())
+    if settings.centroid == "linear":
+        refined = _linear_centroid(roi, xs, ys, cx, cy, r, blur_px, direction)
+        if refined is None:
+            return None
+        disagreement = math.hypot(refined[0] - cx, refined[1] - cy)
+        cx, cy, streak2, signal = refined
+    else:
+        disagreement, streak2 = 0.0, math.nan
     at_edge = x0 == 0 or y0 == 0 or x1 == w or y1 == h
-    return Measurement(cx, cy, signal, level, background, at_edge)
+    return Measurement(cx, cy, signal, level, background, at_edge, disagreement, streak2)
+
+
+def _linear_centroid(roi, xs, ys, cx, cy, radius, blur_px, direction, margin_px=2.5, iterations=3):
+    """Centroid of (I − b) in a soft-edged mask around the (blurred) marker, b from a ring just outside.
+
+    Linear in the pixel values, so a partly covered edge pixel counts in proportion to its
+    coverage: no pixel locking and no threshold nonlinearity on a blurred streak, and the
+    result is the mean position over the exposure. The mask is a capsule along the motion
+    (``direction``, unit vector; ``blur_px`` the streak length allowed for) with a one-pixel
+    soft edge, so its own centroid moves smoothly with the estimate.
+
+    Returns ``(x, y, streak², signal)`` with streak² = 12 (var_along − var_across) of the
+    weights: the squared length of the exposure streak (a disk's own variance is the same in
+    both directions), NaN without a direction; signal = Σ (I − b) over the mask, which blur
+    does not change. None when nothing stands out.
+    """
+    if direction is None:
+        ux, uy, half_len = 1.0, 0.0, 0.0
+    else:
+        ux, uy = direction
+        half_len = 0.5 * max(blur_px, 0.0)
+    r_mask = radius + margin_px
+    for _ in range(iterations):
+        dx, dy = xs - cx, ys - cy
+        along = np.clip(dx * ux + dy * uy, -half_len, half_len)
+        dist = np.hypot(dx - along * ux, dy - along * uy)
+        mask = np.clip(r_mask + 0.5 - dist, 0.0, 1.0)
+        ring = (dist > r_mask + 1.0) & (dist <= r_mask + 4.0)
+        if ring.sum() < 8:
+            return None
+        weight = (roi - float(np.median(roi[ring]))) * mask
+        col, row = weight.sum(axis=0), weight.sum(axis=1)
+        total = float(col.sum())
+        if total <= 0:
+            return None
+        cx, cy = float(col @ xs[0]) / total, float(row @ ys[:, 0]) / total
+    if direction is None:
+        return cx, cy, math.nan, total
+    dx, dy = xs - cx, ys - cy
+    u = dx * ux + dy * uy
+    v = dy * ux - dx * uy
+    streak2 = 12.0 * float((weight * (u * u - v * v)).sum()) / total
+    return cx, cy, streak2, total
+
+
+def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:
+    """Shutter-open fraction of the frame interval: streak length over the frame-to-frame step.
+
+    Median over usable frames whose step exceeds ``min_step_px`` (a short streak is lost
+    in the noise of its second moment); None when fewer than 10 such frames.
+    """
+    x, y, streak2 = (np.asarray(a, float) for a in (x, y, streak2))
+    step2 = np.full(x.size, np.nan)
+    both = usable[2:] & usable[:-2] & usable[1:-1]
+    step2[1:-1] = np.where(both, ((x[2:] - x[:-2]) ** 2 + (y[2:] - y[:-2]) ** 2) / 4.0, np.nan)
+    pick = np.isfinite(step2) & np.isfinite(streak2) & (step2 > min_step_px**2)
+    if pick.sum() < 10:
+        return None
+    ratio = np.median(streak2[pick] / step2[pick])
+    return float(np.sqrt(np.clip(ratio, 0.0, 1.0)))
+
+
+def exposure_centre_correction(x, usable, exposure_fraction: float) -> np.ndarray:
+    """Correction to add to a blurred marker's centroid to get its position at the frame time.
+
+    The centroid of the exposure is the mean position over the shutter-open time τ
+    (in frame intervals), centred on the frame time: x̄ = x(t) + ẍ τ²/24 + O(τ⁴). The
+    arc's curvature (x̄ lies inside the circle) and the angular acceleration (x̄ falls
+    short of the turning points) both enter through ẍ. ẍ is the second difference of the
+    track, min-mod limited over three neighbouring frames (zero unless all three agree in
+    sign) so that the step in acceleration at the release does not move the held frames;
+    frames without usable neighbours get no correction.
+    """
+    x = np.asarray(x, float)
+    corr = np.zeros(x.size)
+    if x.size < 5:
+        return corr
+    d2 = np.full(x.size, np.nan)
+    both = usable[2:] & usable[:-2] & usable[1:-1]
+    d2[1:-1] = np.where(both, x[2:] - 2.0 * x[1:-1] + x[:-2], np.nan)
+    trio = np.stack([d2[:-2], d2[1:-1], d2[2:]])
+    with np.errstate(invalid="ignore"):
+        same = np.all(trio > 0, axis=0) | np.all(trio < 0, axis=0)
+        limited = np.where(same, np.sign(trio[1]) * np.min(np.abs(trio), axis=0), 0.0)
+    corr[1:-1] = -np.nan_to_num(limited) * exposure_fraction**2 / 24.0
+    return corr
 
 
 def _leave_one_out_weights(half_window: int = 4, degree: int = 3) -> np.ndarray:
@@ -186,6 +292,8 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
     signal_ref = None
     signals: list[float] = []
     lost_run = 0
+    disagreement: list[tuple[int, float]] = []
+    streak2: dict[int, float] = {}
     started = time.perf_counter()
     n_frames = 0
     for index, t, image in iter_luma(path):
@@ -201,7 +309,7 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
                 rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))
                 lost_run += 1
                 continue
-            guess, speed = (found[0], found[1]), 0.0
+            guess, speed, direction = (found[0], found[1]), 0.0, None
         else:
             (f1, x1, y1) = history[-1]
             if len(history) >= 2 and history[-2][0] == f1 - 1:
@@ -211,8 +319,12 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
                 vx = vy = 0.0
             gap = index - f1
             guess = (x1 + vx * gap, y1 + vy * gap)
-            speed = math.hypot(vx, vy) + 2.0 * (gap - 1) * settings.marker_radius_px
-        m = measure_marker(image, guess[0], guess[1], settings, blur_px=speed, marker_level=marker_level)
+            step = math.hypot(vx, vy)
+            direction = (vx / step, vy / step) if step > 0 else None
+            speed = step + 2.0 * (gap - 1) * settings.marker_radius_px
+        m = measure_marker(
+            image, guess[0], guess[1], settings, blur_px=speed, marker_level=marker_level, direction=direction
+        )
         if m is None:
             rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))
             lost_run += 1
@@ -233,7 +345,7 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             flag, x, y = "duplicate", m.x, m.y
         elif m.at_edge:
             flag, x, y = "edge", m.x, m.y
-        elif ratio < settings.min_signal_ratio:
+        elif ratio < settings.min_signal_ratio or m.disagreement_px > settings.max_centroid_disagreement_px:
             flag, x, y = "occluded", m.x, m.y
         elif ratio > settings.max_signal_ratio:
             flag, x, y = "glare", m.x, m.y
@@ -247,6 +359,8 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
                 history.append((index, x, y))
                 del history[:-3]
         rows.append((index, t, x, y, quality, ratio, flag))
+        disagreement.append((index, m.disagreement_px))
+        streak2[index] = m.streak2_px2
         if progress and index % progress_every == 0 and index:
             rate = index / (time.perf_counter() - started)
             progress(f"{path}: tracked frame {index} ({rate:.0f} frames/s)")
@@ -255,9 +369,24 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
     if signal_ref is not None:
         first = table.index[: len(signals)]
         table.loc[first, "signal_ratio"] = np.array(signals) / signal_ref
+    table.attrs["centroid_disagreement_px"] = disagreement
     usable = (table.flag == "ok").to_numpy()
     jumps = flag_jumps(table.x_px.to_numpy(), table.y_px.to_numpy(), usable, settings)
     table.loc[jumps, "flag"] = "jump"
+    exposure = settings.exposure_fraction
+    if settings.centroid == "linear" and len(table):
+        usable = table.flag.isin(("ok", "edge")).to_numpy()
+        if exposure is None:
+            s2 = table.frame.map(streak2).to_numpy(float)
+            exposure = estimate_exposure_fraction(
+                table.x_px, table.y_px, s2, usable, min_step_px=0.5 * settings.marker_radius_px
+            )
+            if exposure is None:  # too slow to measure (and so to matter much): the 180° shutter rule
+                exposure = 0.5
+        if exposure:
+            table["x_px"] += exposure_centre_correction(table.x_px.to_numpy(), usable, exposure)
+            table["y_px"] += exposure_centre_correction(table.y_px.to_numpy(), usable, exposure)
+    table.attrs["exposure_fraction"] = exposure
     if progress:
         rate = n_frames / max(time.perf_counter() - started, 1e-9)
         counts = table.flag.value_counts().to_dict()
