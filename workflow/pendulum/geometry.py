@@ -156,7 +156,10 @@ def detect_release(
     hold = float(np.median(th[held[: max(5, held.size - 5)]]))  # the last held frames may already move
     window = valid[(valid >= first_departure - 5) & (valid < first_departure + 6)]
     dev = np.abs(th[window] - hold)
-    keep = dev > 3 * max(sigma, 1e-6)
+    # Well above the noise and above a fifth of the departure threshold: compressed video
+    # (B-frames) blends the first moving frames into the last held ones, a jitter that the
+    # white-noise σ of a precise track does not cover.
+    keep = dev > max(3 * sigma, 0.2 * limit, 1e-6)
     t_release = float(t[held[-1]])
     if keep.sum() >= 3:
         slope, intercept = np.polyfit(t[window][keep], np.sqrt(dev[keep]), 1)
