@@ -132,7 +132,7 @@ def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0
         return None
     cx, cy = float(col @ xs[0]) / total, float(row @ ys[:, 0]) / total
     mask_r2 = (r + 0.5 * blur_px + 2.5) ** 2
-    for _ in range(2):  # re-centre a circular mask on the estimate
+    for _ in range(1 if settings.centroid == "linear" else 2):  # re-centre a circular mask on the estimate
         inside = (xs - cx) ** 2 + (ys - cy) ** 2 <= mask_r2
         wm = weight * inside
         col, row = wm.sum(axis=0), wm.sum(axis=1)
@@ -140,28 +140,29 @@ def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0
         if total <= 0:
             return None
         cx, cy = float(col @ xs[0]) / total, float(row @ ys[:, 0]) / total
-    inside = (xs - cx) ** 2 + (ys - cy) ** 2 <= mask_r2
-    signal = float(((roi - background) * inside).sum())
     if settings.centroid == "linear":
-        refined = _linear_centroid(roi, xs, ys, cx, cy, r, blur_px, direction)
+        refined = _linear_centroid(roi, x0, y0, cx, cy, r, blur_px, direction)
         if refined is None:
             return None
         disagreement = math.hypot(refined[0] - cx, refined[1] - cy)
         cx, cy, streak2, signal = refined
     else:
+        inside = (xs - cx) ** 2 + (ys - cy) ** 2 <= mask_r2
+        signal = float(((roi - background) * inside).sum())
         disagreement, streak2 = 0.0, math.nan
     at_edge = x0 == 0 or y0 == 0 or x1 == w or y1 == h
     return Measurement(cx, cy, signal, level, background, at_edge, disagreement, streak2)
 
 
-def _linear_centroid(roi, xs, ys, cx, cy, radius, blur_px, direction, margin_px=2.5, iterations=3):
+def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=2.5, iterations=2):
     """Centroid of (I − b) in a soft-edged mask around the (blurred) marker, b from a ring just outside.
 
     Linear in the pixel values, so a partly covered edge pixel counts in proportion to its
     coverage: no pixel locking and no threshold nonlinearity on a blurred streak, and the
     result is the mean position over the exposure. The mask is a capsule along the motion
     (``direction``, unit vector; ``blur_px`` the streak length allowed for) with a one-pixel
-    soft edge, so its own centroid moves smoothly with the estimate.
+    soft edge, so its own centroid moves smoothly with the estimate. ``roi`` starts at image
+    pixel (x0, y0); (cx, cy) is the starting estimate in image pixels.
 
     Returns ``(x, y, streak², signal)`` with streak² = 12 (var_along − var_across) of the
     weights: the squared length of the exposure streak (a disk's own variance is the same in
@@ -174,27 +175,44 @@ def _linear_centroid(roi, xs, ys, cx, cy, radius, blur_px, direction, margin_px=
         ux, uy = direction
         half_len = 0.5 * max(blur_px, 0.0)
     r_mask = radius + margin_px
+    ring_in, ring_out = r_mask + 1.0, r_mask + 4.0
+    # Only the window that the capsule and its ring can reach.
+    h, w = roi.shape
+    reach_x, reach_y = ring_out + 1.5 + half_len * abs(ux), ring_out + 1.5 + half_len * abs(uy)
+    i0, i1 = max(0, int(cy - y0 - reach_y)), min(h, int(cy - y0 + reach_y) + 2)
+    j0, j1 = max(0, int(cx - x0 - reach_x)), min(w, int(cx - x0 + reach_x) + 2)
+    if i1 - i0 < 3 or j1 - j0 < 3:
+        return None
+    sub = roi[i0:i1, j0:j1]
+    # Coordinates relative to the starting estimate (small numbers: float32 is exact enough).
+    ox, oy = cx, cy
+    xr = (np.arange(x0 + j0, x0 + j1) - ox).astype(np.float32)
+    yr = (np.arange(y0 + i0, y0 + i1) - oy).astype(np.float32)
+    ex = ey = 0.0  # current estimate relative to (ox, oy)
+    background = None
     for _ in range(iterations):
-        dx, dy = xs - cx, ys - cy
-        along = np.clip(dx * ux + dy * uy, -half_len, half_len)
-        dist = np.hypot(dx - along * ux, dy - along * uy)
-        mask = np.clip(r_mask + 0.5 - dist, 0.0, 1.0)
-        ring = (dist > r_mask + 1.0) & (dist <= r_mask + 4.0)
-        if ring.sum() < 8:
-            return None
-        weight = (roi - float(np.median(roi[ring]))) * mask
+        u = (xr[None, :] - ex) * ux + (yr[:, None] - ey) * uy  # along the motion
+        v = (yr[:, None] - ey) * ux - (xr[None, :] - ex) * uy  # across it
+        excess = u - np.clip(u, -half_len, half_len)
+        dist = np.sqrt(v * v + excess * excess)
+        if background is None:
+            ring = (dist > ring_in) & (dist <= ring_out)
+            if np.count_nonzero(ring) < 8:
+                return None
+            background = float(np.median(sub[ring]))
+        mask = np.clip(r_mask + 0.5 - dist, 0.0, 1.0, out=dist)
+        weight = sub - background
+        weight *= mask
         col, row = weight.sum(axis=0), weight.sum(axis=1)
         total = float(col.sum())
         if total <= 0:
             return None
-        cx, cy = float(col @ xs[0]) / total, float(row @ ys[:, 0]) / total
+        ex, ey = float(col @ xr) / total, float(row @ yr) / total
     if direction is None:
-        return cx, cy, math.nan, total
-    dx, dy = xs - cx, ys - cy
-    u = dx * ux + dy * uy
-    v = dy * ux - dx * uy
+        return ox + ex, oy + ey, math.nan, total
+    # Moments about the last mask centre, within a small fraction of a pixel of the result.
     streak2 = 12.0 * float((weight * (u * u - v * v)).sum()) / total
-    return cx, cy, streak2, total
+    return ox + ex, oy + ey, streak2, total
 
 
 def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:
