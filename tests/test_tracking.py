@@ -1,11 +1,19 @@
-"""Marker tracking against the rendered truth (demo set, dark marker, occlusions)."""
+"""Marker tracking against the rendered truth (demo set, dark marker, occlusions, a fast rig)."""
+
+import math
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from conftest import DEMO_RAW, DEMO_TRUTH, demo_trials
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.synthetic import Camera, TrialSpec, _draw_disk, generate_trial, release_time_s
+from pendulum.tracking import (
+    TrackerSettings,
+    exposure_centre_correction,
+    measure_marker,
+    track_video,
+)
 from truth import track_errors
 
 
@@ -19,8 +27,10 @@ def test_demo_marker_centre_is_subpixel(demo_tracks, trial):
     errors = track_errors(demo_tracks[trial], pd.read_csv(DEMO_TRUTH / f"{trial}.csv"))
     ok = errors.flag == "ok"
     assert ok.mean() > 0.98
-    assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.15
-    assert errors.error_px[ok].max() <= 2.0
+    # Linear centroid: 0.042–0.054 px RMS, max 0.20 px (the thresholded one: 0.054–0.067, max 0.25);
+    # what remains is mostly H.264 (0.01 px on the same render encoded losslessly).
+    assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.065
+    assert errors.error_px[ok].max() <= 0.3
 
 
 def test_dark_marker_on_bright_scene(hard_videos):
@@ -28,8 +38,8 @@ def test_dark_marker_on_bright_scene(hard_videos):
     errors = track_errors(track, pd.read_csv(hard_videos / "dark_marker.csv"))
     ok = errors.flag == "ok"
     assert ok.mean() > 0.98
-    assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.15
-    assert errors.error_px[ok].max() <= 2.0
+    assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.065  # measured 0.054 (thresholded: 0.068)
+    assert errors.error_px[ok].max() <= 0.3  # measured 0.15
 
 
 def test_occluded_frames_are_flagged_not_interpolated(hard_videos):
@@ -42,6 +52,114 @@ def test_occluded_frames_are_flagged_not_interpolated(hard_videos):
     # every substantially covered frame is flagged; lost frames carry no invented position
     assert not (ok & (errors.occluded_fraction >= 0.2)).any()
     assert errors.loc[errors.flag == "lost", ["x_px", "y_px"]].isna().all().all()
-    assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.15
-    assert errors.error_px[ok].max() <= 2.0
+    # Measured 0.054 px RMS, max 0.20 px: a small occluder inside the marker window makes the
+    # linear and thresholded centroids disagree, and the frame is flagged (thresholded alone:
+    # 0.091 px RMS, 0.67 px on frames 6 % covered).
+    assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.08
+    assert errors.error_px[ok].max() <= 0.4
     assert (~ok).sum() <= 2 * occluded.sum()  # flags are not sprayed over clean frames
+
+
+def _disk_image(cx, cy, radius, size=120, body=55.0, marker=235.0):
+    img = np.full((size, size), body, np.float32)
+    _draw_disk(img, cx, cy, radius, marker)
+    return img
+
+
+def test_centroid_has_no_pixel_locking():
+    """A sharp disk at random sub-pixel positions: the centroid must not snap to the pixel grid.
+
+    Measured 0.006 px RMS (the renderer's 4×4 coverage sampling and 8-bit rounding); the
+    thresholded centroid, 0.025 px.
+    """
+    rng = np.random.default_rng(0)
+    settings = TrackerSettings(marker_radius_px=9.0)
+    errors = []
+    for _ in range(100):
+        cx, cy = 60 + rng.uniform(0, 1), 60 + rng.uniform(0, 1)
+        img = np.rint(_disk_image(cx, cy, 9.0)).astype(np.uint8)
+        m = measure_marker(img, cx + 0.7, cy - 0.4, settings)
+        errors.append(math.hypot(m.x - cx, m.y - cy))
+    assert np.sqrt(np.mean(np.square(errors))) <= 0.012
+
+
+@pytest.mark.parametrize("streak_px", [8.0, 20.0, 36.0])
+def test_streak_centroid_is_the_exposure_mean_and_measures_the_streak(streak_px):
+    """A disk blurred along an arc: centroid = mean sub-exposure position; streak² ≈ its length²."""
+    radius, arm, pivot = 9.0, 250.0, (40.0, -170.0)
+    span = streak_px / arm
+    phis = 0.1 + (np.arange(16) + 0.5) / 16 * span - span / 2
+    xs, ys = pivot[0] + arm * np.sin(phis), pivot[1] + arm * np.cos(phis)
+    img = np.mean([_disk_image(x, y, radius, size=160) for x, y in zip(xs, ys, strict=True)], axis=0)
+    img = np.rint(img).astype(np.uint8)
+    direction = (math.cos(0.1), -math.sin(0.1))
+    m = measure_marker(
+        img,
+        xs.mean() + 0.5,
+        ys.mean(),
+        TrackerSettings(marker_radius_px=radius),
+        blur_px=2 * streak_px,
+        direction=direction,
+    )
+    assert math.hypot(m.x - xs.mean(), m.y - ys.mean()) <= 0.02
+    assert math.sqrt(max(m.streak2_px2, 0.0)) == pytest.approx(streak_px * (1 - 1 / 16**2) ** 0.5, rel=0.05)
+
+
+def test_exposure_centre_correction_gives_the_position_at_the_frame_time():
+    """x̄ (mean over a centred exposure of τ frames) − ẍτ²/24 = x(t) for a swinging marker."""
+    t = np.arange(200) / 30.0
+    omega, tau = 6.0, 0.5  # rad/s (up to 40 px per frame), exposure fraction
+
+    def x_of(time):
+        return 250.0 * np.sin(0.8 * np.cos(omega * time))
+
+    sub = (np.arange(32) + 0.5) / 32 - 0.5
+    mean_x = x_of(t[:, None] + sub[None, :] * tau / 30.0).mean(axis=1)
+    usable = np.ones(t.size, bool)
+    corrected = mean_x + exposure_centre_correction(mean_x, usable, tau)
+    inner = slice(2, -2)
+    assert np.abs(mean_x - x_of(t))[inner].max() > 0.06  # the uncorrected mean: 0.068 px off
+    assert np.abs(corrected - x_of(t))[inner].max() <= 0.003  # corrected: 0.0007 px
+
+
+@pytest.fixture(scope="module")
+def fast_video(tmp_path_factory):
+    """A rig the demo lacks: 0.3 m arm, 250 px in the image, dark 9 px marker on a small light body,
+    60° release at 30 fps (the marker moves up to 36 px per frame; the window sees the clutter)."""
+    spec = TrialSpec(
+        name="fast_small",
+        release_deg=60.0,
+        rig={"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005},
+        truth={"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005},
+        effects=["quadratic_drag", "linear_damping", "coulomb_friction"],
+        seed=1511,
+        hold_s=1.0,
+        duration_s=6.0,
+        camera=Camera(
+            pivot_px=(598.1, 150.7), marker_arm_px=250.0, marker_radius_px=9.0, polarity="dark", roll_deg=0.3
+        ),
+    )
+    out = tmp_path_factory.mktemp("fast_video")
+    generate_trial(spec, out, out, progress=None)
+    return spec, out
+
+
+def test_fast_marker_on_a_small_body_keeps_angle_accuracy(fast_video):
+    """The thresholded tracker (ROI-border background) kept 30 % of a 12 s render of this rig as
+    ok, some 25 px off (the window's border fell on the clutter); measured now on that render:
+    99.4 % ok, 0.061 px, 0.011° RMS, first second +0.003°."""
+    spec, folder = fast_video
+    cam = spec.camera
+    track = track_video(folder / "fast_small.mp4", TrackerSettings(marker_radius_px=9.0, polarity="dark"))
+    truth = pd.read_csv(folder / "fast_small.csv")
+    errors = track_errors(track, truth)
+    ok = (errors.flag == "ok").to_numpy()
+    assert ok.mean() > 0.97
+    assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.09
+    theta = np.arctan2(errors.x_px - cam.pivot_px[0], errors.y_px - cam.pivot_px[1]) - math.radians(cam.roll_deg)
+    err_deg = np.degrees(theta - errors.theta_rad).to_numpy()
+    moving = ok & (errors.time_s_true.to_numpy() > release_time_s(spec))
+    first = moving & (errors.time_s_true.to_numpy() < release_time_s(spec) + 1.0)
+    assert np.sqrt(np.mean(err_deg[moving] ** 2)) <= 0.02
+    assert abs(np.mean(err_deg[first])) <= 0.01
+    assert 0.4 <= track.attrs["exposure_fraction"] <= 0.6  # rendered with 0.5

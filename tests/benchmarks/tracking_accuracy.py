@@ -14,6 +14,7 @@ onwards, ``ok`` samples):
 * ``mk_mid``: the same against the marker position at the frame time (the exposure's middle);
 * ``rms``, ``mean``, ``max``: angle error (tracked − true θ at the frame time), degrees;
 * ``slope−1``: scale error of tracked against true θ (least-squares slope − 1), ppm;
+* ``slope_tp``: the same with the true pivot (marker errors alone), ppm;
 * ``1st_s``: mean angle error in the first second after release (the fastest swing), degrees;
 * ``pivot``: distance of the pooled pivot estimate from the true pivot, px;
 * ``vert``: error of the estimated vertical, degrees (the angles themselves use
@@ -197,6 +198,12 @@ def evaluate_rig(specs: list[TrialSpec], folders: dict[str, Path], settings: Tra
         t_rel = true.time_s.to_numpy()[ok] - info.release_time_s
         first = t_rel < 1.0
         slope = float(np.polyfit(ref, est, 1)[0])  # scale, with an offset allowed
+        # The same with the true pivot: what the marker errors alone do to the scale.
+        xy = track.set_index("frame").loc[table.frame[ok]]
+        est_tp = np.arctan2(xy.x_px - cam.pivot_px[0], xy.y_px - cam.pivot_px[1]).to_numpy() - math.radians(
+            cam.roll_deg
+        )
+        slope_tp = float(np.polyfit(ref, est_tp, 1)[0])
         merged = track.merge(truth.reset_index(), on="frame")
         mk_ok = (merged.flag == "ok") & (merged.frame >= table.frame.iloc[0]) & (merged.frame <= table.frame.iloc[-1])
         mk = np.hypot(merged.x_px - merged.marker_x_px, merged.y_px - merged.marker_y_px)[mk_ok]
@@ -221,6 +228,7 @@ def evaluate_rig(specs: list[TrialSpec], folders: dict[str, Path], settings: Tra
                 "mean": float(np.mean(err)),
                 "max": float(np.max(np.abs(err))),
                 "slope-1_ppm": 1e6 * (slope - 1.0),
+                "slope_tp": 1e6 * (slope_tp - 1.0),
                 "1st_s": float(np.mean(err[first])),
                 "pivot": float(np.hypot(pivot[0] - cam.pivot_px[0], pivot[1] - cam.pivot_px[1])),
                 "vert": geometry["vertical_deg"] - cam.roll_deg,
@@ -274,6 +282,7 @@ def main(argv=None):
                     "mean": "{:+.4f}".format,
                     "max": "{:.4f}".format,
                     "slope-1_ppm": "{:+.0f}".format,
+                    "slope_tp": "{:+.0f}".format,
                     "1st_s": "{:+.4f}".format,
                     "pivot": "{:.2f}".format,
                     "vert": "{:+.3f}".format,
