@@ -12,7 +12,7 @@ from pendulum.fitting import fit_trials
 from pendulum.io import write_json
 from pendulum.physics import PendulumModel, Rig
 from pendulum.records import FitSettings, characteristic_length_m, load_record
-from pendulum.summary import cycle_table, fit_document, fitted_curve
+from pendulum.summary import cycle_table, fit_document, fitted_curve, summary_table
 from pendulum.synthetic import synthetic_angle_table
 
 RIG_VALUES = {
@@ -146,3 +146,32 @@ def test_cycle_table_predicts_the_measured_extinction(fitted):
     inertia = RIG.pivot_inertia_kg_m2 + truth["added_mass_kg"] * RIG.length_m**2
     true_speed = RIG.length_m * np.sqrt(2 * RIG.restoring_torque_nm * (1 - np.cos(cycles.mean_amplitude_rad)) / inertia)
     assert np.allclose(cycles.peak_speed_m_s, true_speed, rtol=0.01)
+
+
+def test_information_criteria_are_compared_only_between_fits_of_the_same_samples():
+    """A variant whose outlier rejection dropped other samples gets no ΔAIC (its AIC is not comparable)."""
+
+    def doc(variant, aic, digest):
+        entry = {"value": 1.0, "stderr": 0.1, "ci95": [0.8, 1.2], "at_bound": False, "identifiable": True}
+        return {
+            "trial": "t1",
+            "variant": variant,
+            "trials": {"t1": {"theta0_deg": 20.0}},
+            "keulegan_carpenter_number": 3.0,
+            "n_samples": 600,
+            "rms_deg": 0.01,
+            "rms_arc_m": 1e-4,
+            "aic": aic,
+            "bic": aic + 30,
+            "samples_digest": digest,
+            "warnings": [],
+            "parameters": {"added_mass_kg": entry},
+        }
+
+    table = summary_table([doc("a", -100.0, "x"), doc("b", -90.0, "x"), doc("c", -200.0, "y")]).set_index("variant")
+    # c has the best AIC but was fitted to other samples: a and b cannot be ranked against it
+    assert table.loc["c", "delta_aic"] == 0.0 and table.loc["c", "same_samples_as_best"]
+    assert table.loc[["a", "b"], "delta_aic"].isna().all()
+    assert not table.loc[["a", "b"], "same_samples_as_best"].any()
+    table = summary_table([doc("a", -100.0, "x"), doc("b", -90.0, "x")]).set_index("variant")
+    assert table.loc["b", "delta_aic"] == pytest.approx(10.0) and table.loc["a", "delta_aic"] == 0.0

@@ -58,6 +58,7 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
                 "rms_arc_m": fit["rms_arc_m"],
                 "aic": fit["aic"],
                 "bic": fit["bic"],
+                "samples_digest": fit.get("samples_digest"),
                 "consistency": fit.get("consistency", {}).get("verdict"),
                 "n_warnings": len(fit["warnings"]),
             }
@@ -69,8 +70,33 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
                 row[f"{name}_ci95_high"] = entry["ci95"][1] if entry else None
                 row[f"{name}_at_bound"] = entry["at_bound"] if entry else None
                 row[f"{name}_identifiable"] = entry["identifiable"] if entry else None
+                row[f"{name}_stderr_statistical"] = entry.get("stderr_statistical") if entry else None
+                row[f"{name}_stderr_systematic"] = entry.get("stderr_systematic") if entry else None
             rows.append(row)
-    return pd.DataFrame(rows)
+    return _information_criteria_differences(pd.DataFrame(rows))
+
+
+def _information_criteria_differences(table: pd.DataFrame) -> pd.DataFrame:
+    """ΔAIC, ΔBIC against the best variant of the same fit, only among fits of the same samples.
+
+    Outlier rejection may drop different samples for different variants; AIC and
+    BIC of fits to different samples are not comparable, so such a fit gets no
+    Δ (empty) and ``same_samples_as_best`` False.
+    """
+    table = table.copy()
+    table["delta_aic"] = np.nan
+    table["delta_bic"] = np.nan
+    table["same_samples_as_best"] = False
+    if table.empty:
+        return table
+    for _, group in table.groupby("fit", sort=False):
+        best = group.loc[group.aic.idxmin()]
+        same = group.samples_digest == best.samples_digest
+        index = group.index[same.to_numpy()]
+        table.loc[index, "delta_aic"] = group.aic[same] - best.aic
+        table.loc[index, "delta_bic"] = group.bic[same] - group.bic[same].min()
+        table.loc[index, "same_samples_as_best"] = True
+    return table
 
 
 # ---------------------------------------------------------------------------
