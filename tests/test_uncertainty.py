@@ -158,3 +158,15 @@ def test_added_mass_bound_keeps_the_inertia_positive():
     inertia = rec.rig.pivot_inertia_kg_m2 + floor * rec.rig.length_m**2
     assert inertia == pytest.approx(0.01 * rec.rig.pivot_inertia_kg_m2)
     assert _added_mass_lower_kg([rec], FitSettings(added_mass_lower_kg=-0.5)) == -0.5
+
+
+def test_a_wrong_vertical_changes_no_coefficient():
+    """The fitted rest offset absorbs a constant angle error exactly, so the vertical is no error-budget input."""
+    data = table(25, seed=16)
+    fit = fit_trials([load_record(data, "a", RIG, SETTINGS)], TERMS, SETTINGS)
+    tilted = data.assign(theta_rad=data.theta_rad + math.radians(0.7))
+    refit = fit_trials([load_record(tilted, "a", RIG, SETTINGS)], TERMS, SETTINGS)
+    for name in PHYSICAL:
+        assert refit["parameters"][name]["value"] == pytest.approx(fit["parameters"][name]["value"], rel=1e-6)
+    offsets = [f["trials"]["a"]["rest_offset_deg"] for f in (fit, refit)]
+    assert offsets[1] - offsets[0] == pytest.approx(0.7, abs=1e-6)
