@@ -124,8 +124,13 @@ def test_fits_every_variant_and_the_demo_reproduces_the_paper_symptom(project):
     quadratic = json.loads((project / "results/fits/quadratic/joint/paper_rig.json").read_text())
     assert quadratic["consistency"]["verdict"] == "inconsistent"
     assert "drag_area_m2" in quadratic["consistency"]["inconsistent_parameters"]
-    scale = quadratic["consistency"]["parameters"]["drag_area_m2"]["scale_factor"]
-    assert scale > 2 * friction["consistency"]["parameters"]["drag_area_m2"]["scale_factor"]
+    # the true model agrees with itself across the five releases; the paper's drag swings with the release
+    assert friction["consistency"]["verdict"] == "consistent", friction["consistency"]["explanation"]
+    drags = [
+        json.loads((project / f"results/fits/quadratic/{trial}.json").read_text())["parameters"]["drag_area_m2"]
+        for trial in demo_trials()
+    ]
+    assert max(d["value"] for d in drags) > 1.5 * min(d["value"] for d in drags)
 
 
 def test_adding_a_variant_fits_only_that_variant(tmp_path, project):
