@@ -7,6 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from paper_rig import PAPER_RIG
 from pendulum.decay import half_cycles, loss_at_amplitude
 from pendulum.fitting import fit_trials
 from pendulum.io import write_json
@@ -15,16 +16,7 @@ from pendulum.records import FitSettings, characteristic_length_m, load_record
 from pendulum.summary import cycle_table, fit_document, fitted_curve, summary_table
 from pendulum.synthetic import synthetic_angle_table
 
-RIG_VALUES = {
-    "mass_kg": 3.53,
-    "length_m": 0.76,
-    "frontal_area_m2": 0.0322,
-    "displaced_volume_m3": 0.0025,
-    "fluid_density_kg_m3": 1000.0,
-    "gravity_m_s2": 9.81,
-    "characteristic_length_m": None,
-    "kinematic_viscosity_m2_s": 1.0e-6,
-}
+RIG_VALUES = {**PAPER_RIG, "characteristic_length_m": None, "kinematic_viscosity_m2_s": 1.0e-6}
 RIG = Rig.from_mapping(RIG_VALUES)
 ADDED_MASS = 2.5
 D = characteristic_length_m(RIG_VALUES)  # √(4A/π) = 0.2025 m

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 from conftest import SHARED
+from paper_rig import PAPER_RIG, VARIANTS, truth_for
 from pendulum.fitting import fit_trials
 from pendulum.io import write_json
 from pendulum.physics import PendulumModel, Rig
@@ -18,25 +19,7 @@ from pendulum.records import FitSettings, load_record
 from pendulum.synthetic import synthetic_angle_table
 from pendulum.uncertainty import consistency_test
 
-PAPER_RIG = {
-    "mass_kg": 3.53,
-    "length_m": 0.76,
-    "frontal_area_m2": 0.0322,
-    "displaced_volume_m3": 0.0025,
-    "fluid_density_kg_m3": 1000.0,
-    "gravity_m_s2": 9.81,
-}
-VARIANTS = {
-    "quadratic": ("quadratic_drag",),
-    "linear": ("quadratic_drag", "linear_damping"),
-    "friction": ("quadratic_drag", "linear_damping", "coulomb_friction"),
-}
-TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
 SETTINGS = FitSettings()
-
-
-def truth_for(terms):
-    return {k: v for k, v in TRUTH.items() if k in PendulumModel(Rig(**PAPER_RIG), terms).parameter_names}
 
 
 def record(release_deg, terms, seed, **kwargs):

@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 from scipy.stats import binom
 
+from paper_rig import PAPER_RIG, TRUTH, VARIANTS, truth_for
 from pendulum.decay import decay_analysis
 from pendulum.fitting import fit_joint, fit_trials
 from pendulum.io import write_json
@@ -35,25 +36,7 @@ from pendulum.records import FitSettings, load_record
 from pendulum.synthetic import synthetic_angle_table
 
 ALPHA = 1e-3  # probability that a test fails although its claim is true
-PAPER_RIG = {
-    "mass_kg": 3.53,
-    "length_m": 0.76,
-    "frontal_area_m2": 0.0322,
-    "displaced_volume_m3": 0.0025,
-    "fluid_density_kg_m3": 1000.0,
-    "gravity_m_s2": 9.81,
-}
-VARIANTS = {
-    "quadratic": ("quadratic_drag",),
-    "linear": ("quadratic_drag", "linear_damping"),
-    "friction": ("quadratic_drag", "linear_damping", "coulomb_friction"),
-}
-TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
 SETTINGS = FitSettings()
-
-
-def truth_for(terms):
-    return {k: v for k, v in TRUTH.items() if k in PendulumModel(Rig(**PAPER_RIG), terms).parameter_names}
 
 
 def record(release_deg, terms, seed, truth=None, **kwargs):

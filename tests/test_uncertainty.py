@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from paper_rig import PAPER_RIG, TRUTH, VARIANTS
 from pendulum.fitting import _added_mass_lower_kg, fit_trials
 from pendulum.geometry import image_angle_rad
 from pendulum.physics import PendulumModel, Rig
@@ -13,16 +14,8 @@ from pendulum.records import FitSettings, load_record, rig_tolerances
 from pendulum.synthetic import synthetic_angle_table
 from pendulum.uncertainty import consistency_test, interval95
 
-RIG = {
-    "mass_kg": 3.53,
-    "length_m": 0.76,
-    "frontal_area_m2": 0.0322,
-    "displaced_volume_m3": 0.0025,
-    "fluid_density_kg_m3": 1000.0,
-    "gravity_m_s2": 9.81,
-}
-TERMS = ("quadratic_drag", "linear_damping", "coulomb_friction")
-TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
+RIG = PAPER_RIG
+TERMS = VARIANTS["friction"]
 PHYSICAL = tuple(TRUTH) + ("drag_coefficient",)
 SETTINGS = FitSettings()
 

@@ -26,15 +26,11 @@ def run(args, cwd, check=True):
 
 def planned_jobs(dry_run_output: str) -> set[tuple[str, str]]:
     """(rule, trial-or-rig) pairs from a dry run."""
-    jobs, rule = set(), None
-    for line in dry_run_output.splitlines():
-        m = re.match(r"^\s*(?:local)?rule (\w+):", line)
-        if m:
-            rule = m.group(1)
-        m = re.match(r"^\s*wildcards: (?:trial|rig)=(\S+)", line)
-        if m and rule:
-            jobs.add((rule, m.group(1)))
-    return jobs
+    return {
+        (rule, w.get("trial", w.get("rig")))
+        for rule, w in planned_wildcards(dry_run_output)
+        if next(iter(w), None) in ("trial", "rig")
+    }
 
 
 def planned_wildcards(dry_run_output: str) -> list[tuple[str, dict]]:

@@ -46,7 +46,9 @@ from scipy import stats
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "workflow"))
+sys.path.insert(0, str(ROOT / "tests"))
 
+from paper_rig import PAPER_RIG, TRUTH  # noqa: E402
 from pendulum.synthetic import Camera, TrialSpec, generate_trial, truth_record  # noqa: E402
 
 FRICTION = ("quadratic_drag", "linear_damping", "coulomb_friction")
@@ -56,22 +58,10 @@ STARTED = time.perf_counter()
 # The two rigs: measured values (truth), their stated 1σ tolerances, the true hydrodynamics.
 RIGS = {
     "paper": {
-        "values": {
-            "mass_kg": 3.53,
-            "length_m": 0.76,
-            "frontal_area_m2": 0.0322,
-            "displaced_volume_m3": 0.0025,
-            "fluid_density_kg_m3": 1000.0,
-            "gravity_m_s2": 9.81,
-        },
+        "values": dict(PAPER_RIG),
         # as config.yaml's paper_rig; density takes the default fraction, gravity 0
         "tolerances": {"mass_kg": 0.005, "length_m": 0.001, "frontal_area_m2": 0.0005, "displaced_volume_m3": 2e-5},
-        "truth": {
-            "added_mass_kg": 2.5,
-            "drag_area_m2": 0.02576,
-            "linear_damping_nm_s": 0.15,
-            "friction_torque_nm": 0.02,
-        },
+        "truth": dict(TRUTH),
         "camera": {"pivot_px": (640.3, 70.6), "marker_arm_px": 560.0, "marker_radius_px": 10.0},
         "duration_s": 18.0,
     },

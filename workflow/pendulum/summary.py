@@ -238,25 +238,13 @@ def cycle_table(
     offset = math.radians(entry["rest_offset_deg"])
     length = characteristic_length_m(rig_values)
     nu = float(rig_values.get("kinematic_viscosity_m2_s") or 1e-6)
-    valid = curve.flag.isin([FITTED, RELEASE_TRANSIENT]).to_numpy()
-    measured = half_cycles(
-        curve.time_s.to_numpy(float)[valid],
-        curve.theta_measured_rad.to_numpy(float)[valid],
-        offset,
-        model,
-        params,
-        length,
-        nu,
-    )
-    simulated = np.isfinite(curve.theta_fitted_rad.to_numpy(float))
-    predicted = half_cycles(
-        curve.time_s.to_numpy(float)[simulated],
-        curve.theta_fitted_rad.to_numpy(float)[simulated],
-        offset,
-        model,
-        params,
-        length,
-        nu,
-    )
+
+    def cycles(column, use):
+        return half_cycles(
+            curve.time_s.to_numpy(float)[use], curve[column].to_numpy(float)[use], offset, model, params, length, nu
+        )
+
+    measured = cycles("theta_measured_rad", curve.flag.isin([FITTED, RELEASE_TRANSIENT]).to_numpy())
+    predicted = cycles("theta_fitted_rad", np.isfinite(curve.theta_fitted_rad.to_numpy(float)))
     measured["predicted_amplitude_loss_rad"] = loss_at_amplitude(predicted, measured.amplitude_rad.to_numpy())
     return measured

@@ -1,0 +1,23 @@
+"""The reference paper's Table 1 rig and the demo set's hidden hydrodynamics, shared by the fitting tests."""
+
+from pendulum.physics import PendulumModel, Rig
+
+PAPER_RIG = {
+    "mass_kg": 3.53,
+    "length_m": 0.76,
+    "frontal_area_m2": 0.0322,
+    "displaced_volume_m3": 0.0025,
+    "fluid_density_kg_m3": 1000.0,
+    "gravity_m_s2": 9.81,
+}
+VARIANTS = {
+    "quadratic": ("quadratic_drag",),
+    "linear": ("quadratic_drag", "linear_damping"),
+    "friction": ("quadratic_drag", "linear_damping", "coulomb_friction"),
+}
+TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
+
+
+def truth_for(terms):
+    """The true coefficients of the parameters a model with ``terms`` has."""
+    return {k: v for k, v in TRUTH.items() if k in PendulumModel(Rig(**PAPER_RIG), terms).parameter_names}
