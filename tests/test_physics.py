@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-from independent_eom import Pendulum, integrate
 
+from independent_eom import Pendulum, integrate
 from pendulum.physics import PendulumModel, Rig, simulate, small_angle_period_s, stick_angle_bound_rad
 
 PAPER_RIG = Rig(mass_kg=3.53, length_m=0.76, frontal_area_m2=0.0322, displaced_volume_m3=0.0025)

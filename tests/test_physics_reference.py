@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 import pytest
-from independent_eom import Pendulum, angle_table, integrate
 
+from independent_eom import Pendulum, angle_table, integrate
 from pendulum.fitting import fit_trials
 from pendulum.physics import PendulumModel, Rig, simulate, small_angle_period_s
 from pendulum.records import FitSettings, load_record
