@@ -42,7 +42,9 @@ from pendulum.records import AngleRecord, FitSettings
 from pendulum.uncertainty import (
     Z95,
     _lag1,
+    coefficient_entry,
     consistency_test,
+    drag_coefficient_entry,
     interval95,
     linear_response,
     sandwich_covariance,
@@ -243,7 +245,6 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
     x = sol.x
     stderr = np.sqrt(np.maximum(np.diag(cov), 0.0))
     shifts = hac_info.pop("systematic_shifts")
-    stderr_sys = np.sqrt(sum((d**2 for d in shifts.values()), np.zeros(x.size)))
     active = np.asarray(sol.active_mask) != 0
     rig = records[0].rig
     warnings = []
@@ -253,37 +254,23 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         warnings.append(f"{n_outliers} sample(s) beyond {settings.outlier_sigmas:g} robust σ were dropped as outliers")
     params = {}
     for j, name in enumerate(names):
-        value, se = float(x[j]), float(stderr[j])
-        at_bound = bool(active[j] or value <= lower[j] + 1e-9 * max(se, 1e-300))
-        if at_bound:
-            value = float(lower[j])
-        combined = math.hypot(se, float(stderr_sys[j]))
-        entry = {
-            "value": value,
-            "stderr": combined,
-            "ci95": interval95(value, combined, float(lower[j]), at_bound),
-            "stderr_statistical": se,
-            "stderr_systematic": float(stderr_sys[j]),
-            "error_budget": {key: float(d[j]) for key, d in shifts.items()},
-            "lower_bound": float(lower[j]),
-            "at_bound": at_bound,
-            "identifiable": True,
-            "unit": _unit(name),
-        }
-        if at_bound:
-            entry["note"] = f"at its lower bound {lower[j]:g}: the data prefer a smaller (unphysical) value"
-            warnings.append(f"{name} is at its lower bound ({lower[j]:g}); its estimate is not a measurement")
-        rel = se / abs(value) if value != 0 else math.inf
-        if not at_bound and rel > settings.identifiable_max_relative_stderr:
-            entry["identifiable"] = False
-            entry["reason"] = (
-                f"standard error {se:.3g} is {rel * 100:.0f} % of the estimate: this term's torque is too small "
-                "against the noise and the other terms over this record (amplitude or duration too small)"
-            )
-            warnings.append(f"{name} is not identifiable from this record ({rel * 100:.0f} % standard error)")
-        params[name] = entry
+        se = float(stderr[j])
+        at_bound = bool(active[j] or x[j] <= lower[j] + 1e-9 * max(se, 1e-300))
+        params[name] = coefficient_entry(
+            name,
+            _unit(name),
+            float(x[j]),
+            se,
+            {key: float(d[j]) for key, d in shifts.items()},
+            float(lower[j]),
+            at_bound,
+            settings.identifiable_max_relative_stderr,
+            warnings,
+        )
         if name == "drag_area_m2":
-            params["drag_coefficient"] = _drag_coefficient(entry, records[0])
+            params["drag_coefficient"] = drag_coefficient_entry(
+                params[name], rig.frontal_area_m2, records[0].tolerances.get("frontal_area_m2", 0.0)
+            )
     warnings += _rig_checks(rig, params[ADDED_MASS], starts)
     sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     corr = cov / np.outer(sd, sd)
@@ -403,31 +390,6 @@ def _systematic_inputs(records) -> dict:
         "rig_tolerances": dict(first.tolerances),
         "pivot_covariance_px2": {r.trial: r.pivot_covariance_px2 for r in records},
         "arm_radius_px": {r.trial: r.arm_radius_px for r in records},
-    }
-
-
-def _drag_coefficient(drag_area: dict, record: AngleRecord) -> dict:
-    """C_d = C_dA / A: every input of the drag area's budget divided by A, plus A's own tolerance."""
-    area = record.rig.frontal_area_m2
-    value = drag_area["value"] / area
-    budget = {key: shift / area for key, shift in drag_area["error_budget"].items()}
-    area_sigma = record.tolerances.get("frontal_area_m2", 0.0)
-    if area_sigma:
-        budget["frontal_area_m2"] = -value * area_sigma / area
-    stat = drag_area["stderr_statistical"] / area
-    sys = math.sqrt(sum(v * v for v in budget.values()))
-    combined = math.hypot(stat, sys)
-    return {
-        **drag_area,
-        "value": value,
-        "stderr": combined,
-        "ci95": interval95(value, combined, drag_area["lower_bound"] / area, drag_area["at_bound"]),
-        "stderr_statistical": stat,
-        "stderr_systematic": sys,
-        "error_budget": budget,
-        "lower_bound": drag_area["lower_bound"] / area,
-        "unit": "1",
-        "derived_from": "drag_area_m2 / frontal_area_m2",
     }
 
 

@@ -213,6 +213,73 @@ def interval95(value: float, stderr: float, lower: float, at_bound: bool) -> lis
     return [max(value - Z95 * stderr, lower), value + Z95 * stderr]
 
 
+def coefficient_entry(
+    name: str,
+    unit: str,
+    value: float,
+    stderr_statistical: float,
+    error_budget: dict,
+    lower: float,
+    at_bound: bool,
+    max_relative_stderr: float,
+    warnings: list,
+) -> dict:
+    """One fitted coefficient as reported: the value (the bound itself when it ends there), the statistical,
+    systematic (quadrature sum of the ``error_budget`` shifts) and combined standard errors, the 95 % interval
+    of the combined error, and the at-bound and identifiability flags (warnings appended to ``warnings``)."""
+    if at_bound:
+        value = lower
+    systematic = math.sqrt(sum(v * v for v in error_budget.values()))
+    combined = math.hypot(stderr_statistical, systematic)
+    entry = {
+        "value": value,
+        "stderr": combined,
+        "ci95": interval95(value, combined, lower, at_bound),
+        "stderr_statistical": stderr_statistical,
+        "stderr_systematic": systematic,
+        "error_budget": error_budget,
+        "lower_bound": lower,
+        "at_bound": at_bound,
+        "identifiable": True,
+        "unit": unit,
+    }
+    if at_bound:
+        entry["note"] = f"at its lower bound {lower:g}: the data prefer a smaller (unphysical) value"
+        warnings.append(f"{name} is at its lower bound ({lower:g}); its estimate is not a measurement")
+    rel = stderr_statistical / abs(value) if value != 0 else math.inf
+    if not at_bound and rel > max_relative_stderr:
+        entry["identifiable"] = False
+        entry["reason"] = (
+            f"standard error {stderr_statistical:.3g} is {rel * 100:.0f} % of the estimate: this term's torque is "
+            "too small against the noise and the other terms over this record (amplitude or duration too small)"
+        )
+        warnings.append(f"{name} is not identifiable from this record ({rel * 100:.0f} % standard error)")
+    return entry
+
+
+def drag_coefficient_entry(drag_area: dict, frontal_area_m2: float, frontal_area_sigma_m2: float) -> dict:
+    """C_d = C_dA / A: every input of the drag area's budget divided by A, plus A's own tolerance (−C_d σ_A / A)."""
+    area = frontal_area_m2
+    value = drag_area["value"] / area
+    budget = {key: shift / area for key, shift in drag_area["error_budget"].items()}
+    if frontal_area_sigma_m2:
+        budget["frontal_area_m2"] = -value * frontal_area_sigma_m2 / area
+    systematic = math.sqrt(sum(v * v for v in budget.values()))
+    combined = math.hypot(drag_area["stderr_statistical"] / area, systematic)
+    return {
+        **drag_area,
+        "value": value,
+        "stderr": combined,
+        "ci95": interval95(value, combined, drag_area["lower_bound"] / area, drag_area["at_bound"]),
+        "stderr_statistical": drag_area["stderr_statistical"] / area,
+        "stderr_systematic": systematic,
+        "error_budget": budget,
+        "lower_bound": drag_area["lower_bound"] / area,
+        "unit": "1",
+        "derived_from": "drag_area_m2 / frontal_area_m2",
+    }
+
+
 def linear_response(jac: np.ndarray, free: np.ndarray, delta_residual: np.ndarray) -> np.ndarray:
     """Shift of the least-squares estimate when the residuals move by δr: δx = −J⁺ δr (parameters at a bound stay)."""
     dx = np.zeros(jac.shape[1])
