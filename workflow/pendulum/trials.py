@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,6 +53,17 @@ def validate_config(config: dict, source: str = "config.yaml") -> None:
     empty = [name for name, terms in config["variants"].items() if terms is None]
     if empty:
         raise ConfigError(f"{source}: variants {empty} have no term list (use [] for added mass only)")
+    for rig, values in config["rigs"].items():
+        for key, sigma in (values.get("tolerances") or {}).items():
+            value = values.get(key)
+            if not math.isfinite(sigma):
+                raise ConfigError(f"{source}: rigs/{rig}/tolerances/{key} is {sigma!r}; give a finite 1σ")
+            if value is not None and sigma > 0.25 * abs(value):
+                raise ConfigError(
+                    f"{source}: rigs/{rig}/tolerances/{key} = {sigma:g} is {100 * sigma / abs(value):.0f} % of "
+                    f"{key} = {value:g}; tolerances are 1σ in the value's own unit (e.g. {0.01 * abs(value):.3g} "
+                    "for 1 %), not fractions"
+                )
     if config["default_rig"] not in config["rigs"]:
         raise ConfigError(
             f"{source}: default_rig {config['default_rig']!r} is not one of rigs {sorted(config['rigs'])}"

@@ -229,6 +229,8 @@ def coefficient_entry(
     of the combined error, and the at-bound and identifiability flags (warnings appended to ``warnings``)."""
     if at_bound:
         value = lower
+        # held on its bound, it moves with no input: what the refits leave is rounding (1e-10), not an error
+        error_budget = {k: (v if abs(v) > 1e-6 * stderr_statistical else 0.0) for k, v in error_budget.items()}
     systematic = math.sqrt(sum(v * v for v in error_budget.values()))
     combined = math.hypot(stderr_statistical, systematic)
     entry = {
@@ -263,7 +265,7 @@ def drag_coefficient_entry(drag_area: dict, frontal_area_m2: float, frontal_area
     value = drag_area["value"] / area
     budget = {key: shift / area for key, shift in drag_area["error_budget"].items()}
     if frontal_area_sigma_m2:
-        budget["frontal_area_m2"] = -value * frontal_area_sigma_m2 / area
+        budget["frontal_area_m2"] = -value * frontal_area_sigma_m2 / area + 0.0  # + 0.0: no "-0.0" at a bound
     systematic = math.sqrt(sum(v * v for v in budget.values()))
     combined = math.hypot(drag_area["stderr_statistical"] / area, systematic)
     return {

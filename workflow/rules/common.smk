@@ -94,7 +94,14 @@ def angles_inputs(wildcards):
 
 
 def angles_settings(wildcards):
-    return trial_settings(config, TRIALS[wildcards.trial])
+    """Only what the angles stage uses, so that changing a mass or a tolerance reruns the fits, not the angles."""
+    s = trial_settings(config, TRIALS[wildcards.trial])
+    return {
+        "rig_name": s["rig_name"],
+        "length_m": s["rig"]["length_m"],
+        "pivot_px": s["pivot_px"],
+        "vertical_deg": s["vertical_deg"],
+    }
 
 
 def variant_terms(wildcards):

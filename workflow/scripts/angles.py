@@ -12,7 +12,7 @@ from pendulum.io import script_logger, write_csv, write_json
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "angles")
 settings = sm.params.settings
-length_m = settings["rig"]["length_m"]
+length_m = settings["length_m"]
 try:
     if "table" in sm.input.keys():
         source = sm.input.table
