@@ -232,6 +232,9 @@ def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
         (lambda c: c.update(trackng=c.pop("tracking")), "trackng"),
         (lambda c: c["rigs"]["paper_rig"].update(mass_kg=-3.53), "mass_kg"),
         (lambda c: c["tracking"].update(polarity="neon"), "polarity"),
+        # 1 % written as a fraction: 400 % of the volume
+        (lambda c: c["rigs"]["paper_rig"]["tolerances"].update(displaced_volume_m3=0.01), "not fractions"),
+        (lambda c: c["rigs"]["paper_rig"]["tolerances"].update(lenght_m=0.001), "lenght_m"),
     ],
 )
 def test_config_errors_name_the_key(tmp_path, project, change, message):
