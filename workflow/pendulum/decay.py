@@ -51,14 +51,8 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
         centre = float(np.median(th[-max(10, th.size // 5) :]))
     x = th - centre
     K = rig.restoring_torque_nm
-    ext_t, ext_v = extrema(t, x)
-    big = np.abs(ext_v) > max(20 * sigma, 1e-4)
-    ext_t, ext_v = ext_t[big], ext_v[big]
-    alternating = np.sign(ext_v[1:]) != np.sign(ext_v[:-1])
-    half_t = np.diff(ext_t)[alternating]
-    amp = np.abs(ext_v)
-    mean_amp = (0.5 * (amp[1:] + amp[:-1]))[alternating]
-    loss = (amp[:-1] - amp[1:])[alternating]
+    _, a0, a1, half_t = _half_cycle_pairs(t, x, max(20 * sigma, 1e-4))
+    mean_amp, loss = 0.5 * (a0 + a1), a0 - a1
     start = {}
     if half_t.size >= 1:
         correction = 1 + mean_amp**2 / 16 + 11 * mean_amp**4 / 3072
@@ -104,15 +98,19 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
     }
 
 
-def _swing_extrema(t, x, min_amplitude_rad):
-    """Refined extrema of x (θ minus the rest offset) above ``min_amplitude_rad``, as (times, values)."""
+def _half_cycle_pairs(t, x, min_amplitude_rad):
+    """Half cycles of x (θ minus the rest offset): consecutive refined extrema above ``min_amplitude_rad``
+    of opposite sign, as (peak time, amplitude, next amplitude, half period)."""
     good = np.isfinite(t) & np.isfinite(x)
     t, x = np.asarray(t, float)[good], np.asarray(x, float)[good]
     if t.size < 5:
-        return np.array([]), np.array([])
+        return (np.array([]),) * 4
     ext_t, ext_v = extrema(t, x)
     keep = np.abs(ext_v) > min_amplitude_rad
-    return ext_t[keep], ext_v[keep]
+    ext_t, ext_v = ext_t[keep], ext_v[keep]
+    pairs = np.flatnonzero(np.sign(ext_v[1:]) != np.sign(ext_v[:-1])) if ext_v.size > 1 else np.array([], int)
+    amp = np.abs(ext_v)
+    return ext_t[pairs], amp[pairs], amp[pairs + 1], ext_t[pairs + 1] - ext_t[pairs]
 
 
 HALF_CYCLE_COLUMNS = (
@@ -174,14 +172,10 @@ def half_cycles(
     x = np.asarray(theta_rad, float) - rest_offset_rad
     if min_amplitude_rad is None:
         min_amplitude_rad = max(20 * noise_level(x[np.isfinite(x)]), 1e-4)
-    ext_t, ext_v = _swing_extrema(t, x, min_amplitude_rad)
-    pairs = np.flatnonzero(np.sign(ext_v[1:]) != np.sign(ext_v[:-1])) if ext_v.size > 1 else np.array([], int)
+    peak_t, a0, a1, half = _half_cycle_pairs(t, x, min_amplitude_rad)
     rig = model.rig
     K = rig.restoring_torque_nm
     inertia = float(model.inertia_kg_m2(params))
-    amp = np.abs(ext_v)
-    a0, a1 = amp[pairs], amp[pairs + 1]
-    half = ext_t[pairs + 1] - ext_t[pairs]
     loss = a0 - a1
     mean = 0.5 * (a0 + a1)
     period = 2 * half
@@ -190,8 +184,8 @@ def half_cycles(
     D = float(characteristic_length_m)
     return pd.DataFrame(
         {
-            "peak_time_s": ext_t[pairs],
-            "next_peak_time_s": ext_t[pairs + 1],
+            "peak_time_s": peak_t,
+            "next_peak_time_s": peak_t + half,
             "amplitude_rad": a0,
             "amplitude_deg": np.degrees(a0),
             "next_amplitude_rad": a1,

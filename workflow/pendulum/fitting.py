@@ -98,15 +98,14 @@ class _Problem:
         nuis = x[self.n_phys :].reshape(len(self.records), 3)
         return phys, nuis
 
-    def simulate_trial(self, k, phys, nuis_k, rig_values=None):
+    def simulate_trial(self, k, phys, nuis_k):
         r = self.records[k]
-        model = self.models[k] if rig_values is None else self.model_for(Rig.from_mapping(rig_values))
-        theta, _ = simulate(model, phys, nuis_k[0], nuis_k[1], r.time_s, max_step_s=self.max_step_s)
+        theta, _ = simulate(self.models[k], phys, nuis_k[0], nuis_k[1], r.time_s, max_step_s=self.max_step_s)
         return theta + nuis_k[2]
 
-    def trial_residual(self, k, phys, nuis_k, rig_values=None):
-        """Simulated minus measured θ on trial k's samples in use (optionally with other rig values)."""
-        return (self.simulate_trial(k, phys, nuis_k, rig_values) - self.records[k].theta_rad)[self.masks[k]]
+    def trial_residual(self, k, phys, nuis_k):
+        """Simulated minus measured θ on trial k's samples in use."""
+        return (self.simulate_trial(k, phys, nuis_k) - self.records[k].theta_rad)[self.masks[k]]
 
     def trial_residuals(self, x):
         phys, nuis = self.split(x)
@@ -345,9 +344,9 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         else next(iter(trials.values()))["keulegan_carpenter_number"],
         "uncertainty": {
             "method": "statistical: least-squares sandwich covariance with an AR(p) model of the residual "
-            "noise (p by AIC); systematic: each rig value's stated 1σ tolerance and the estimated pivot's "
-            "covariance propagated by a linearised refit (error_budget); combined in quadrature; normal 95 % "
-            "intervals, one-sided at a bound",
+            "noise (p by AIC), its bias from fitting residuals corrected by a parametric bootstrap; systematic: "
+            "each rig value's stated 1σ tolerance and the estimated pivot's covariance, each propagated by a "
+            "refit (error_budget); combined in quadrature; normal 95 % intervals, one-sided at a bound",
             "systematic_inputs": _systematic_inputs(records),
             "stderr_over_white_noise_stderr": inflation,
             **hac_info,

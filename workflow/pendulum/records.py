@@ -74,7 +74,6 @@ class AngleRecord:
     arm_radius_px: float | None = None
     pivot_covariance_px2: list | None = None
     vertical_rad: float = 0.0  # image angle of the vertical: θ_image = θ + vertical
-    kinematic_viscosity_m2_s: float = WATER_KINEMATIC_VISCOSITY_M2_S
 
     @property
     def n_samples(self) -> int:
@@ -141,5 +140,4 @@ def load_record(
         arm_radius_px=info.get("arm_radius_px"),
         pivot_covariance_px2=info.get("pivot_covariance_px2"),
         vertical_rad=math.radians(info.get("vertical_deg") or 0.0),
-        kinematic_viscosity_m2_s=float(rig_values.get("kinematic_viscosity_m2_s") or WATER_KINEMATIC_VISCOSITY_M2_S),
     )

@@ -10,7 +10,7 @@ import pandas as pd
 
 from pendulum.decay import half_cycles, loss_at_amplitude
 from pendulum.physics import ADDED_MASS, PendulumModel, Rig, simulate
-from pendulum.records import FitSettings, characteristic_length_m, load_record
+from pendulum.records import WATER_KINEMATIC_VISCOSITY_M2_S, FitSettings, characteristic_length_m, load_record
 
 
 def fit_document(fit: dict, *, variant: str, rig: dict, sources: list[str], settings: FitSettings) -> dict:
@@ -237,7 +237,7 @@ def cycle_table(
     params = fitted_physical(fit_document, model)
     offset = math.radians(entry["rest_offset_deg"])
     length = characteristic_length_m(rig_values)
-    nu = float(rig_values.get("kinematic_viscosity_m2_s") or 1e-6)
+    nu = float(rig_values.get("kinematic_viscosity_m2_s") or WATER_KINEMATIC_VISCOSITY_M2_S)
 
     def cycles(column, use):
         return half_cycles(
