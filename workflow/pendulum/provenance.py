@@ -1,0 +1,125 @@
+"""Where a result came from: code version, configuration digest, software versions.
+
+Used by the report (its provenance section) and by the freeze target
+(`provenance.json` of a frozen results folder). Nothing here reads the clock:
+the report must be byte-identical between two builds of the same commit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import platform
+import re
+import subprocess
+from importlib import metadata
+from pathlib import Path
+
+CORE_PACKAGES = (
+    "snakemake",
+    "opencv-python-headless",
+    "numpy",
+    "scipy",
+    "pandas",
+    "matplotlib",
+    "papermill",
+    "nbconvert",
+    "ipykernel",
+    "jsonschema",
+    "pyyaml",
+)
+
+# Paths whose changes do not make a work tree "dirty": what the workflow writes
+# and the user's data (hashed separately when a result is frozen).
+NOT_CODE = ("results", "logs", ".snakemake", ".venv", "data/raw")
+
+
+def config_digest(config: dict) -> str:
+    """SHA-256 of the configuration as used (canonical JSON: sorted keys, no spaces)."""
+    text = json.dumps(config, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _git(root: Path, *args: str) -> str | None:
+    try:
+        proc = subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return proc.stdout.strip() if proc.returncode == 0 else None
+
+
+def git_state(root: str | Path = ".") -> dict:
+    """Commit, its UTC commit time and whether code or config differ from it.
+
+    Outside a git work tree every field is None. `dirty_files` lists changed or
+    untracked paths outside results/, logs/, .snakemake/, .venv/ and data/raw/.
+    """
+    root = Path(root)
+    commit = _git(root, "rev-parse", "HEAD")
+    if commit is None:
+        return {"commit": None, "commit_time_utc": None, "dirty": None, "dirty_files": None}
+    commit_time = _git(root, "log", "-1", "--format=%cd", "--date=format-local:%Y-%m-%dT%H:%M:%SZ")
+    status = _git(root, "-c", "core.quotepath=off", "status", "--porcelain", "--untracked-files=all") or ""
+    dirty_files = sorted(
+        path
+        for path in (line[3:].split(" -> ")[-1].strip('"') for line in status.splitlines() if line.strip())
+        if not any(path == p or path.startswith(p + "/") for p in NOT_CODE)
+    )
+    return {
+        "commit": commit,
+        "commit_time_utc": commit_time,
+        "dirty": bool(dirty_files),
+        "dirty_files": dirty_files,
+    }
+
+
+def package_versions(names=CORE_PACKAGES) -> dict[str, str | None]:
+    """Installed version of each named distribution (None when not installed)."""
+    versions = {}
+    for name in names:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return versions
+
+
+def installed_packages() -> list[str]:
+    """Every installed distribution as `name==version`, sorted (a `pip freeze` without pip)."""
+    return sorted(
+        {f"{d.metadata['Name']}=={d.version}" for d in metadata.distributions() if d.metadata["Name"]},
+        key=str.lower,
+    )
+
+
+def opencv_video_backend() -> dict:
+    """OpenCV version and the video I/O backends it was built with (FFMPEG and its library versions)."""
+    import cv2
+
+    info = cv2.getBuildInformation()
+    section = info.split("Video I/O:", 1)[-1].split("\n\n", 1)[0]
+    backends = {}
+    for line in section.splitlines():
+        m = re.match(r"\s+(\w[\w ]*?):\s+(.+)$", line)
+        if m:
+            backends[m.group(1).strip()] = m.group(2).strip()
+    return {"opencv": cv2.__version__, "video_io": backends}
+
+
+def software() -> dict:
+    """Python, platform and the versions of the packages a result depends on."""
+    return {
+        "python": platform.python_version(),
+        "implementation": platform.python_implementation(),
+        "platform": platform.platform(terse=True),
+        "packages": package_versions(),
+        "opencv_video": opencv_video_backend(),
+    }
+
+
+def provenance(root: str | Path = ".", config: dict | None = None) -> dict:
+    """Everything above in one document (no timestamps except the commit's)."""
+    document = {"git": git_state(root), "software": software()}
+    if config is not None:
+        document["config_sha256"] = config_digest(config)
+    return document
