@@ -35,3 +35,16 @@ def hard_videos(tmp_path_factory):
     for spec in (dark, occluded):
         generate_trial(spec, out, out, progress=None)
     return out
+
+
+@pytest.fixture(scope="session")
+def demo_project(tmp_path_factory):
+    """One full build of the demo videos (README's build command) in a project copy, shared by the workflow tests.
+
+    Tests that change it restore it; tests that need a changed project copy it.
+    """
+    from workflow_run import copy_project, run
+
+    work = copy_project(tmp_path_factory.mktemp("demo_project"))
+    run(["-c2"], work)
+    return work

@@ -1,68 +1,21 @@
 """The Snakemake workflow end to end on a copy of the repository (demo videos)."""
 
-import hashlib
 import json
-import re
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 import yaml
 
-from conftest import DEMO_RAW, ROOT, demo_trials
+from conftest import ROOT, demo_trials
 from pendulum.trials import ConfigError, validate_config
-
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
-
-
-def run(args, cwd, check=True):
-    proc = subprocess.run(SNAKEMAKE + args, cwd=cwd, capture_output=True, text=True)
-    if check and proc.returncode != 0:
-        raise AssertionError(f"snakemake {args} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
-    return proc
+from workflow_run import planned_jobs, planned_wildcards, run
 
 
-def planned_jobs(dry_run_output: str) -> set[tuple[str, str]]:
-    """(rule, trial-or-rig) pairs from a dry run."""
-    return {
-        (rule, w.get("trial", w.get("rig")))
-        for rule, w in planned_wildcards(dry_run_output)
-        if next(iter(w), None) in ("trial", "rig")
-    }
-
-
-def planned_wildcards(dry_run_output: str) -> list[tuple[str, dict]]:
-    """(rule, {wildcard: value}) of every job in a dry run."""
-    jobs, rule = [], None
-    for line in dry_run_output.splitlines():
-        m = re.match(r"^\s*(?:local)?rule (\w+):", line)
-        if m:
-            rule = m.group(1)
-        m = re.match(r"^\s*wildcards: (.+)$", line)
-        if m and rule:
-            jobs.append((rule, dict(item.split("=", 1) for item in m.group(1).split(", "))))
-    return jobs
-
-
-def digest(folder: Path, patterns=("*.csv", "*.json")) -> dict:
-    return {
-        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
-        for pat in patterns
-        for p in sorted(folder.rglob(pat))
-    }
-
-
-@pytest.fixture(scope="module")
-def project(tmp_path_factory):
-    work = tmp_path_factory.mktemp("project")
-    for item in ("Snakefile", "config.yaml", "workflow", "profiles"):
-        src = ROOT / item
-        (shutil.copytree if src.is_dir() else shutil.copy)(src, work / item)
-    shutil.copytree(DEMO_RAW, work / "data" / "raw")
-    run(["-c2"], work)
-    return work
+@pytest.fixture
+def project(demo_project):
+    return demo_project
 
 
 def test_builds_tracks_and_angles_for_every_demo_video(project):
@@ -77,28 +30,6 @@ def test_builds_tracks_and_angles_for_every_demo_video(project):
         header = (project / f"results/angles/{trial}.csv").read_text().splitlines()[0].split(",")
         assert {"time_s", "theta_rad", "theta_deg", "s_m", "quality"} <= set(header)
     assert "tracked frame" in (project / f"logs/tracks/{demo_trials()[0]}.log").read_text()
-
-
-def test_second_run_has_nothing_to_do(project):
-    assert "Nothing to be done" in run(["-n"], project).stdout
-
-
-def test_results_are_byte_identical_on_rerun(project):
-    before = digest(project / "results")
-    run(["-c2", "--forceall"], project)
-    assert digest(project / "results") == before
-
-
-def test_adding_a_video_builds_only_that_trial(project):
-    shutil.copy(project / "data/raw/demo_m05.mp4", project / "data/raw/extra_m05.mp4")
-    try:
-        jobs = planned_jobs(run(["-n"], project).stdout)
-        heavy = {(r, t) for r, t in jobs if r in ("frames", "tracks")}
-        assert heavy == {("frames", "extra_m05"), ("tracks", "extra_m05")}
-        # the estimated pivot is pooled over the rig, so the rig's cheap angle records follow it
-        assert ("angles", "extra_m05") in jobs and ("rig_geometry", "paper_rig") in jobs
-    finally:
-        (project / "data/raw/extra_m05.mp4").unlink()
 
 
 TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
@@ -127,20 +58,6 @@ def test_fits_every_variant_and_the_demo_reproduces_the_paper_symptom(project):
         for trial in demo_trials()
     ]
     assert max(d["value"] for d in drags) > 1.5 * min(d["value"] for d in drags)
-
-
-def test_adding_a_variant_fits_only_that_variant(tmp_path, project):
-    config = yaml.safe_load((project / "config.yaml").read_text())
-    config["variants"]["drag_only_linear"] = ["linear_damping"]
-    extra = tmp_path / "extra.yaml"
-    extra.write_text(yaml.safe_dump({"variants": config["variants"]}))
-    out = run(["-n", "--configfile", str(extra)], project).stdout
-    rules = re.findall(r"^\s*(?:local)?rule (\w+):", out, flags=re.M)
-    variants = set(re.findall(r"variant=([\w.+-]+)", out))
-    assert variants == {"drag_only_linear"}
-    assert sorted(set(rules)) == ["all", "fit_curve", "fit_joint", "fit_summary", "fit_trial"]
-    assert rules.count("fit_trial") == rules.count("fit_curve") == len(demo_trials())
-    assert rules.count("fit_joint") == 1
 
 
 def test_curve_cycles_and_joint_files_for_every_trial_variant_and_rig(project):
@@ -175,21 +92,6 @@ def test_curve_cycles_and_joint_files_for_every_trial_variant_and_rig(project):
                 assert cycles[column].notna().sum() >= 5, (variant, trial, column)
 
 
-def test_broken_video_is_named_and_costs_nothing_else(tmp_path, project):
-    work = tmp_path / "p"
-    shutil.copytree(project, work, ignore=shutil.ignore_patterns("results", ".snakemake", "logs"))
-    (work / "data/raw/broken.mp4").write_bytes(b"\x00\x00\x00\x18ftypmp42 this is not a video" * 50)
-    before = digest(work / "data/raw", ("*",))
-    proc = run(["-c2"], work, check=False)
-    assert proc.returncode != 0
-    assert "broken.mp4" in proc.stdout + proc.stderr + (work / "logs/frames/broken.log").read_text()
-    for trial in demo_trials():
-        assert (work / f"results/angles/{trial}.csv").is_file()
-    assert not (work / "results/angles/broken.csv").exists()
-    assert not list((work / "results").rglob("*.tmp*"))
-    assert digest(work / "data/raw", ("*",)) == before
-
-
 def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
     from conftest import SHARED
 
@@ -208,7 +110,9 @@ def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
     }
     (work / "config.yaml").write_text(yaml.safe_dump(config))
     dry_run = run(["-n"], work).stdout
-    jobs = planned_jobs(dry_run)
+    jobs = {
+        (rule, name) for rule, name in planned_jobs(dry_run) if rule in ("frames", "tracks", "rig_geometry", "angles")
+    }
     assert jobs == {("angles", "wooden_bob")}
     # a trial of a second rig refits only that rig's joint fits, never paper_rig's
     joints = {(w["variant"], w["rig"]) for rule, w in planned_wildcards(dry_run) if rule == "fit_joint"}

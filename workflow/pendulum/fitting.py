@@ -47,6 +47,7 @@ from pendulum.uncertainty import (
     consistency_test,
     drag_coefficient_entry,
     interval95,
+    jacobian_rank_warnings,
     linear_response,
     sandwich_covariance,
     systematic_perturbations,
@@ -209,6 +210,11 @@ def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None =
     n = residual.size
     white_cov = np.linalg.pinv(jac.T @ jac) * float(residual @ residual) / max(n - sol.x.size, 1)
     hac_info["systematic_shifts"] = _systematic_shifts(problem, sol, jac, lower)
+    labels = list(model.parameter_names) + [f"{k}[{r.trial}]" for r in records for k in NUISANCE]
+    free = np.asarray(sol.active_mask) == 0
+    hac_info["jacobian_warnings"] = jacobian_rank_warnings(
+        jac[:, free], [n for n, f in zip(labels, free, strict=True) if f]
+    )
     return _summarise(
         model, records, problem, sol, cov, white_cov, res_parts, starts, n_outliers, hac_info, settings, lower
     )
@@ -250,6 +256,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
     warnings = []
     if not sol.success:
         warnings.append(f"the optimiser stopped without converging: {sol.message}")
+    warnings += hac_info.pop("jacobian_warnings")
     if n_outliers:
         warnings.append(f"{n_outliers} sample(s) beyond {settings.outlier_sigmas:g} robust σ were dropped as outliers")
     params = {}

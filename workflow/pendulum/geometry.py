@@ -314,18 +314,78 @@ def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_
     )
 
 
-def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertical_deg=None) -> dict:
-    """Pivot (circle through the pooled marker paths) and vertical (pooled oscillation centre).
+OUTLIER_TRACK_FACTOR = 8.0  # a track this many times the others' circle RMS off their circle is left out
+OUTLIER_TRACK_FLOOR_PX = 1.0  # ... and at least this far (px RMS)
 
-    Values given are kept; only the missing ones are estimated.
+
+def _radial_rms_px(track: pd.DataFrame, circle: CircleFit) -> float:
+    ok = track.flag == "ok"
+    d = np.hypot(track.x_px[ok] - circle.pivot_x_px, track.y_px[ok] - circle.pivot_y_px) - circle.radius_px
+    return float(np.sqrt(np.mean(d.to_numpy(float) ** 2))) if ok.any() else math.inf
+
+
+def _pooled_circle(tracks: dict[str, pd.DataFrame]) -> CircleFit:
+    xs = np.concatenate([t.x_px[t.flag == "ok"].to_numpy(float) for t in tracks.values()])
+    ys = np.concatenate([t.y_px[t.flag == "ok"].to_numpy(float) for t in tracks.values()])
+    return fit_circle(xs, ys)
+
+
+def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, str]]:
+    """Circle through the pooled marker paths, leaving out tracks that are not on it.
+
+    With three or more tracks, the track farthest off the pooled circle (RMS
+    radial distance) is compared with the circle fitted to the others: more than
+    OUTLIER_TRACK_FACTOR × their RMS and more than OUTLIER_TRACK_FLOOR_PX off, it
+    is left out (a moved camera, a tracked reflection) and the test repeated.
+    Returns the circle and {trial: reason} of the tracks left out.
     """
-    result: dict = {"trials": sorted(tracks)}
+    kept = dict(tracks)
+    rejected: dict[str, str] = {}
+    circle = _pooled_circle(kept)
+    while len(kept) >= 3:
+        worst = max(sorted(kept), key=lambda name: _radial_rms_px(kept[name], circle))
+        others = {k: v for k, v in kept.items() if k != worst}
+        reference = _pooled_circle(others)
+        off = _radial_rms_px(kept[worst], reference)
+        limit = max(OUTLIER_TRACK_FACTOR * reference.rms_px, OUTLIER_TRACK_FLOOR_PX)
+        if not off > limit:
+            break
+        rejected[worst] = (
+            f"its marker path is {off:.2f} px RMS off the circle through the other {len(others)} trials' paths "
+            f"(limit {limit:.2f} px): camera moved or wrong object tracked? Give its pivot_px in a sidecar"
+        )
+        kept, circle = others, reference
+    return circle, rejected
+
+
+def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
+    """Why a track cannot use its rig's pooled pivot (its path is off the rig's circle), or None."""
+    circle = geometry.get("circle")
+    if not circle:
+        return None
+    off = _radial_rms_px(track, CircleFit(**circle))
+    limit = max(OUTLIER_TRACK_FACTOR * circle["rms_px"], OUTLIER_TRACK_FLOOR_PX)
+    if off > limit:
+        return (
+            f"the marker path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): "
+            "camera moved or wrong object tracked? Give this trial's pivot_px in a sidecar"
+        )
+    return None
+
+
+def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertical_deg=None) -> dict:
+    """Pivot (circle through the pooled marker paths, outlying tracks left out) and vertical.
+
+    The vertical is the median oscillation centre of the tracks used. Values
+    given are kept; only the missing ones are estimated.
+    """
+    result: dict = {"trials": sorted(tracks), "rejected_trials": {}}
     if pivot_px is None:
-        xs = np.concatenate([t.x_px[t.flag == "ok"].to_numpy() for t in tracks.values()])
-        ys = np.concatenate([t.y_px[t.flag == "ok"].to_numpy() for t in tracks.values()])
-        circle = fit_circle(xs, ys)
+        circle, rejected = pooled_pivot(tracks)
+        tracks = {k: v for k, v in tracks.items() if k not in rejected}
         pivot_px = [circle.pivot_x_px, circle.pivot_y_px]
-        result["pivot_source"] = "estimated: circle fitted to the pooled marker paths"
+        result["rejected_trials"] = rejected
+        result["pivot_source"] = f"estimated: circle fitted to the pooled marker paths of {len(tracks)} trial(s)"
         result["circle"] = asdict(circle)
         result["pivot_covariance_px2"] = circle.pivot_covariance_px2
     else:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import glob
 import json
 import logging
 import math
@@ -16,8 +17,14 @@ FLOAT_FORMAT = "%.10g"
 
 
 def _atomic(path: Path, write) -> None:
+    """Write to a hidden temporary sibling, then rename: a reader sees the old file or the whole new one.
+
+    Temporaries left by a killed earlier writer of the same path are removed first.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.tmp*"):
+        stale.unlink(missing_ok=True)
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
     try:
         write(tmp)
@@ -48,6 +55,10 @@ def _clean(value):
 
 def write_json(document: dict, path) -> None:
     text = json.dumps(_clean(document), indent=2, sort_keys=False) + "\n"
+    _atomic(path, lambda p: Path(p).write_text(text))
+
+
+def write_text(text: str, path) -> None:
     _atomic(path, lambda p: Path(p).write_text(text))
 
 

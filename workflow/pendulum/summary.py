@@ -38,10 +38,13 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
     """One row per (variant, trial or joint fit): the paper's Tables 2 and 3 with intervals and flags.
 
     ``documents``: per-trial fit documents (with ``trial``) and per-rig joint ones
-    (results/fits/<variant>/joint/<rig>.json, labelled ``joint:<rig>``).
+    (results/fits/<variant>/joint/<rig>.json, labelled ``joint:<rig>``). Failed
+    fits (``status: failed``) have no row; the status table lists them.
     """
     rows = []
     for doc in documents:
+        if doc.get("status") == "failed":
+            continue
         fits = [(_label(doc), doc)]
         for label, fit in fits:
             kc = fit["keulegan_carpenter_number"]
@@ -61,6 +64,7 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
                 "samples_digest": fit.get("samples_digest"),
                 "consistency": fit.get("consistency", {}).get("verdict"),
                 "n_warnings": len(fit["warnings"]),
+                "warnings": " | ".join(fit["warnings"]),
             }
             for name in PHYSICAL_COLUMNS:
                 entry = fit["parameters"].get(name)

@@ -328,3 +328,28 @@ def systematic_perturbations(records) -> dict[str, list]:
             label = "pivot_px" if len(groups) == 1 else f"pivot_px[{g}]"
             out[f"{label} (axis {i + 1})"] = moved
     return out
+
+
+def jacobian_rank_warnings(jac: np.ndarray, labels: list[str], tolerance: float = 1e-8) -> list[str]:
+    """Warnings for combinations of parameters the record cannot determine (a (near-)singular Jacobian).
+
+    Columns are scaled to unit norm, so the test is on the sensitivities' shapes,
+    not their units; a singular value below ``tolerance`` × the largest means that
+    direction in parameter space leaves every residual unchanged. The warning
+    names the parameters that carry that direction.
+    """
+    norms = np.linalg.norm(jac, axis=0)
+    out = [f"{labels[j]} has no effect on the fitted record (zero sensitivity)" for j in np.flatnonzero(norms == 0)]
+    live = norms > 0
+    if live.sum() < 2:
+        return out
+    _, sv, vt = np.linalg.svd(jac[:, live] / norms[live], full_matrices=False)
+    names = [label for label, keep in zip(labels, live, strict=True) if keep]
+    for s, v in zip(sv, vt, strict=True):
+        if s < tolerance * sv[0]:
+            carried = [names[i] for i in sorted(np.argsort(-np.abs(v))[:3]) if abs(v[i]) > 0.2]
+            out.append(
+                f"singular Jacobian: {' and '.join(carried)} cannot be told apart by this record "
+                f"(relative singular value {s / sv[0]:.1e})"
+            )
+    return out

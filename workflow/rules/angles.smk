@@ -1,7 +1,8 @@
 rule rig_geometry:
     """Pivot and vertical of one rig, estimated from its trials' pooled marker paths."""
     input:
-        tracks=rig_tracks,
+        unpack(geometry_inputs),
+        code=script_code("rig_geometry.py"),
     output:
         geometry="results/geometry/{rig}.json",
     log:
@@ -18,6 +19,7 @@ rule angles:
     """θ(t) about the pivot, arc displacement s = Lθ, trimmed from release to rest."""
     input:
         unpack(angles_inputs),
+        code=script_code("angles.py"),
     output:
         angles="results/angles/{trial}.csv",
         summary="results/angles/{trial}.json",

@@ -1,3 +1,6 @@
+import ast
+import json
+import os
 import sys
 from pathlib import Path
 
@@ -12,6 +15,11 @@ from pendulum.trials import (  # noqa: E402
     trial_settings,
     validate_config,
 )
+
+# `--config key=true` arrives as the string "true": make it the boolean it means.
+for key, value in list(config.items()):
+    if isinstance(value, str) and value.lower() in ("true", "false"):
+        config[key] = value.lower() == "true"
 
 validate_config(
     config, source="the configuration (config.yaml and any --configfile/--config)"
@@ -46,6 +54,8 @@ def all_targets():
         if config["frames"]["keep_images"]:
             targets.append(f"results/frames/{name}/images")
     targets += [f"results/angles/{name}.csv" for name in sorted(TRIALS)]
+    if TRIALS:
+        targets += ["results/status/trials.csv", "results/status/all_trials_ok.txt"]
     for variant in sorted(config["variants"]):
         for name in sorted(TRIALS):
             targets += [
@@ -65,20 +75,37 @@ def raw_video(wildcards):
     return trial.path
 
 
-def sidecar_files(wildcards):
-    path = TRIALS[wildcards.trial].sidecar_path
-    return [path] if path else []
-
-
 def tracking_settings(wildcards):
     return trial_settings(config, TRIALS[wildcards.trial])["tracking"]
 
 
-def rig_tracks(wildcards):
-    return [
-        f"results/tracks/{name}.csv"
-        for name in pooled_trials(config, TRIALS, wildcards.rig)
-    ]
+def geometry_trials(wildcards):
+    """The trials whose tracks estimate a rig's pivot and vertical.
+
+    Once estimated, a rig's geometry is kept: the trials it was estimated from
+    stay its inputs, so adding a video does not re-estimate it (nor rebuild every
+    other trial's angles and fits). `--config reestimate_geometry=true` pools
+    every current trial of the rig instead (a deliberate re-estimate).
+    """
+    current = pooled_trials(config, TRIALS, wildcards.rig)
+    path = Path(f"results/geometry/{wildcards.rig}.json")
+    if config.get("reestimate_geometry") or not path.is_file():
+        return current
+    try:
+        kept = json.loads(path.read_text()).get("input_trials")
+    except (OSError, ValueError):
+        return current
+    if not kept or not set(kept) <= set(current):
+        return current
+    return sorted(kept)
+
+
+def geometry_inputs(wildcards):
+    names = geometry_trials(wildcards)
+    return {
+        "tracks": [f"results/tracks/{name}.csv" for name in names],
+        "summaries": [f"results/tracks/{name}.json" for name in names],
+    }
 
 
 def angles_inputs(wildcards):
@@ -86,10 +113,12 @@ def angles_inputs(wildcards):
     if trial.kind == "angles":
         inputs = {"table": trial.path}
     else:
-        inputs = {"track": f"results/tracks/{trial.name}.csv"}
+        inputs = {
+            "track": f"results/tracks/{trial.name}.csv",
+            "track_summary": f"results/tracks/{trial.name}.json",
+        }
         if needs_rig_geometry(config, trial):
             inputs["geometry"] = f"results/geometry/{rig_name(config, trial)}.json"
-    inputs["sidecar"] = sidecar_files(wildcards)
     return inputs
 
 
@@ -160,3 +189,85 @@ def summary_inputs(wildcards):
         for path in [f"results/fits/{variant}/{name}.json" for name in sorted(TRIALS)]
         + joint_fits(variant)
     ]
+
+
+def trial_documents(name):
+    """(stage, JSON document, log) of one trial's per-trial outputs, in pipeline order."""
+    docs = []
+    if TRIALS[name].kind == "video":
+        docs += [
+            (
+                "frames",
+                f"results/frames/{name}/summary.json",
+                f"logs/frames/{name}.log",
+            ),
+            ("tracks", f"results/tracks/{name}.json", f"logs/tracks/{name}.log"),
+        ]
+    docs.append(("angles", f"results/angles/{name}.json", f"logs/angles/{name}.log"))
+    for variant in sorted(config["variants"]):
+        docs.append(
+            (
+                f"fit:{variant}",
+                f"results/fits/{variant}/{name}.json",
+                f"logs/fits/{variant}/{name}.log",
+            )
+        )
+    return docs
+
+
+def status_trials():
+    """Trial → source file, rig and its stage documents (the status table's params)."""
+    return {
+        name: {
+            "source": TRIALS[name].path,
+            "rig": rig_name(config, TRIALS[name]),
+            "documents": trial_documents(name),
+        }
+        for name in sorted(TRIALS)
+    }
+
+
+def status_documents(wildcards):
+    return [path for name in sorted(TRIALS) for _, path, _ in trial_documents(name)]
+
+
+LIBRARY_DIR = Path(workflow.basedir) / "workflow" / "pendulum"
+SCRIPTS_DIR = Path(workflow.basedir) / "workflow" / "scripts"
+
+
+def _library_imports(path):
+    """Names of the `pendulum` modules a Python file imports (absolute or relative)."""
+    names = set()
+    for node in ast.walk(ast.parse(Path(path).read_text())):
+        if isinstance(node, ast.ImportFrom):
+            source = node.module or ""
+            if node.level and path.parent == LIBRARY_DIR:
+                names |= {source} if source else {a.name for a in node.names}
+            elif source == "pendulum":
+                names |= {a.name for a in node.names}
+            elif source.startswith("pendulum."):
+                names.add(source.split(".")[1])
+        elif isinstance(node, ast.Import):
+            names |= {
+                a.name.split(".")[1]
+                for a in node.names
+                if a.name.startswith("pendulum.")
+            }
+    return {n for n in names if (LIBRARY_DIR / f"{n}.py").is_file()}
+
+
+def script_code(script):
+    """The library modules a stage's script imports, directly or through each other.
+
+    Declared as the rule's `code` input, so that editing the science of a stage
+    reruns that stage (and what depends on it), not the others.
+    """
+    seen, todo = set(), _library_imports(SCRIPTS_DIR / script)
+    while todo:
+        name = todo.pop()
+        if name not in seen:
+            seen.add(name)
+            todo |= _library_imports(LIBRARY_DIR / f"{name}.py")
+    files = [LIBRARY_DIR / "__init__.py", SCRIPTS_DIR / "_setup.py"]
+    files += [LIBRARY_DIR / f"{n}.py" for n in sorted(seen)]
+    return [os.path.relpath(f) for f in files]

@@ -3,6 +3,7 @@ rule fit_trial:
     input:
         angles="results/angles/{trial}.csv",
         angle_info="results/angles/{trial}.json",
+        code=script_code("fit_trial.py"),
     output:
         fit="results/fits/{variant}/{trial}.json",
     log:
@@ -22,6 +23,7 @@ rule fit_curve:
     input:
         angles="results/angles/{trial}.csv",
         fit="results/fits/{variant}/{trial}.json",
+        code=script_code("fit_curve.py"),
     output:
         curve="results/fits/{variant}/{trial}.curve.csv",
         cycles="results/fits/{variant}/{trial}.cycles.csv",
@@ -45,6 +47,7 @@ rule fit_joint:
         fits=lambda wc: [
             f"results/fits/{wc.variant}/{name}.json" for name in joint_trials(wc)
         ],
+        code=script_code("fit_joint.py"),
     output:
         joint="results/fits/{variant}/joint/{rig}.json",
     log:
@@ -63,6 +66,7 @@ rule fit_summary:
     """Every variant's per-trial and per-rig joint estimates in one table (the paper's Tables 2 and 3)."""
     input:
         fits=summary_inputs,
+        code=script_code("fit_summary.py"),
     output:
         table="results/fits/summary.csv",
     log:

@@ -2,6 +2,7 @@ rule frames:
     """Frame timeline from the container (no decoding) and a key-frame contact sheet."""
     input:
         video=raw_video,
+        code=script_code("frames.py"),
     output:
         timeline="results/frames/{trial}/timeline.csv",
         summary="results/frames/{trial}/summary.json",
@@ -19,6 +20,7 @@ rule frame_images:
     """Every decoded frame as a PNG (only when frames.keep_images is true; costly)."""
     input:
         video=raw_video,
+        code=script_code("frame_images.py"),
     output:
         images=directory("results/frames/{trial}/images"),
     log:

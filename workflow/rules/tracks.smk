@@ -2,7 +2,7 @@ rule tracks:
     """Sub-pixel marker centre and quality flag per frame (one decode pass)."""
     input:
         video=raw_video,
-        sidecar=sidecar_files,
+        code=script_code("tracks.py"),
     output:
         track="results/tracks/{trial}.csv",
         summary="results/tracks/{trial}.json",

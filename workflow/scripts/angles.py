@@ -6,14 +6,23 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.geometry import angles_from_track, angles_from_tracker_csv
+from pendulum.geometry import angles_from_track, angles_from_tracker_csv, off_rig_circle
 from pendulum.io import script_logger, write_csv, write_json
+from pendulum.status import empty_table, require_ok, run_stage
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "angles")
+trial = sm.wildcards.trial
 settings = sm.params.settings
 length_m = settings["length_m"]
-try:
+ANGLE_COLUMNS = ["time_s", "video_time_s", "frame", "theta_rad", "theta_deg", "s_m", "quality", "flag"]
+
+
+def read_json(path):
+    return json.loads(Path(path).read_text())
+
+
+def work():
     if "table" in sm.input.keys():
         source = sm.input.table
         vertical = settings["vertical_deg"] if settings["vertical_deg"] is not None else 0.0
@@ -21,19 +30,19 @@ try:
             pd.read_csv(source), vertical_deg=vertical, length_m=length_m, source=source
         )
     else:
-        track_path = sm.input.track
-        track = pd.read_csv(track_path)
-        if track.empty:
-            summary = json.loads(Path(track_path).with_suffix(".json").read_text())
-            raise ValueError(f"{summary['video']}: no marker track: {summary['error']}")
+        require_ok(read_json(sm.input.track_summary), "tracks")
+        source = sm.input.track
+        track = pd.read_csv(source)
         pivot, vertical = settings["pivot_px"], settings["vertical_deg"]
         pivot_cov = None
         if "geometry" in sm.input.keys():
-            geometry = json.loads(Path(sm.input.geometry).read_text())
+            geometry = require_ok(read_json(sm.input.geometry), "geometry")
             if pivot is None:
+                problem = off_rig_circle(track, geometry)
+                if problem:
+                    raise ValueError(f"{sm.input.track}: {problem}")
                 pivot, pivot_cov = geometry["pivot_px"], geometry.get("pivot_covariance_px2")
             vertical = vertical if vertical is not None else geometry["vertical_deg"]
-        source = track_path
         table, info = angles_from_track(
             track,
             pivot_px=pivot,
@@ -42,9 +51,14 @@ try:
             source=source,
             pivot_covariance_px2=pivot_cov,
         )
-except Exception as exc:
-    log.error("trial %s: %s", sm.wildcards.trial, exc)
-    raise
-log.info("trial %s: %s", sm.wildcards.trial, info)
-write_csv(table, sm.output.angles)
-write_json({"trial": sm.wildcards.trial, "rig": settings["rig_name"], **info.to_dict()}, sm.output.summary)
+    log.info("trial %s: %s", trial, info)
+    write_csv(table, sm.output.angles)
+    write_json({"trial": trial, "rig": settings["rig_name"], "status": "ok", **info.to_dict()}, sm.output.summary)
+
+
+def write_failed(document):
+    write_csv(empty_table(ANGLE_COLUMNS), sm.output.angles)
+    write_json({"trial": trial, "rig": settings["rig_name"], **document}, sm.output.summary)
+
+
+run_stage("angles", log, work, write_failed)

@@ -1,4 +1,4 @@
-"""Snakemake adapter: one model variant fitted jointly to every trial of one rig."""
+"""Snakemake adapter: one model variant fitted jointly to every trial of one rig that could be fitted."""
 
 import json
 from pathlib import Path
@@ -9,17 +9,32 @@ import _setup  # noqa: F401
 from pendulum.fitting import fit_joint
 from pendulum.io import script_logger, write_json
 from pendulum.records import FitSettings, load_record
+from pendulum.status import is_failed, run_stage
 from pendulum.summary import fit_document
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "fit_joint")
 rig, variant = sm.wildcards.rig, sm.wildcards.variant
 settings = FitSettings(**sm.params.fitting)
-angles = {Path(p).stem: p for p in sm.input.angles}
-angle_info = {Path(p).stem: json.loads(Path(p).read_text()) for p in sm.input.angle_info}
-fits = {Path(p).stem: json.loads(Path(p).read_text()) for p in sm.input.fits}
-names = sorted(sm.params.trial_rigs)
-try:
+
+
+def read_json(path):
+    return json.loads(Path(path).read_text())
+
+
+def work():
+    angles = {Path(p).stem: p for p in sm.input.angles}
+    angle_info = {Path(p).stem: read_json(p) for p in sm.input.angle_info}
+    fits = {Path(p).stem: read_json(p) for p in sm.input.fits}
+    excluded = {}
+    for name in sorted(sm.params.trial_rigs):
+        failed = next((d for d in (angle_info[name], fits[name]) if is_failed(d)), None)
+        if failed:
+            excluded[name] = f"{failed['failed_stage']} failed: {failed['error']}"
+            log.warning("rig %s, variant %s: %s left out (%s)", rig, variant, name, excluded[name])
+    names = [n for n in sorted(sm.params.trial_rigs) if n not in excluded]
+    if not names:
+        raise ValueError(f"rig {rig}: no trial could be fitted with variant {variant}, so there is no joint fit")
     records = [
         load_record(
             pd.read_csv(angles[n]),
@@ -33,11 +48,15 @@ try:
     ]
     log.info("rig %s, variant %s: joint fit of %d trial(s) %s", rig, variant, len(names), names)
     joint = fit_joint(records, sm.params.terms, {n: fits[n] for n in names}, settings)
-except Exception as exc:
-    log.error("rig %s, variant %s: %s", rig, variant, exc)
-    raise
-log.info("rig %s, variant %s: consistency %s", rig, variant, joint["consistency"]["verdict"])
-document = fit_document(
-    joint, variant=variant, rig={"name": rig}, sources=[angles[n] for n in names], settings=settings
-)
-write_json(document, sm.output.joint)
+    log.info("rig %s, variant %s: consistency %s", rig, variant, joint["consistency"]["verdict"])
+    document = fit_document(
+        joint, variant=variant, rig={"name": rig}, sources=[angles[n] for n in names], settings=settings
+    )
+    write_json({"status": "ok", **document, "excluded_trials": excluded}, sm.output.joint)
+
+
+def write_failed(document):
+    write_json({"variant": variant, "rig": {"name": rig}, **document}, sm.output.joint)
+
+
+run_stage("joint fit", log, work, write_failed)

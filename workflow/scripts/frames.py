@@ -1,16 +1,30 @@
-"""Snakemake adapter: frame timeline, summary and contact sheet of one video."""
+"""Snakemake adapter: frame timeline, summary and contact sheet of one video (failed outputs if unreadable)."""
 
 import _setup  # noqa: F401
 from pendulum.io import script_logger, write_csv, write_json, write_png
+from pendulum.status import empty_table, failure_image, run_stage
 from pendulum.video import contact_sheet, frame_timeline
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "frames")
 video = sm.input.video
-try:
+TIMELINE_COLUMNS = [
+    "frame",
+    "pts",
+    "time_s",
+    "interval_s",
+    "dropped_before",
+    "duplicate_time",
+    "keyframe",
+    "packet_bytes",
+]
+
+
+def work():
     info, timeline = frame_timeline(video)
     summary = {
         "video": video,
+        "status": "ok",
         "width_px": info.width_px,
         "height_px": info.height_px,
         "codec": info.codec,
@@ -30,9 +44,15 @@ try:
             summary["duplicate_timestamps"],
         )
     sheet = contact_sheet(video, n_tiles=sm.params.tiles)
-except Exception as exc:
-    log.error("%s", exc)
-    raise
-write_csv(timeline, sm.output.timeline)
-write_json(summary, sm.output.summary)
-write_png(sheet, sm.output.contact_sheet)
+    write_csv(timeline, sm.output.timeline)
+    write_png(sheet, sm.output.contact_sheet)
+    write_json(summary, sm.output.summary)
+
+
+def write_failed(document):
+    write_csv(empty_table(TIMELINE_COLUMNS), sm.output.timeline)
+    write_png(failure_image(document["error"]), sm.output.contact_sheet)
+    write_json({"video": video, **document}, sm.output.summary)
+
+
+run_stage("frames", log, work, write_failed)

@@ -1,0 +1,186 @@
+"""Reruns, bad trials and interrupted runs: finished work stays finished, one bad file costs nothing else.
+
+Dry runs (`snakemake -n`) on the demo build check what each kind of change
+reruns; real runs check that a truncated and a fake video leave every other
+result (and data/raw) intact, and that a run killed mid-way resumes to the
+same bytes as an uninterrupted one.
+"""
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import time
+from collections import Counter
+from contextlib import contextmanager
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from conftest import DEMO_RAW, demo_trials
+from workflow_run import SNAKEMAKE, copy_project, digest, planned_wildcards, run
+
+VARIANTS = ("friction", "linear", "quadratic")
+AGGREGATES = {"fit_joint", "fit_summary", "status_table", "check_trials", "all", "report"}
+
+
+def plan(project, *args) -> Counter:
+    """(rule, trial/rig/None) → number of planned jobs."""
+    out = run(["-n", *args], project).stdout
+    return Counter((rule, w.get("trial", w.get("rig"))) for rule, w in planned_wildcards(out))
+
+
+@contextmanager
+def edited(path: Path):
+    """``path`` edited (a comment appended) inside the block; its bytes and time are restored after.
+
+    Snakemake reruns on content, not on a newer time alone (it keeps checksums of small inputs).
+    """
+    stat, text = path.stat(), path.read_bytes()
+    path.write_bytes(text + b"\n# edited\n")
+    try:
+        yield
+    finally:
+        path.write_bytes(text)
+        os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+
+
+def test_touching_nothing_reruns_nothing(demo_project):
+    assert "Nothing to be done" in run(["-n"], demo_project).stdout
+
+
+def test_results_are_byte_identical_on_a_forced_rebuild(demo_project):
+    before = digest(demo_project / "results")
+    run(["-c2", "--forceall"], demo_project)
+    assert digest(demo_project / "results") == before
+
+
+def test_adding_a_video_runs_only_that_trial_and_the_aggregates(demo_project):
+    extra = demo_project / "data/raw/extra_m05.mp4"
+    shutil.copy(demo_project / "data/raw/demo_m05.mp4", extra)
+    try:
+        jobs = plan(demo_project)
+    finally:
+        extra.unlink()
+    per_trial = {(rule, name) for rule, name in jobs if rule not in AGGREGATES}
+    assert per_trial == {
+        ("frames", "extra_m05"),
+        ("tracks", "extra_m05"),
+        ("angles", "extra_m05"),
+        ("fit_trial", "extra_m05"),
+        ("fit_curve", "extra_m05"),
+    }, "the rig's geometry is kept: no other trial's angles or fits rerun"
+    assert jobs[("fit_trial", "extra_m05")] == len(VARIANTS)
+    assert jobs[("fit_joint", "paper_rig")] == len(VARIANTS)
+
+
+def test_reestimating_the_geometry_is_a_deliberate_command(demo_project):
+    extra = demo_project / "data/raw/extra_m05.mp4"
+    shutil.copy(demo_project / "data/raw/demo_m05.mp4", extra)
+    try:
+        jobs = plan(demo_project, "--config", "reestimate_geometry=true")
+    finally:
+        extra.unlink()
+    assert ("rig_geometry", "paper_rig") in jobs
+    assert {name for rule, name in jobs if rule == "angles"} == set(demo_trials()) | {"extra_m05"}
+
+
+def test_editing_one_variant_refits_only_that_variant(tmp_path, demo_project):
+    config = yaml.safe_load((demo_project / "config.yaml").read_text())
+    config["variants"]["linear"] = ["linear_damping"]
+    changed = tmp_path / "variants.yaml"
+    changed.write_text(yaml.safe_dump({"variants": config["variants"]}))
+    out = run(["-n", "--configfile", str(changed)], demo_project).stdout
+    jobs = planned_wildcards(out)
+    assert {w["variant"] for _, w in jobs if "variant" in w} == {"linear"}
+    rules = Counter(rule for rule, _ in jobs)
+    assert rules["fit_trial"] == rules["fit_curve"] == len(demo_trials())
+    assert rules["fit_joint"] == 1
+    assert set(rules) <= {"fit_trial", "fit_curve"} | AGGREGATES
+
+
+def test_editing_a_sidecar_rig_value_refits_that_trial_without_retracking(demo_project):
+    sidecar = demo_project / "data/raw/demo_p05.yaml"
+    sidecar.write_text("mass_kg: 3.60  # weighed again\n")
+    try:
+        jobs = plan(demo_project)
+    finally:
+        sidecar.unlink()
+    per_trial = {(rule, name) for rule, name in jobs if rule not in AGGREGATES}
+    assert per_trial == {("fit_trial", "demo_p05"), ("fit_curve", "demo_p05")}
+
+
+@pytest.mark.parametrize(
+    "module,first_stage,untouched",
+    [
+        ("fitting.py", "fit_trial", {"frames", "tracks", "rig_geometry", "angles"}),
+        ("tracking.py", "tracks", {"frames"}),
+        ("geometry.py", "angles", {"frames", "tracks"}),
+    ],
+)
+def test_editing_a_library_module_reruns_the_stages_that_import_it(demo_project, module, first_stage, untouched):
+    with edited(demo_project / "workflow/pendulum" / module):
+        jobs = plan(demo_project)
+    rules = {rule for rule, _ in jobs}
+    assert first_stage in rules
+    assert not rules & untouched, rules & untouched
+
+
+def test_a_truncated_and_a_fake_video_cost_nothing_else(tmp_path, demo_project):
+    work = tmp_path / "p"
+    shutil.copytree(demo_project, work, ignore=shutil.ignore_patterns("results", ".snakemake", "logs"))
+    raw = work / "data/raw"
+    (raw / "truncated.mp4").write_bytes((DEMO_RAW / "demo_p20.mp4").read_bytes()[:300_000])
+    (raw / "fake.mp4").write_text("this is a text file, not a video\n")
+    before = digest(raw, ("*",))
+    proc = run(["-c2"], work, check=False)
+    assert proc.returncode != 0, "the run must say that trials failed"
+    assert digest(raw, ("*",)) == before, "data/raw was modified"
+    status = pd.read_csv(work / "results/status/trials.csv", keep_default_na=False).set_index("trial")
+    assert (status.loc[demo_trials(), "status"] == "ok").all()
+    for bad in ("truncated", "fake"):
+        assert status.loc[bad, "status"] == "failed"
+        assert f"{bad}.mp4" in status.loc[bad, "reason"]
+        assert Path(work / status.loc[bad, "log"]).is_file()
+    for variant in VARIANTS:
+        joint = json.loads((work / f"results/fits/{variant}/joint/paper_rig.json").read_text())
+        assert joint["status"] == "ok" and sorted(joint["trials"]) == sorted(demo_trials())
+        assert set(joint["excluded_trials"]) == {"truncated", "fake"}
+    summary = pd.read_csv(work / "results/fits/summary.csv")
+    assert set(summary.fit) == set(demo_trials()) | {"joint:paper_rig"}
+    assert "2 of 7 trial(s) failed" in (work / "logs/status/check.log").read_text()
+    assert not list((work / "results").rglob(".*.tmp*")), "a temporary file was left behind"
+    assert "Shell command: None" not in proc.stdout + proc.stderr
+    # a rerun does not retry what failed for a reason that has not changed, and still says it failed
+    again = run(["-c2"], work, check=False)
+    assert again.returncode != 0
+    assert {rule for rule, _ in planned_wildcards(again.stdout)} <= {"check_trials", "all"}
+
+
+def _kill_mid_run(work: Path, sig: int, after_files: int) -> None:
+    """Start a build and send ``sig`` to its whole process group once ``after_files`` angle records exist."""
+    proc = subprocess.Popen(
+        [*SNAKEMAKE, "-c2"], cwd=work, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
+    deadline = time.time() + 300
+    while time.time() < deadline and proc.poll() is None:
+        if len(list((work / "results/angles").glob("*.json"))) >= after_files:
+            break
+        time.sleep(0.2)
+    assert proc.poll() is None, "the build finished before it could be interrupted"
+    os.killpg(proc.pid, sig)
+    proc.wait(timeout=120)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL], ids=["SIGINT", "SIGKILL"])
+def test_a_killed_run_resumes_to_the_same_bytes(tmp_path, demo_project, sig):
+    work = copy_project(tmp_path / "p")
+    _kill_mid_run(work, sig, after_files=2)
+    if sig == signal.SIGKILL:
+        run(["--unlock"], work)  # a killed Snakemake cannot remove its lock
+    run(["-c2", "--rerun-incomplete"], work)
+    assert digest(work / "results") == digest(demo_project / "results")
+    assert not list((work / "results").rglob(".*.tmp*"))

@@ -1,0 +1,134 @@
+"""Failure as data (per-trial status), outlying tracks in the pooled pivot, and singular-Jacobian warnings."""
+
+import logging
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pendulum.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot
+from pendulum.status import (
+    UpstreamFailed,
+    describe,
+    failed,
+    failure_summary,
+    require_ok,
+    run_stage,
+    status_table,
+    trial_status,
+)
+from pendulum.uncertainty import jacobian_rank_warnings
+
+LOG = logging.getLogger("test_status")
+
+
+def run_and_capture(work):
+    written = []
+    ok = run_stage("tracks", LOG, work, written.append)
+    return ok, written
+
+
+def test_run_stage_records_bad_input_in_the_users_words():
+    def work():
+        raise ValueError("data/raw/x.mp4: no marker found in any frame")
+
+    ok, written = run_and_capture(work)
+    assert not ok
+    assert written == [
+        {"status": "failed", "failed_stage": "tracks", "error": "data/raw/x.mp4: no marker found in any frame"}
+    ]
+
+
+def test_run_stage_calls_an_unexpected_error_a_bug():
+    def work():
+        return {}["missing"] + 1 if False else None.shape  # AttributeError
+
+    ok, written = run_and_capture(work)
+    assert not ok and written[0]["error"].startswith("internal error (AttributeError")
+
+
+def test_an_upstream_failure_keeps_its_origin_and_message():
+    document = failed("frames", "data/raw/x.mp4: not a video")
+
+    def work():
+        require_ok(document, "tracks")
+
+    ok, written = run_and_capture(work)
+    assert written == [document]
+    assert run_stage("tracks", LOG, lambda: None, written.append) and len(written) == 1
+
+
+def test_describe_joins_lines_and_names_types_of_bugs():
+    assert describe(ValueError("a\n  b")) == "a b"
+    assert describe(ZeroDivisionError("division by zero")).startswith("internal error (ZeroDivisionError")
+    assert isinstance(UpstreamFailed("x", "y"), Exception)
+
+
+def test_trial_status_names_the_stage_where_the_failure_arose():
+    ok = {"status": "ok"}
+    fit_failed = failed("fit", "record too short")
+    geometry_failed = failed("geometry", "no usable track")
+    rows = [
+        trial_status("a", "data/raw/a.mp4", "rig", [("tracks", "logs/t/a.log", ok), ("angles", "logs/a/a.log", ok)]),
+        trial_status(
+            "b", "data/raw/b.mp4", "rig", [("angles", "logs/a/b.log", ok), ("fit:linear", "logs/f/b.log", fit_failed)]
+        ),
+        trial_status("c", "data/raw/c.mp4", "rig", [("angles", "logs/a/c.log", geometry_failed)]),
+    ]
+    table = status_table(rows[::-1])
+    assert list(table.trial) == ["a", "b", "c"]
+    assert list(table.status) == ["ok", "failed", "failed"]
+    assert list(table.stage) == ["", "fit:linear", "geometry"]
+    assert table.loc[1, "log"] == "logs/f/b.log"
+    text = failure_summary(table)
+    assert text.startswith("2 of 3 trial(s) failed") and "b (fit:linear: record too short)" in text
+    assert failure_summary(table[table.status == "ok"]) is None
+
+
+def arc_track(centre, radius, amplitude_deg, n=600, noise_px=0.2, seed=0):
+    rng = np.random.default_rng(seed)
+    angle = np.radians(amplitude_deg) * np.cos(np.linspace(0, 12 * np.pi, n)) * np.exp(-np.linspace(0, 1, n))
+    x = centre[0] + radius * np.sin(angle) + rng.normal(0, noise_px, n)
+    y = centre[1] + radius * np.cos(angle) + rng.normal(0, noise_px, n)
+    return pd.DataFrame({"x_px": x, "y_px": y, "flag": "ok"})
+
+
+PIVOT = (640.0, 80.0)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_track_from_a_moved_camera_is_left_out_of_the_pooled_pivot(seed):
+    tracks = {f"good{k}": arc_track(PIVOT, 520, a, seed=10 * seed + k) for k, a in enumerate((5, 20, 60))}
+    tracks["moved"] = arc_track((PIVOT[0] + 6, PIVOT[1] - 4), 520, 30, seed=10 * seed + 9)
+    circle, rejected = pooled_pivot(tracks)
+    assert set(rejected) == {"moved"} and "px RMS off" in rejected["moved"]
+    assert abs(circle.pivot_x_px - PIVOT[0]) < 1.0 and abs(circle.pivot_y_px - PIVOT[1]) < 1.0
+    geometry = estimate_rig_geometry(tracks, vertical_deg=0.0)
+    assert set(geometry["rejected_trials"]) == {"moved"} and "3 trial(s)" in geometry["pivot_source"]
+    # a later trial filmed from the moved camera cannot use the rig's pivot either; a good one can
+    assert "off the rig's pivot circle" in off_rig_circle(tracks["moved"], geometry)
+    assert off_rig_circle(arc_track(PIVOT, 520, 40, seed=99), geometry) is None
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_good_tracks_are_never_left_out(seed):
+    tracks = {f"t{k}": arc_track(PIVOT, 520, a, seed=seed * 7 + k) for k, a in enumerate((3, 5, 20, 75))}
+    circle, rejected = pooled_pivot(tracks)
+    assert rejected == {}
+    assert np.hypot(circle.pivot_x_px - PIVOT[0], circle.pivot_y_px - PIVOT[1]) < 0.5
+
+
+def test_two_tracks_are_pooled_without_a_vote():
+    tracks = {"a": arc_track(PIVOT, 520, 20), "b": arc_track((PIVOT[0] + 6, PIVOT[1]), 520, 30, seed=1)}
+    _, rejected = pooled_pivot(tracks)
+    assert rejected == {}  # with two tracks there is no majority to say which one moved
+
+
+def test_jacobian_rank_warnings_name_the_inseparable_parameters():
+    rng = np.random.default_rng(1)
+    a, b, c = rng.normal(size=(3, 200))
+    assert jacobian_rank_warnings(np.column_stack([a, b, c]), ["m_a", "C_dA", "c"]) == []
+    warnings = jacobian_rank_warnings(np.column_stack([a, b, 2 * b]), ["m_a", "C_dA", "c"])
+    assert len(warnings) == 1 and "C_dA and c cannot be told apart" in warnings[0]
+    warnings = jacobian_rank_warnings(np.column_stack([a, b, 0 * c]), ["m_a", "C_dA", "tau_f"])
+    assert warnings == ["tau_f has no effect on the fitted record (zero sensitivity)"]

@@ -1,0 +1,64 @@
+"""Running the Snakemake workflow from tests: a project copy, runs, dry-run plans, result digests."""
+
+import hashlib
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from conftest import DEMO_RAW, ROOT
+
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+PROJECT_ITEMS = ("Snakefile", "config.yaml", "workflow", "profiles", "notebooks")
+
+
+def run(args, cwd, check=True, **kwargs):
+    proc = subprocess.run(SNAKEMAKE + list(args), cwd=cwd, capture_output=True, text=True, **kwargs)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"snakemake {args} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
+    return proc
+
+
+def copy_project(work: Path, raw_files=None) -> Path:
+    """The workflow (code, config, profile, notebooks) and raw videos copied to ``work``."""
+    work.mkdir(parents=True, exist_ok=True)
+    for item in PROJECT_ITEMS:
+        src = ROOT / item
+        if src.exists():
+            (shutil.copytree if src.is_dir() else shutil.copy2)(src, work / item)
+    raw = work / "data" / "raw"
+    raw.mkdir(parents=True, exist_ok=True)
+    for path in raw_files if raw_files is not None else sorted(DEMO_RAW.iterdir()):
+        shutil.copy2(path, raw / Path(path).name)
+    return work
+
+
+def planned_wildcards(dry_run_output: str) -> list[tuple[str, dict]]:
+    """(rule, {wildcard: value}) of every job in a dry run (jobs without wildcards: empty dict)."""
+    jobs, rule, wildcards = [], None, {}
+    for line in dry_run_output.splitlines():
+        m = re.match(r"^\s*(?:local)?rule (\w+):", line)
+        if m:
+            if rule is not None:
+                jobs.append((rule, wildcards))
+            rule, wildcards = m.group(1), {}
+        m = re.match(r"^\s*wildcards: (.+)$", line)
+        if m and rule:
+            wildcards = dict(item.split("=", 1) for item in m.group(1).split(", "))
+    if rule is not None:
+        jobs.append((rule, wildcards))
+    return jobs
+
+
+def planned_jobs(dry_run_output: str) -> set[tuple[str, str | None]]:
+    """(rule, trial or rig or None) of every job in a dry run."""
+    return {(rule, w.get("trial", w.get("rig"))) for rule, w in planned_wildcards(dry_run_output)}
+
+
+def digest(folder: Path, patterns=("*.csv", "*.json", "*.png", "*.html", "*.ipynb")) -> dict:
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for pat in patterns
+        for p in sorted(folder.rglob(pat))
+    }

@@ -1,0 +1,137 @@
+"""Failure is data: a stage that cannot do its work still writes its outputs, marked failed.
+
+One bad video must not stop the other trials or the aggregates, so every
+per-trial stage ends with its declared outputs on disk: the real ones, or
+empty tables and a JSON document ``{"status": "failed", "failed_stage": ...,
+"error": <one sentence>}``. Later stages pass an upstream failure on unchanged;
+aggregates (rig geometry, joint fits, summary, report) leave failed trials out
+and list them; the workflow's last rule exits non-zero when any trial failed.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+import numpy as np
+import pandas as pd
+
+STAGE_ORDER = ("frames", "tracks", "geometry", "angles", "fit", "curve")
+STATUS_COLUMNS = ["trial", "source", "rig", "status", "stage", "reason", "log"]
+
+
+class UpstreamFailed(Exception):
+    """An input of this stage is a failed document; this stage fails with the same cause."""
+
+    def __init__(self, stage: str, error: str):
+        super().__init__(f"{stage} failed: {error}")
+        self.stage, self.error = stage, error
+
+
+def describe(exc: BaseException) -> str:
+    """One line for the user.
+
+    Bad input raises ValueError/OSError subclasses whose message names the file
+    and the problem; anything else is a bug in this tool and says so.
+    """
+    message = " ".join(str(exc).split()) or type(exc).__name__
+    if isinstance(exc, (ValueError, OSError, RuntimeError, KeyError)) and not isinstance(exc, NotImplementedError):
+        return message
+    return f"internal error ({type(exc).__name__}: {message}); please report it with the log"
+
+
+def failed(stage: str, error: str, **fields) -> dict:
+    """The document a failed stage writes in place of its JSON output."""
+    return {"status": "failed", "failed_stage": stage, "error": error, **fields}
+
+
+def is_failed(document: dict) -> bool:
+    return document.get("status") == "failed"
+
+
+def require_ok(document: dict, what: str) -> dict:
+    """Raise UpstreamFailed if ``document`` (the JSON of an input called ``what``) is a failed one."""
+    if is_failed(document):
+        raise UpstreamFailed(document.get("failed_stage", what), document.get("error", "failed"))
+    return document
+
+
+def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_failed: Callable[[dict], None]) -> bool:
+    """Run ``work``; on any exception log it and ``write_failed(failed document)`` instead.
+
+    Returns True when the work succeeded. An upstream failure keeps its own
+    stage and message; an unexpected error is logged with its traceback.
+    """
+    try:
+        work()
+        return True
+    except UpstreamFailed as exc:
+        log.error("not run: %s", exc)
+        write_failed(failed(exc.stage, exc.error))
+    except Exception as exc:
+        reason = describe(exc)
+        if reason.startswith("internal error"):
+            log.exception("%s", reason)
+        else:
+            log.error("%s", reason)
+        write_failed(failed(stage, reason))
+    return False
+
+
+def empty_table(columns) -> pd.DataFrame:
+    """A header-only table: the CSV output of a failed stage (no rows, so nothing is mistaken for data)."""
+    return pd.DataFrame({c: pd.Series(dtype=float) for c in columns})
+
+
+def failure_image(message: str, width_px: int = 960, height_px: int = 200) -> np.ndarray:
+    """A grey image that states why there is no contact sheet."""
+    import cv2
+
+    image = np.full((height_px, width_px), 60, np.uint8)
+    words, lines, line = message.split(), [], ""
+    for word in words:
+        if len(line) + len(word) + 1 > 70:
+            lines.append(line)
+            line = word
+        else:
+            line = f"{line} {word}".strip()
+    lines.append(line)
+    for i, text in enumerate(["NO CONTACT SHEET:"] + lines[:6]):
+        cv2.putText(image, text, (16, 30 + 26 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 235, 1, cv2.LINE_AA)
+    return image
+
+
+def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, str, dict]]) -> dict:
+    """One row of the status table from a trial's stage documents.
+
+    ``documents``: (stage, log path, JSON document) in pipeline order; a stage
+    may be qualified (``fit:quadratic``). The trial failed at the first failed
+    document, in the stage named there (an upstream failure passed on keeps its
+    origin, e.g. ``geometry`` for an angle record without a pivot).
+    """
+    for stage, log_path, document in documents:
+        if is_failed(document):
+            origin = document.get("failed_stage", stage)
+            return {
+                "trial": trial,
+                "source": source,
+                "rig": rig,
+                "status": "failed",
+                "stage": stage if origin == stage.split(":")[0] else origin,
+                "reason": document.get("error", ""),
+                "log": log_path,
+            }
+    return {"trial": trial, "source": source, "rig": rig, "status": "ok", "stage": "", "reason": "", "log": ""}
+
+
+def status_table(rows: list[dict]) -> pd.DataFrame:
+    return pd.DataFrame(rows, columns=STATUS_COLUMNS).sort_values("trial", kind="stable").reset_index(drop=True)
+
+
+def failure_summary(table: pd.DataFrame) -> str | None:
+    """One paragraph naming every failed trial and why, or None when all succeeded."""
+    bad = table[table.status != "ok"]
+    if bad.empty:
+        return None
+    items = "; ".join(f"{r.trial} ({r.stage}: {r.reason})" for r in bad.itertuples())
+    return f"{len(bad)} of {len(table)} trial(s) failed: {items}. See results/status/trials.csv and the report."
