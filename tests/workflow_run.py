@@ -10,7 +10,7 @@ from pathlib import Path
 from conftest import DEMO_RAW, ROOT
 
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
-PROJECT_ITEMS = ("Snakefile", "config.yaml", "workflow", "profiles", "notebooks")
+PROJECT_ITEMS = ("Snakefile", "config.yaml", "workflow", "profiles", "notebooks", "environment-lock.txt")
 
 
 def run(args, cwd, check=True, **kwargs):

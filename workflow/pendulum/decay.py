@@ -75,7 +75,7 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
         "linear_damping": 2 * inertia * omega0 / math.pi,
         "quadratic_drag": 3 * inertia / 4 / (0.5 * rig.fluid_density_kg_m3 * rig.length_m**3),
     }
-    terms = list(model.terms)
+    terms = [name for name in model.terms if name in columns]  # the others (history, restoring) start at 0
     coefficients = np.zeros(len(terms))
     if loss.size >= len(terms) + 1:
         a = np.column_stack([columns[name] for name in terms])
@@ -85,6 +85,8 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
         coefficients = solution / scale
     for name, value in zip(terms, coefficients, strict=True):
         start[TERMS[name].parameter] = float(value * to_coefficient[name])
+    for name in model.terms:
+        start.setdefault(TERMS[name].parameter, 0.0)
     # initial state at the first sample: local quadratic through the first samples
     n0 = min(7, t.size)
     poly = np.polyfit(t[:n0] - t[0], x[:n0], 2)

@@ -38,7 +38,15 @@ from scipy.optimize import least_squares
 
 from pendulum.decay import decay_analysis
 from pendulum.geometry import noise_level
-from pendulum.physics import ADDED_MASS, TERMS, PendulumModel, Rig, keulegan_carpenter_number, simulate
+from pendulum.physics import (
+    ADDED_MASS,
+    TERMS,
+    PendulumModel,
+    Rig,
+    keulegan_carpenter_number,
+    lower_bound,
+    simulate,
+)
 from pendulum.records import AngleRecord, FitSettings
 from pendulum.uncertainty import (
     Z95,
@@ -63,13 +71,9 @@ NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
 def typical_scales(model: PendulumModel) -> dict:
     """Parameter magnitudes used for finite-difference steps (never for the answer)."""
     rig = model.rig
-    inertia = rig.pivot_inertia_kg_m2
-    omega = math.sqrt(rig.restoring_torque_nm / inertia)
     return {
         ADDED_MASS: 0.1 * rig.mass_kg,
-        "drag_area_m2": 0.01 * rig.frontal_area_m2,
-        "linear_damping_nm_s": 1e-3 * inertia * omega,
-        "friction_torque_nm": 1e-4 * rig.restoring_torque_nm,
+        **{term.parameter: term.typical_scale(rig) for term in TERMS.values()},  # the effects library's
         "theta0_rad": 1e-2,
         "omega0_rad_s": 1e-2,
     }
@@ -186,7 +190,7 @@ def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None =
     starts = [decay_analysis(model_for(r.rig), r) for r in records]
     phys0 = _phys_start(model, starts)
     x0 = np.array([phys0[n] for n in names] + [s[k] for s in starts for k in NUISANCE])
-    lower = np.array([0.0] * len(names) + [-np.inf] * (3 * len(records)))
+    lower = np.array([lower_bound(n) for n in names] + [-np.inf] * (3 * len(records)))
     lower[0] = _added_mass_lower_kg(records, settings)
     problem = _Problem(model_for, records, names, settings.max_step_s)
     sol = problem.solve(x0, lower)

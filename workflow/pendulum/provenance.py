@@ -7,6 +7,7 @@ the report must be byte-identical between two builds of the same commit.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import platform
@@ -14,6 +15,8 @@ import re
 import subprocess
 from importlib import metadata
 from pathlib import Path
+
+import yaml
 
 CORE_PACKAGES = (
     "snakemake",
@@ -34,9 +37,37 @@ CORE_PACKAGES = (
 NOT_CODE = ("results", "logs", ".snakemake", ".venv", "data/raw")
 
 
+# Config keys that say what to do with finished results (freeze and cite them), not how
+# they are made: left out of the configuration as used and of its digest.
+RUN_ONLY_KEYS = ("freeze_tag", "freeze_allow_dirty", "citation")
+CONFIG_SCHEMA = Path(__file__).resolve().parents[1] / "schemas" / "config.schema.yaml"
+
+
+def _fill_defaults(value, schema: dict):
+    if not isinstance(value, dict):
+        return value
+    filled = dict(value)
+    for key, sub in (schema.get("properties") or {}).items():
+        if key in filled:
+            filled[key] = _fill_defaults(filled[key], sub)
+        elif "default" in sub:
+            filled[key] = copy.deepcopy(sub["default"])
+    return filled
+
+
+def config_as_used(config: dict) -> dict:
+    """The configuration a build used: the schema's defaults filled in, `RUN_ONLY_KEYS` left out."""
+    schema = yaml.safe_load(CONFIG_SCHEMA.read_text())
+    filled = _fill_defaults(copy.deepcopy(dict(config)), schema)
+    return {key: value for key, value in filled.items() if key not in RUN_ONLY_KEYS}
+
+
 def config_digest(config: dict) -> str:
-    """SHA-256 of the configuration as used (canonical JSON: sorted keys, no spaces)."""
-    text = json.dumps(config, sort_keys=True, separators=(",", ":"), default=str)
+    """SHA-256 of the configuration as used (`config_as_used`; canonical JSON: sorted keys, no spaces).
+
+    The same whether or not the schema's defaults are written out and whatever the run-only keys say.
+    """
+    text = json.dumps(config_as_used(config), sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -45,7 +76,8 @@ def _git(root: Path, *args: str) -> str | None:
         proc = subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, timeout=30)
     except (OSError, subprocess.TimeoutExpired):
         return None
-    return proc.stdout.strip() if proc.returncode == 0 else None
+    # Only the trailing newline: `status --porcelain` lines begin with a space (" M file").
+    return proc.stdout.rstrip("\n") if proc.returncode == 0 else None
 
 
 def git_state(root: str | Path = ".") -> dict:

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.decay import half_cycles, loss_at_amplitude
+from pendulum.effects import TERMS
 from pendulum.physics import ADDED_MASS, PendulumModel, Rig, simulate
 from pendulum.records import WATER_KINEMATIC_VISCOSITY_M2_S, FitSettings, characteristic_length_m, load_record
 
@@ -28,6 +29,13 @@ def fit_document(fit: dict, *, variant: str, rig: dict, sources: list[str], sett
 PHYSICAL_COLUMNS = (ADDED_MASS, "drag_area_m2", "drag_coefficient", "linear_damping_nm_s", "friction_torque_nm")
 
 
+def _coefficient_columns(documents: list[dict]) -> list[str]:
+    """The paper's coefficients always; other library effects' coefficients when some fit has them."""
+    present = {name for doc in documents for name in doc.get("parameters", {})}
+    extra = [t.parameter for t in TERMS.values() if t.parameter in present and t.parameter not in PHYSICAL_COLUMNS]
+    return [*PHYSICAL_COLUMNS, *extra]
+
+
 def _label(document: dict) -> str:
     if "trial" in document:
         return document["trial"]
@@ -41,10 +49,10 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
     (results/fits/<variant>/joint/<rig>.json, labelled ``joint:<rig>``). Failed
     fits (``status: failed``) have no row; the status table lists them.
     """
+    documents = [doc for doc in documents if doc.get("status") != "failed"]
+    columns = _coefficient_columns(documents)
     rows = []
     for doc in documents:
-        if doc.get("status") == "failed":
-            continue
         fits = [(_label(doc), doc)]
         for label, fit in fits:
             kc = fit["keulegan_carpenter_number"]
@@ -66,7 +74,7 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
                 "n_warnings": len(fit["warnings"]),
                 "warnings": " | ".join(fit["warnings"]),
             }
-            for name in PHYSICAL_COLUMNS:
+            for name in columns:
                 entry = fit["parameters"].get(name)
                 row[name] = entry["value"] if entry else None
                 row[f"{name}_stderr"] = entry["stderr"] if entry else None

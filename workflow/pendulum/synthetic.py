@@ -1,8 +1,11 @@
 """Synthetic free-decay experiment: known truth, rendered to a realistic video.
 
 The truth trajectory comes from :func:`pendulum.physics.simulate` (the same
-equations the fitter uses) with any set of effects, including ones a fitted
-model lacks. The renderer draws a monochrome camera view: a textured,
+equations the fitter uses) with any set of effects of the library
+(:data:`pendulum.effects.TERMS`, the history force included), including ones a
+fitted model lacks, and optionally with effects outside the library
+(:class:`Disturbances`: a periodic disturbance torque, a pivot drifting in the
+image; for angle tables a drifting zero). The renderer draws a monochrome camera view: a textured,
 cluttered tank background, the pivot, the rod, the vehicle and a circular
 marker dot; the exposure blur is the average of sub-exposure renders; sensor
 noise is added before lossy H.264 compression.
@@ -25,6 +28,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from pendulum.effects import effects_for
 from pendulum.physics import PendulumModel, Rig, simulate
 
 
@@ -55,18 +59,61 @@ class Occlusions:
     event_frames: int = 6
 
 
+@dataclass(frozen=True)
+class PeriodicTorque:
+    """A disturbance torque outside the library: τ(t) = A sin(2π t / T + φ), t in the simulation's time base."""
+
+    amplitude_nm: float
+    period_s: float
+    phase_rad: float = 0.0
+
+    def __call__(self, t: float) -> float:
+        return self.amplitude_nm * math.sin(2 * math.pi * t / self.period_s + self.phase_rad)
+
+
+@dataclass
+class Disturbances:
+    """Effects outside the model library, for tests of the discovery; all off by default.
+
+    ``pivot_drift_px``: the rendered pivot (and with it the whole pendulum) moves
+    linearly from ``camera.pivot_px`` at t = 0 to ``pivot_px + pivot_drift_px`` at
+    the end of the video. ``torque_*``: a periodic torque A sin(2π t/T + φ) acting
+    on the pendulum (t: video time), e.g. a pump or vortex shedding off the tank.
+    """
+
+    pivot_drift_px: tuple[float, float] = (0.0, 0.0)
+    torque_amplitude_nm: float = 0.0
+    torque_period_s: float = 1.0
+    torque_phase_rad: float = 0.0
+
+    @property
+    def torque(self) -> PeriodicTorque | None:
+        if self.torque_amplitude_nm == 0:
+            return None
+        return PeriodicTorque(self.torque_amplitude_nm, self.torque_period_s, self.torque_phase_rad)
+
+    @property
+    def drifting(self) -> bool:
+        return any(v != 0 for v in self.pivot_drift_px)
+
+    @property
+    def active(self) -> bool:
+        return self.drifting or self.torque is not None
+
+
 @dataclass
 class TrialSpec:
     name: str
     release_deg: float
     rig: dict
     truth: dict  # physical coefficients, e.g. added_mass_kg, drag_area_m2, ...
-    effects: list[str]  # terms of the true physics
+    effects: list[str]  # terms of the true physics (names in pendulum.effects.TERMS)
     seed: int = 0
     hold_s: float = 1.0  # pendulum held at the release angle before release
     duration_s: float = 25.0
     camera: Camera = field(default_factory=Camera)
     occlusions: Occlusions = field(default_factory=Occlusions)
+    disturbances: Disturbances = field(default_factory=Disturbances)
 
     @classmethod
     def from_mapping(cls, values: dict) -> TrialSpec:
@@ -76,6 +123,10 @@ class TrialSpec:
             camera["pivot_px"] = tuple(camera["pivot_px"])
         values["camera"] = Camera(**camera)
         values["occlusions"] = Occlusions(**values.get("occlusions", {}))
+        disturbances = dict(values.get("disturbances") or {})
+        if "pivot_drift_px" in disturbances:
+            disturbances["pivot_drift_px"] = tuple(disturbances["pivot_drift_px"])
+        values["disturbances"] = Disturbances(**disturbances)
         return cls(**values)
 
 
@@ -92,7 +143,7 @@ def release_time_s(spec: TrialSpec) -> float:
 
 
 def true_angle_rad(spec: TrialSpec, times_s: np.ndarray) -> np.ndarray:
-    """θ(t): held at the release angle, then the free decay of the true physics."""
+    """θ(t): held at the release angle, then the free decay of the true physics (plus any disturbance torque)."""
     model = PendulumModel(Rig.from_mapping(spec.rig), tuple(spec.effects))
     t_release = release_time_s(spec)
     theta = np.full(times_s.shape, math.radians(spec.release_deg))
@@ -102,18 +153,33 @@ def true_angle_rad(spec: TrialSpec, times_s: np.ndarray) -> np.ndarray:
     if after.any():
         sample_t, index = np.unique(sorted_t[after], return_inverse=True)
         grid = np.concatenate([[t_release], sample_t])
-        th, _ = simulate(model, spec.truth, math.radians(spec.release_deg), 0.0, grid, substeps=4)
+        torque = spec.disturbances.torque
+        if torque is None:
+            th, _ = simulate(model, spec.truth, math.radians(spec.release_deg), 0.0, grid, substeps=4)
+        else:
+            th, _ = simulate(
+                model, spec.truth, math.radians(spec.release_deg), 0.0, grid, substeps=4, external_torque_nm=torque
+            )
         theta_sorted = theta[order]
         theta_sorted[after] = th[1:][index]
         theta[order] = theta_sorted
     return theta
 
 
-def marker_position_px(camera: Camera, theta_rad) -> tuple[np.ndarray, np.ndarray]:
+def marker_position_px(camera: Camera, theta_rad, pivot_px=None) -> tuple[np.ndarray, np.ndarray]:
+    """Marker centre for angle θ; ``pivot_px`` (x, y), arrays allowed, overrides the camera's pivot."""
     phi = np.asarray(theta_rad) + math.radians(camera.roll_deg)
-    x = camera.pivot_px[0] + camera.marker_arm_px * np.sin(phi)
-    y = camera.pivot_px[1] + camera.marker_arm_px * np.cos(phi)
+    px, py = camera.pivot_px if pivot_px is None else pivot_px
+    x = px + camera.marker_arm_px * np.sin(phi)
+    y = py + camera.marker_arm_px * np.cos(phi)
     return x, y
+
+
+def pivot_position_px(spec: TrialSpec, times_s) -> tuple[np.ndarray, np.ndarray]:
+    """The rendered pivot at video times ``times_s``: drifting linearly by ``pivot_drift_px`` over the video."""
+    t = np.asarray(times_s, float) / spec.duration_s
+    (x0, y0), (dx, dy) = spec.camera.pivot_px, spec.disturbances.pivot_drift_px
+    return x0 + dx * t, y0 + dy * t
 
 
 def _smooth_noise(rng, shape, scale_px):
@@ -175,10 +241,10 @@ def _draw_disk(canvas, cx, cy, radius, value):
     patch += cover * (value - patch)
 
 
-def _draw_pendulum(canvas, camera: Camera, theta_rad: float, shades: dict):
+def _draw_pendulum(canvas, camera: Camera, theta_rad: float, shades: dict, pivot_px=None):
     phi = theta_rad + math.radians(camera.roll_deg)
     s, c = math.sin(phi), math.cos(phi)
-    px, py = camera.pivot_px
+    px, py = camera.pivot_px if pivot_px is None else pivot_px
     arm = camera.marker_arm_px
     shift = 4
     scale = 1 << shift
@@ -229,7 +295,9 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     sub_times = times[:, None] + sub_offsets[None, :]
     theta_sub = true_angle_rad(spec, sub_times.reshape(-1)).reshape(n, k)
     theta_mid = true_angle_rad(spec, times)
-    mx, my = marker_position_px(cam, theta_sub)
+    drifting = spec.disturbances.drifting
+    pivot_sub = pivot_position_px(spec, sub_times) if drifting else None
+    mx, my = marker_position_px(cam, theta_sub, pivot_sub)
     truth = pd.DataFrame(
         {
             "frame": np.arange(n),
@@ -240,6 +308,8 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
             "occluded_fraction": 0.0,
         }
     )
+    if drifting:
+        truth["pivot_x_px"], truth["pivot_y_px"] = pivot_position_px(spec, times)
     background = render_background(cam, spec.seed)
     rng = np.random.default_rng(spec.seed + 15485863)
     noise_bank = [rng.standard_normal(background.shape).astype(np.float32) * cam.noise_sigma for _ in range(4)]
@@ -250,11 +320,12 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     accum = np.empty_like(background)
     canvas = np.empty_like(background)
     for i in range(n):
-        if i == 0 or not np.array_equal(theta_sub[i], theta_sub[i - 1]):  # held: reuse the exposure
+        if i == 0 or drifting or not np.array_equal(theta_sub[i], theta_sub[i - 1]):  # held: reuse the exposure
             accum.fill(0.0)
             for j in range(k):
                 np.copyto(canvas, background)
-                _draw_pendulum(canvas, cam, float(theta_sub[i, j]), shades)
+                pivot = None if pivot_sub is None else (pivot_sub[0][i, j], pivot_sub[1][i, j])
+                _draw_pendulum(canvas, cam, float(theta_sub[i, j]), shades, pivot)
                 accum += canvas
             accum /= k
         frame = accum.copy()
@@ -324,7 +395,7 @@ def truth_record(spec: TrialSpec) -> dict:
     """Everything known about a trial, for data/truth/<trial>.yaml."""
     cam = asdict(spec.camera)
     cam["pivot_px"] = list(spec.camera.pivot_px)
-    return {
+    record = {
         "trial": spec.name,
         "release_deg": spec.release_deg,
         "release_time_s": round(release_time_s(spec), 9),
@@ -337,6 +408,9 @@ def truth_record(spec: TrialSpec) -> dict:
         "hold_s": spec.hold_s,
         "duration_s": spec.duration_s,
     }
+    if spec.disturbances.active:  # effects outside the library (absent: none)
+        record["disturbances"] = {**asdict(spec.disturbances), "pivot_drift_px": list(spec.disturbances.pivot_drift_px)}
+    return record
 
 
 def generate_trial(spec: TrialSpec, video_dir: Path, truth_dir: Path, progress=print) -> Path:
@@ -415,12 +489,50 @@ def synthetic_angle_table(
     duration_s: float = 22.0,
     rest_offset_deg: float = 0.0,
     rng: np.random.Generator | None = None,
+    zero_drift_deg: float = 0.0,
+    disturbance: PeriodicTorque | None = None,
     **noise,
 ) -> pd.DataFrame:
-    """An angle record as the angles stage writes it (time since release), from the model itself."""
+    """An angle record as the angles stage writes it (time since release), from the model itself.
+
+    θ_k = x(t_k) + δ + Δ t_k / duration_s + noise, x simulated from rest at the release (t = 0) with
+    every effect of ``model`` (the history force's memory starts there) plus ``disturbance(t)``; δ is
+    ``rest_offset_deg``, Δ ``zero_drift_deg`` (a zero drifting linearly, outside the library).
+    """
     times = np.arange(1, int(duration_s * fps) + 1) / fps
-    theta, _ = simulate(model, truth, math.radians(release_deg), 0.0, np.concatenate([[0.0], times]), substeps=8)
+    grid = np.concatenate([[0.0], times])
+    if disturbance is None:
+        theta, _ = simulate(model, truth, math.radians(release_deg), 0.0, grid, substeps=8)
+    else:
+        theta, _ = simulate(
+            model, truth, math.radians(release_deg), 0.0, grid, substeps=8, external_torque_nm=disturbance
+        )
     theta = theta[1:] + math.radians(rest_offset_deg)
+    if zero_drift_deg:
+        theta = theta + math.radians(zero_drift_deg) * times / duration_s
     if rng is not None:
         theta = theta + angle_noise_rad(rng, times.size, **noise)
     return pd.DataFrame({"time_s": times, "theta_rad": theta, "flag": "ok"})
+
+
+def hidden_effect_table(
+    rig: dict | Rig,
+    truth: dict,
+    release_deg: float,
+    *,
+    effects: tuple[str, ...] | None = None,
+    seed: int | None = None,
+    **options,
+) -> pd.DataFrame:
+    """An angle table with effects hidden in it, for discovery tests (no video): the truth decides the physics.
+
+    ``truth`` maps parameter names to values (``added_mass_kg`` plus one coefficient per hidden
+    library effect, e.g. ``history_coefficient_kg_per_sqrt_s``); ``effects`` defaults to the library
+    effects whose coefficients ``truth`` holds. ``seed`` adds tracking-like noise (None: noise-free).
+    ``options`` go to :func:`synthetic_angle_table`: fps, duration_s, rest_offset_deg, zero_drift_deg,
+    disturbance (a :class:`PeriodicTorque`) and the noise levels.
+    """
+    rig = rig if isinstance(rig, Rig) else Rig.from_mapping(rig)
+    model = PendulumModel(rig, effects_for(truth) if effects is None else tuple(effects))
+    rng = None if seed is None else np.random.default_rng(seed)
+    return synthetic_angle_table(model, truth, release_deg, rng=rng, **options)

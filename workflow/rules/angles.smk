@@ -8,6 +8,9 @@ rule rig_geometry:
     log:
         "logs/geometry/{rig}.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=10,
     params:
         pivot_px=lambda wc: config["rigs"][wc.rig].get("pivot_px"),
         vertical_deg=lambda wc: config["rigs"][wc.rig].get("vertical_deg"),
@@ -26,6 +29,9 @@ rule angles:
     log:
         "logs/angles/{trial}.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
     params:
         settings=angles_settings,
         keep_rest_s=config["angles"]["keep_rest_s"],

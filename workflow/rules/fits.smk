@@ -9,6 +9,9 @@ rule fit_trial:
     log:
         "logs/fits/{variant}/{trial}.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=30,
     params:
         terms=variant_terms,
         rig=fit_rig,
@@ -30,6 +33,9 @@ rule fit_curve:
     log:
         "logs/fits/{variant}/{trial}.curve.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
     params:
         terms=variant_terms,
         rig=fit_rig,
@@ -53,6 +59,9 @@ rule fit_joint:
     log:
         "logs/fits/{variant}/joint/{rig}.log",
     threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=120,
     params:
         terms=variant_terms,
         trial_rigs=joint_trial_rigs,
@@ -72,6 +81,9 @@ rule fit_summary:
     log:
         "logs/fits/summary.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
     params:
         variants=sorted(config["variants"]),
     script:

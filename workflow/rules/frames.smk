@@ -10,6 +10,9 @@ rule frames:
     log:
         "logs/frames/{trial}.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=10,
     params:
         tiles=config["frames"]["contact_sheet_tiles"],
     script:
@@ -26,6 +29,9 @@ rule frame_images:
     log:
         "logs/frame_images/{trial}.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=60,
     params:
         image_format="png",
     script:

@@ -10,6 +10,7 @@ rule status_table:
     threads: 1
     resources:
         mem_mb=500,
+        runtime=5,
     params:
         trials=status_trials(),
     script:
@@ -29,5 +30,6 @@ rule check_trials:
     threads: 1
     resources:
         mem_mb=200,
+        runtime=5,
     script:
         "../scripts/check_trials.py"

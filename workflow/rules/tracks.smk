@@ -9,6 +9,9 @@ rule tracks:
     log:
         "logs/tracks/{trial}.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=60,
     params:
         tracking=tracking_settings,
     script:

@@ -1,0 +1,51 @@
+import shlex
+
+from pendulum.freeze import freeze_inputs  # noqa: E402
+from pendulum.provenance import config_as_used  # noqa: E402
+
+FREEZE_REQUEST = {
+    "tag": config.get("freeze_tag"),
+    "allow_dirty": bool(config.get("freeze_allow_dirty", False)),
+    "frozen_dir": "results/frozen",
+    "code_root": workflow.basedir,
+}
+# Not frozen: frame images (bulky; the contact sheets stay) and the run's all-ok flag
+# (a frozen folder may hold failed trials: results/status/trials.csv says which and why).
+NOT_FROZEN = ["results/status/all_trials_ok.txt"] + [
+    f"results/frames/{name}/images" for name in VIDEO_TRIALS
+]
+
+
+localrules:
+    freeze,
+
+
+rule freeze:
+    """Results, report, configuration as used, environment and provenance copied to
+    results/frozen/<freeze_tag>/ with a SHA-256 manifest. No declared output, so Snakemake never
+    deletes a frozen folder: a taken tag, a missing one or a dirty tree is refused while the DAG is
+    built (nothing runs); the script writes under a temporary name and renames."""
+    input:
+        results=lambda wildcards: freeze_inputs(
+            FREEZE_REQUEST,
+            all_targets()
+            + [doc for name in sorted(TRIALS) for _, doc, _ in trial_documents(name)]
+            + [f"results/geometry/{rig}.json" for rig in RIGS_NEEDING_GEOMETRY]
+            + (list(rules.report.output) if rules.has("report") else []),
+            excluded=NOT_FROZEN,
+        ),
+        lock=os.path.relpath(Path(workflow.basedir) / "environment-lock.txt"),
+        code=script_code("freeze.py"),
+    log:
+        f"logs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.log",
+    threads: 1
+    resources:
+        mem_mb=500,
+    params:
+        request=FREEZE_REQUEST,
+        config=config_as_used(config),
+        citation=config.get("citation"),
+        raw_dir=config["raw_dir"],
+        command=shlex.join(["snakemake", *sys.argv[1:]]),
+    script:
+        "../scripts/freeze.py"

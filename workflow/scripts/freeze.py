@@ -1,0 +1,26 @@
+"""Snakemake adapter: freeze the results into results/frozen/<freeze_tag>/ (never over an existing one)."""
+
+import _setup  # noqa: F401
+from pendulum.freeze import FreezeError, freeze
+from pendulum.io import script_logger
+
+sm = snakemake  # noqa: F821
+log = script_logger(sm.log[0], "freeze")
+request = sm.params.request
+try:
+    freeze(
+        tag=request["tag"],
+        results=list(sm.input.results),
+        lock_file=sm.input.lock,
+        config=sm.params.config,
+        raw_dir=sm.params.raw_dir,
+        code_root=request["code_root"],
+        frozen_dir=request["frozen_dir"],
+        allow_dirty=request["allow_dirty"],
+        command=sm.params.command,
+        citation=sm.params.citation,
+        log=log,
+    )
+except FreezeError as error:
+    log.error("freeze refused: %s", error)
+    raise SystemExit(f"freeze refused: {error}") from None
