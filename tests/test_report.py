@@ -1,0 +1,408 @@
+"""The results report: number formatting, best variant, tables from result documents, and the built
+report (byte-identical rebuilds, only the report reruns when its code changes, and it renders in
+headless Chromium with every image decoded and a Table 3 row per trial and variant)."""
+
+import html as html_module
+import json
+import os
+import re
+import shutil
+import subprocess
+import time
+
+import nbformat
+import pandas as pd
+import pytest
+
+from conftest import DEMO_TRUTH, demo_trials
+from pendulum import report as R
+from workflow_run import digest, planned_wildcards, run
+
+VARIANTS = {"quadratic": ["quadratic_drag"], "linear": ["quadratic_drag", "linear_damping"]}
+
+
+# ---------------------------------------------------------------------------
+# Numbers
+
+
+def test_a_coefficient_at_its_bound_is_never_printed_as_rounding_noise():
+    entry = {"value": 4.2577e-14, "ci95": [0.0, 0.00118], "lower_bound": 0.0, "at_bound": True, "identifiable": True}
+    assert R.format_estimate(entry) == "0 (at bound; < 0.0012)"
+
+
+def test_estimates_keep_two_significant_figures_of_their_interval():
+    added_mass = {"value": 2.500119943, "ci95": [2.258329771, 2.741910116], "at_bound": False, "identifiable": True}
+    assert R.estimate_parts(added_mass) == ("2.50", "[2.26, 2.74]")
+    drag_area = {"value": 0.02575155777, "ci95": [0.02467542841, 0.02682768713], "at_bound": False}
+    assert R.format_estimate(drag_area) == "0.0258 [0.0247, 0.0268]"
+    friction = {"value": 0.01998299443, "ci95": [0.01917203081, 0.02079395804], "at_bound": False}
+    assert R.format_estimate(friction) == "0.01998 [0.01917, 0.02079]"
+    negative = {"value": -0.1304, "ci95": [-0.2, -0.0608], "identifiable": False}
+    assert R.format_estimate(negative) == "−0.130 [−0.200, −0.061] not identifiable"
+    assert R.format_estimate(None) == "—"
+
+
+def test_plain_numbers_use_significant_figures_and_powers_of_ten_only_when_needed():
+    assert R.fmt(0.003859462471, 2) == "0.0039"
+    assert R.fmt(6.736e-05, 2) == "6.7×10⁻⁵"
+    assert R.fmt(-59523.16, 3) == "−59523"
+    assert R.fmt(1000.0, 4) == "1000"
+    assert R.fmt(3.53, 4) == "3.530"
+    assert R.fmt(float("nan")) == "—" and R.fmt(None) == "—" and R.fmt(0.0) == "0"
+
+
+# ---------------------------------------------------------------------------
+# Best variant and nested terms
+
+
+def _summary_rows(rows):
+    return pd.DataFrame(rows, columns=["variant", "fit", "aic", "bic", "samples_digest"])
+
+
+def test_best_variant_is_the_lowest_aic_among_fits_of_the_same_samples():
+    table = _summary_rows(
+        [
+            ("quadratic", "joint:rig", -100.0, -90.0, "a"),
+            ("linear", "joint:rig", -300.0, -280.0, "a"),
+            ("friction", "joint:rig", -250.0, -260.0, "a"),
+        ]
+    )
+    best = R.best_variant(table, "joint:rig", ["t1"])
+    assert best["variant"] == "linear" and best["comparable"]
+    assert best["delta_aic"] == {"friction": 50.0, "linear": 0.0, "quadratic": 200.0}
+    assert best["bic_best"] == "linear"
+
+
+def test_joint_fits_of_different_samples_are_compared_on_the_trials_fitted_alike():
+    # friction's joint fit dropped samples (lower AIC, not comparable); per trial, t1 was fitted alike
+    table = _summary_rows(
+        [
+            ("linear", "joint:rig", -300.0, -280.0, "a"),
+            ("friction", "joint:rig", -900.0, -880.0, "b"),
+            ("linear", "t1", -150.0, -140.0, "x"),
+            ("friction", "t1", -120.0, -110.0, "x"),
+            ("linear", "t2", -150.0, -140.0, "y"),
+            ("friction", "t2", -700.0, -690.0, "z"),
+        ]
+    )
+    best = R.best_variant(table, "joint:rig", ["t1", "t2"])
+    assert best["variant"] == "linear"
+    assert "1 per-trial" in best["basis"] and best["comparable"]
+    assert R.best_variant(table, "joint:other", ["t1"]) is None
+
+
+def test_each_variant_adds_one_term_to_its_nested_parent():
+    variants = {**VARIANTS, "friction": ["quadratic_drag", "linear_damping", "coulomb_friction"], "air": []}
+    assert R.variant_order(variants) == ["air", "quadratic", "linear", "friction"]
+    assert R.nested_parent(variants, "friction") == "linear"
+    assert R.nested_parent(variants, "quadratic") == "air"
+    assert R.nested_parent(variants, "air") is None
+
+
+# ---------------------------------------------------------------------------
+# Tables from result documents (one failed trial)
+
+
+def _entry(value, half, at_bound=False):
+    low = max(0.0, value - half) if at_bound else value - half
+    return {
+        "value": value,
+        "stderr": half / 1.96,
+        "stderr_statistical": half / 2.5,
+        "ci95": [low, value + half],
+        "lower_bound": 0.0,
+        "at_bound": at_bound,
+        "identifiable": True,
+        "scale_factor": 1.0,
+    }
+
+
+def _fit(variant, trial, drag_area, aic, warnings=()):
+    parameters = {
+        "added_mass_kg": _entry(2.5, 0.24),
+        "drag_area_m2": _entry(drag_area, 0.003, at_bound=drag_area == 0),
+        "drag_coefficient": _entry(drag_area / 0.0322, 0.1, at_bound=drag_area == 0),
+    }
+    if "linear_damping" in VARIANTS[variant]:
+        parameters["linear_damping_nm_s"] = _entry(0.15, 0.01)
+    return {
+        "trial": trial,
+        "status": "ok",
+        "variant": variant,
+        "terms": VARIANTS[variant],
+        "rig": {"name": "rig"},
+        "parameters": parameters,
+        "rms_rad": 1e-3,
+        "rms_deg": 0.0573,
+        "rms_arc_m": 7.6e-4,
+        "aic": aic,
+        "bic": aic + 10,
+        "n_samples": 600,
+        "n_parameters": 5,
+        "samples_digest": f"d-{trial}",
+        "keulegan_carpenter_number": 6.1,
+        "trials": {trial: {"theta0_deg": 19.0, "fit_start_s": 0.25, "residual_lag1_autocorrelation": 0.5}},
+        "warnings": list(warnings),
+    }
+
+
+@pytest.fixture
+def documents(tmp_path):
+    """Result files of two trials (t20 fitted by both variants, bad failed at tracking) and the joint fits."""
+    files = {"trials": {}, "fits": {}, "joint": {}}
+    failed = {"status": "failed", "failed_stage": "tracks", "error": "data/raw/bad.mp4: not a video file"}
+    for trial in ("t20", "bad"):
+        files["trials"][trial] = {"angles": str(tmp_path / f"{trial}.angles.json")}
+        doc = {"status": "ok", "hold_angle_deg": 20.0, "noise_deg": 0.003} if trial == "t20" else failed
+        (tmp_path / f"{trial}.angles.json").write_text(json.dumps(doc))
+    rows = []
+    for variant, drag, aic in (("quadratic", 0.0, -100.0), ("linear", 0.0258, -300.0)):
+        files["fits"][variant] = {}
+        for trial in ("t20", "bad"):
+            doc = _fit(variant, trial, drag, aic, ["drag_area_m2 is at its lower bound (0)"] if not drag else [])
+            doc = doc if trial == "t20" else failed
+            path = tmp_path / f"{variant}.{trial}.json"
+            path.write_text(json.dumps(doc))
+            files["fits"][variant][trial] = {"fit": str(path), "curve": "", "cycles": ""}
+        joint = _fit(variant, "t20", drag, aic)
+        joint.pop("trial")
+        joint["consistency"] = {"verdict": "not testable", "explanation": "one trial", "parameters": {}}
+        (tmp_path / f"{variant}.joint.json").write_text(json.dumps(joint))
+        files["joint"][variant] = {"rig": str(tmp_path / f"{variant}.joint.json")}
+        rows += [(variant, "t20", aic, aic + 10, "d-t20"), (variant, "joint:rig", aic, aic + 10, "d-t20")]
+    files["summary"] = str(tmp_path / "summary.csv")
+    _summary_rows(rows).to_csv(files["summary"], index=False)
+    files["status"] = str(tmp_path / "trials.csv")
+    pd.DataFrame(
+        [
+            ("bad", "data/raw/bad.mp4", "rig", "failed", "tracks", failed["error"], "logs/tracks/bad.log"),
+            ("t20", "data/raw/t20.mp4", "rig", "ok", "", "", ""),
+        ],
+        columns=["trial", "source", "rig", "status", "stage", "reason", "log"],
+    ).to_csv(files["status"], index=False)
+    trials = {
+        t: {"rig": "rig", "kind": "angles", "source": f"data/raw/{t}.csv", "overrides": {}} for t in ("t20", "bad")
+    }
+    rigs = {"rig": {"values": {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322}, "tolerances": {}}}
+    return R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS)
+
+
+def test_table3_has_a_row_per_trial_and_variant_and_says_why_a_fit_is_missing(documents):
+    html = documents.coefficient_table()
+    for trial in ("t20", "bad"):
+        for variant in VARIANTS:
+            assert f'data-trial="{trial}" data-variant="{variant}" data-kind="trial"' in html
+    assert html.count("tracks failed: data/raw/bad.mp4: not a video file") == 2
+    assert not re.search(r"\de-\d", html) and "(at bound; &lt; 0.0030)" in html
+    assert 'data-trial="joint:rig" data-variant="linear" data-kind="joint"' in html
+
+
+def test_the_summary_recommends_the_best_variant_and_warns_of_the_failed_trial(documents):
+    assert documents.recommended("rig") == "linear"
+    box = documents.summary_box()
+    assert "variant linear (quadratic drag + linear damping)" in box
+    assert "1 trial(s) failed and are not in the fit: bad" in box
+    assert "not built from a git commit" in box.lower()
+    failures = documents.failures_section()
+    assert "bad" in failures and "not a video file" in failures and "logs/tracks/bad.log" in failures
+    assert "1 of 2 trial(s) failed" in failures
+
+
+def test_trial_order_puts_trials_without_a_release_angle_last(documents):
+    assert documents.trial_order() == ["t20", "bad"]
+    assert documents.release_deg("t20") == 20.0 and documents.release_deg("bad") is None
+
+
+def test_a_build_where_every_trial_failed_still_gives_every_section(tmp_path):
+    failed = {"status": "failed", "failed_stage": "frames", "error": "data/raw/a.mp4: not a video file"}
+    (tmp_path / "failed.json").write_text(json.dumps(failed))
+    (tmp_path / "summary.csv").write_text("variant,fit\n")
+    doc = str(tmp_path / "failed.json")
+    files = {
+        "summary": str(tmp_path / "summary.csv"),
+        "trials": {"a": {"angles": doc, "frames": doc, "tracks": doc, "contact_sheet": str(tmp_path / "none.png")}},
+        "fits": {v: {"a": {"fit": doc, "curve": str(tmp_path / "none.csv"), "cycles": ""}} for v in VARIANTS},
+        "joint": {v: {"rig": doc} for v in VARIANTS},
+    }
+    trials = {"a": {"rig": "rig", "kind": "video", "source": "data/raw/a.mp4", "overrides": {}}}
+    rigs = {"rig": {"values": {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322}, "tolerances": {}}}
+    report = R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS)
+    sections = [
+        report.header(),
+        report.summary_box(),
+        report.rig_table(),
+        report.rms_table(),
+        report.coefficient_table(),
+        report.trial_figures(),
+        report.consistency_figure(),
+        report.extinction_figure(),
+        report.model_comparison(),
+        report.truth_section(),
+        report.tracking_section(),
+        report.failures_section(),
+        report.provenance_section(),
+    ]
+    assert "No joint fit succeeded" in sections[1]
+    assert "frames failed: data/raw/a.mp4: not a video file" in sections[4]
+    assert "1 of 1 trial(s) failed" in sections[11] and "not a video file" in sections[11]
+    assert all(isinstance(s, str) for s in sections)
+
+
+def test_the_executed_notebook_keeps_no_timestamps_or_random_ids():
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1"), nbformat.v4.new_markdown_cell("x")])
+    nb.metadata["papermill"] = {"start_time": "2026-01-01T00:00:00", "duration": 1.5, "input_path": "/tmp/a"}
+    nb.cells[0].metadata["papermill"] = {"start_time": "2026-01-01T00:00:00", "duration": 0.1}
+    nb.cells[0].metadata["execution"] = {"iopub.execute_input": "2026-01-01T00:00:00"}
+    nb.cells[0].outputs = [nbformat.v4.new_output("stream", name="stderr", text="a warning\n")]
+    assert R.normalise_notebook(nb) == ["a warning\n"]
+    text = nbformat.writes(nb)
+    assert "2026" not in text and "duration" not in text and "input_path" not in text
+    assert [c.id for c in nb.cells] == ["cell-00", "cell-01"]
+
+
+def test_the_page_loads_nothing_from_outside():
+    page = R.page_html("<p>body</p>", "t")
+    assert "<script" not in page and "http" not in page and "@media print" in page
+
+
+# ---------------------------------------------------------------------------
+# The built report
+
+
+@pytest.fixture(scope="module")
+def report_project(tmp_path_factory, demo_project):
+    """The demo build copied, with the synthetic truth added (only the report reruns)."""
+    work = tmp_path_factory.mktemp("report") / "p"
+    shutil.copytree(demo_project, work, symlinks=True)
+    shutil.copytree(DEMO_TRUTH, work / "data/truth")
+    start = time.perf_counter()
+    proc = run(["-c1", "results/report/report.html"], work)
+    seconds = time.perf_counter() - start
+    assert {rule for rule, _ in planned_wildcards(proc.stdout + proc.stderr)} == {"report"}
+    print(f"report rule: {seconds:.1f} s")
+    return work
+
+
+def test_the_report_is_byte_identical_when_built_again(report_project):
+    report = report_project / "results/report"
+    before = digest(report, ("*.html", "*.ipynb"))
+    assert set(before) == {"report.html", "report.ipynb"}
+    run(["-c1", "--forcerun", "report", "results/report/report.html"], report_project)
+    assert digest(report, ("*.html", "*.ipynb")) == before
+
+
+def test_editing_plot_code_or_the_notebook_reruns_only_the_report(report_project):
+    for path, edit in (
+        ("workflow/pendulum/report.py", "\nMPL_STYLE['lines.linewidth'] = 1.2  # a style edit\n"),
+        ("notebooks/report.ipynb", "\n"),
+    ):
+        path = report_project / path
+        text, stat = path.read_text(), path.stat()
+        path.write_text(text + edit)
+        try:
+            out = run(["-n"], report_project).stdout
+        finally:
+            path.write_text(text)
+            os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+        assert {rule for rule, _ in planned_wildcards(out)} == {"report", "all"}, path
+    assert "Nothing to be done" in run(["-n"], report_project).stdout
+
+
+def _chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        if shutil.which(name):
+            return shutil.which(name)
+    if os.environ.get("CI"):
+        pytest.fail("Chromium is not installed; .ci/run installs Debian's chromium package")
+    pytest.skip("Chromium not found (apt-get install chromium); CI installs it and runs this test")
+
+
+# Appended to a copy of the report (the report itself has no scripts): once the page has loaded
+# (every image fetched and decoded: a broken one has naturalWidth 0) it writes what the test checks
+# into the page, which --dump-dom prints.
+CHECK_SCRIPT = """
+<script>
+window.addEventListener("load", () => {
+  const images = [...document.images];
+  const rows = [...document.querySelectorAll('#table3 tbody tr[data-kind="trial"]')];
+  const result = {
+    images: images.map((img) => [img.alt, img.complete, img.naturalWidth, img.naturalHeight]),
+    table3: rows.map((r) => [r.dataset.trial, r.dataset.variant]),
+    sections: [...document.querySelectorAll("h2[id]")].map((h) => h.id),
+    external: [...document.querySelectorAll("[src], [href]")]
+      .map((e) => e.getAttribute("src") || e.getAttribute("href"))
+      .filter((u) => !u.startsWith("data:") && !u.startsWith("#")),
+    scripts: document.scripts.length - 1,
+    height: Math.ceil(document.documentElement.scrollHeight),
+  };
+  const out = document.createElement("pre");
+  out.id = "report-check";
+  out.textContent = JSON.stringify(result);
+  document.body.appendChild(out);
+});
+</script>
+"""
+
+
+def _chrome(binary, profile, *args):
+    command = [
+        binary,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-dev-shm-usage",
+        "--hide-scrollbars",
+        "--no-first-run",
+        f"--user-data-dir={profile}",
+        *args,
+    ]
+    return subprocess.run(command, capture_output=True, text=True, timeout=180)
+
+
+def test_the_report_renders_in_chromium_with_every_image_and_table3_complete(report_project, tmp_path):
+    binary = _chromium()
+    html = report_project / "results/report/report.html"
+    check = tmp_path / "check.html"
+    check.write_text(html.read_text().replace("</body>", CHECK_SCRIPT + "</body>"))
+    proc = _chrome(
+        binary,
+        tmp_path / "profile",
+        "--window-size=1280,1000",
+        "--virtual-time-budget=20000",
+        "--dump-dom",
+        check.as_uri(),
+    )
+    marker = '<pre id="report-check">'
+    assert marker in proc.stdout, proc.stderr[-2000:]
+    result = json.loads(html_module.unescape(proc.stdout.split(marker, 1)[1].split("</pre>", 1)[0]))
+
+    trials = demo_trials()
+    variants = ("friction", "linear", "quadratic")
+    # figures: one per trial, consistency, extinction; one contact sheet per video
+    assert len(result["images"]) == len(trials) + 2 + len(trials), result["images"]
+    for alt, complete, width, height in result["images"]:
+        assert complete and width > 0 and height > 0, alt
+    assert sorted(map(tuple, result["table3"])) == sorted((t, v) for t in trials for v in variants)
+    assert result["sections"] == [
+        "summary",
+        "rig-values",
+        "rms",
+        "coefficients",
+        "records",
+        "consistency",
+        "extinction",
+        "model-comparison",
+        "truth",
+        "tracking",
+        "failed-trials",
+        "provenance",
+    ]
+    assert result["external"] == [] and result["scripts"] == 0
+
+    screenshot = report_project / "results/report/report.png"
+    height = min(max(result["height"], 1000), 30000)
+    proc = _chrome(
+        binary, tmp_path / "profile", f"--window-size=1280,{height}", f"--screenshot={screenshot}", html.as_uri()
+    )
+    assert screenshot.is_file() and screenshot.stat().st_size > 100_000, proc.stderr[-2000:]
+    print(f"screenshot: {screenshot} (1280 × {height} px)")
