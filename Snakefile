@@ -9,9 +9,21 @@ include: "workflow/rules/frames.smk"
 include: "workflow/rules/tracks.smk"
 include: "workflow/rules/angles.smk"
 include: "workflow/rules/fits.smk"
+include: "workflow/rules/status.smk"
+include: "workflow/rules/report.smk"
+include: "workflow/rules/freeze.smk"
+
+
+# Small aggregates run on the head node when a cluster executor is used.
+localrules:
+    all,
+    status_table,
+    check_trials,
+    fit_summary,
 
 
 rule all:
     default_target: True
     input:
         all_targets(),
+        report_targets(),

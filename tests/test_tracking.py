@@ -163,3 +163,20 @@ def test_fast_marker_on_a_small_body_keeps_angle_accuracy(fast_video):
     assert np.sqrt(np.mean(err_deg[moving] ** 2)) <= 0.02
     assert abs(np.mean(err_deg[first])) <= 0.01
     assert 0.4 <= track.attrs["exposure_fraction"] <= 0.6  # rendered with 0.5
+
+
+@pytest.mark.parametrize("gap_offset", [1, 2, 3, 4, -1, -3])
+def test_a_jump_next_to_lost_frames_is_flagged(gap_offset):
+    """The leave-one-out stencil has holes beside lost frames; a jump there is still seen, and nothing else."""
+    from pendulum.tracking import TrackerSettings, flag_jumps
+
+    rng = np.random.default_rng(abs(gap_offset))
+    t = np.arange(300) / 30.0
+    x = 640 + 300 * np.sin(0.4 * np.cos(2.1 * t)) + rng.normal(0, 0.05, t.size)
+    y = 100 + 300 * np.cos(0.4 * np.cos(2.1 * t)) + rng.normal(0, 0.05, t.size)
+    usable = np.ones(t.size, bool)
+    usable[150:153] = False  # three lost frames
+    jump = 152 + gap_offset if gap_offset > 0 else 150 + gap_offset
+    x[jump] += 4.0
+    flagged = flag_jumps(x, y, usable, TrackerSettings())
+    assert list(np.flatnonzero(flagged)) == [jump]

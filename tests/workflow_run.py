@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from conftest import DEMO_RAW, ROOT
+from conftest import DEMO_RAW, DEMO_TRUTH, ROOT
 
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 PROJECT_ITEMS = ("Snakefile", "config.yaml", "workflow", "profiles", "notebooks", "environment-lock.txt")
@@ -31,6 +31,8 @@ def copy_project(work: Path, raw_files=None) -> Path:
     raw.mkdir(parents=True, exist_ok=True)
     for path in raw_files if raw_files is not None else sorted(DEMO_RAW.iterdir()):
         shutil.copy2(path, raw / Path(path).name)
+    if raw_files is None:  # the demo's synthetic truth, which the report shows beside the estimates
+        shutil.copytree(DEMO_TRUTH, work / "data" / "truth")
     return work
 
 

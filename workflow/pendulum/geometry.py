@@ -9,8 +9,10 @@ the vertical, when not given, is the centre of the oscillation.
 
 from __future__ import annotations
 
+import io
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -142,13 +144,15 @@ def detect_release(
     th = np.asarray(theta, float)
     valid = np.flatnonzero(np.isfinite(th))
     if valid.size < 10:
-        raise ValueError("fewer than 10 valid angle samples")
+        raise ValueError(f"only {valid.size} valid angle samples (at least 10 needed)")
     sigma = noise_level(th)
     hold = float(np.median(th[valid[:5]]))
     limit = max(threshold_sigmas * sigma, min_threshold_rad)
     departed = valid[np.abs(th[valid] - hold) > limit]
     if departed.size == 0:
-        raise ValueError("the pendulum never moves: no release found")
+        raise ValueError(
+            f"the angle never moves more than {math.degrees(limit):.2g}° from its start: no swing, no release found"
+        )
     first_departure = int(departed[0])
     if np.searchsorted(valid, first_departure) < 5:
         return Release(False, float(t[valid[0]]), None, int(valid[0]))
@@ -161,7 +165,7 @@ def detect_release(
     # white-noise σ of a precise track does not cover.
     keep = dev > max(3 * sigma, 0.2 * limit, 1e-6)
     t_release = float(t[held[-1]])
-    if keep.sum() >= 3:
+    if keep.sum() >= 3 and np.ptp(t[window][keep]) > 0:  # repeated time stamps alone give no line
         slope, intercept = np.polyfit(t[window][keep], np.sqrt(dev[keep]), 1)
         if slope > 0:
             candidate = -intercept / slope
@@ -169,6 +173,34 @@ def detect_release(
                 t_release = float(candidate)
     first = int(np.searchsorted(t, t_release, side="right"))
     return Release(True, t_release, hold, first)
+
+
+def swing_extrema(theta: np.ndarray) -> np.ndarray:
+    """Indices of the confirmed swing extrema of a record (not its first sample).
+
+    An extremum counts once the angle has come back from it by more than
+    max(10 σ, 1e-4 rad) (σ the sample noise), so noise makes none; the last one
+    needs that much record after it. A record from a release holds its first
+    two extrema after about one period.
+    """
+    th = np.asarray(theta, float)
+    idx = np.flatnonzero(np.isfinite(th))
+    if idx.size < 3:
+        return np.array([], int)
+    v = th[idx]
+    h = max(10 * noise_level(v), 1e-4)
+    found, state, cand = [], 0, 0
+    for k in range(1, v.size):
+        x = v[k]
+        if state == 0:
+            if abs(x - v[0]) > h:
+                state, cand = (1 if x > v[0] else -1), k
+        elif state * (x - v[cand]) >= 0:
+            cand = k
+        elif abs(v[cand] - x) > h:
+            found.append(cand)
+            state, cand = -state, k
+    return idx[np.array(found, int)]
 
 
 def rest_start_index(theta: np.ndarray, sigmas: float = 5.0) -> int | None:
@@ -203,6 +235,7 @@ class AngleRecordInfo:
     noise_deg: float
     arm_radius_px: float | None = None  # pivot to marker, median over the tracked samples
     pivot_covariance_px2: list | None = None  # of an estimated pivot (None: given, taken as exact)
+    notes: list = field(default_factory=list)  # what was done about imperfect input (sorted, dropped rows, …)
 
     def to_dict(self):
         return asdict(self)
@@ -227,14 +260,21 @@ def angle_record(
 
     Output columns: ``time_s`` (since release), ``video_time_s``, ``frame``,
     ``theta_rad``, ``theta_deg``, ``s_m`` (= L θ), ``quality``, ``flag``.
-    Flagged samples keep θ = NaN (never interpolated).
+    Flagged samples keep θ = NaN (never interpolated). Times must be finite and
+    in order; a record without a swing raises :class:`InputError` naming ``source``.
     """
     t = np.asarray(time_s, float)
     flag = np.asarray(flag, dtype=object)
     theta = np.asarray(theta_image_rad, float) - math.radians(vertical_deg)
-    usable = flag == "ok"
+    theta = np.mod(theta + math.pi, 2 * math.pi) - math.pi  # in [−π, π) whatever the vertical
+    if not np.isfinite(t).all() or np.any(np.diff(t) < 0):
+        raise InputError(f"{source}: times are missing or not in order; cannot make an angle record")
+    usable = (flag == "ok") & np.isfinite(theta)
     theta = np.where(usable, theta, np.nan)
-    release = detect_release(t, theta)
+    try:
+        release = detect_release(t, theta)
+    except ValueError as exc:
+        raise InputError(f"{source}: {exc}") from exc
     end = t.size
     rest = rest_start_index(theta)
     rest_from = None
@@ -276,42 +316,142 @@ def angle_record(
 def angles_from_track(
     track: pd.DataFrame, *, pivot_px, vertical_deg: float, length_m: float, source: str, pivot_covariance_px2=None
 ):
-    """Angle record of a marker track (see :func:`angle_record`)."""
-    theta_img = image_angle_rad(track.x_px, track.y_px, pivot_px)
-    ok = (track.flag == "ok").to_numpy()
-    radius = np.hypot(track.x_px.to_numpy(float) - pivot_px[0], track.y_px.to_numpy(float) - pivot_px[1])[ok]
+    """Angle record of a marker track (see :func:`angle_record`); a malformed track raises :class:`InputError`."""
+    missing = {"frame", "time_s", "x_px", "y_px", "quality", "flag"} - set(track.columns)
+    if missing:
+        raise InputError(f"{source}: the track lacks column(s) {sorted(missing)}")
+    if len(pivot_px) != 2 or not np.isfinite(np.asarray(pivot_px, float)).all():
+        raise InputError(f"{source}: the pivot {pivot_px!r} is not a finite pixel position (x, y)")
+    columns = {c: pd.to_numeric(track[c], errors="coerce").to_numpy(float) for c in ("time_s", "x_px", "y_px")}
+    x, y = columns["x_px"], columns["y_px"]
+    with np.errstate(over="ignore", invalid="ignore"):
+        theta_img = image_angle_rad(x, y, pivot_px)
+        radius = np.hypot(x - pivot_px[0], y - pivot_px[1])
+    # a position on the pivot (or not finite) has no angle
+    ok = (track.flag == "ok").to_numpy() & np.isfinite(theta_img) & np.isfinite(radius) & (radius >= 1.0)
+    flag = np.where(ok | (track.flag != "ok").to_numpy(), track.flag.to_numpy(object), "lost")
     return angle_record(
-        track.time_s,
+        columns["time_s"],
         theta_img,
-        track.quality,
-        track.flag,
+        pd.to_numeric(track.quality, errors="coerce").to_numpy(float),
+        flag,
         vertical_deg=vertical_deg,
         length_m=length_m,
         source=source,
         pivot_px=pivot_px,
         frame=track.frame,
-        arm_radius_px=float(np.median(radius)) if radius.size else None,
+        arm_radius_px=float(np.median(radius[ok])) if ok.any() else None,
         pivot_covariance_px2=pivot_covariance_px2,
     )
 
 
+class InputError(ValueError):
+    """A bad angle table or track: the message names the file and the problem."""
+
+
+ANGLE_TABLE_COLUMNS = ("t_s", "theta_deg")
+MAX_REPEATED_TIME_FRACTION = 0.1  # more rows at an already used time than this: the time column is broken
+
+
+def read_tracker_csv(path) -> pd.DataFrame:
+    """Read an angle table (``t_s``, ``theta_deg``) as exported by Tracker or a spreadsheet.
+
+    Comma-, semicolon- (with decimal commas) and tab-separated files are read;
+    an empty or unparsable file raises :class:`InputError` naming it.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from exc
+    if not text.strip():
+        raise InputError(f"{path}: empty file; export the angle table again (columns t_s, theta_deg)")
+    header = text.lstrip().splitlines()[0]
+    sep = max((",", ";", "\t"), key=header.count)
+    try:
+        return pd.read_csv(io.StringIO(text), sep=sep, decimal="," if sep == ";" else ".")
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as exc:
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{path}: not a readable CSV table ({reason}); export it again") from exc
+
+
+def _numeric(table: pd.DataFrame, column: str, source: str) -> np.ndarray:
+    """A column as floats; text that is not a number raises :class:`InputError` (blank cells are NaN)."""
+    raw = table[column]
+    values = pd.to_numeric(raw, errors="coerce")
+    text = raw.astype(str).str.strip()
+    bad = values.isna() & raw.notna() & (text != "") & ~text.str.lower().isin(("nan", "na", "n/a", "null", "none"))
+    if bad.any():
+        rows = np.flatnonzero(bad.to_numpy())
+        more = f" and {rows.size - 1} more" if rows.size > 1 else ""
+        raise InputError(
+            f"{source}: column {column} holds text that is not a number ({text.iloc[rows[0]]!r} on line "
+            f"{rows[0] + 2}{more}); fix those cells or export again"
+        )
+    return values.to_numpy(float)
+
+
 def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_m: float, source: str):
-    """Angle record of an angle export (columns ``t_s``, ``theta_deg``, as Tracker writes)."""
-    missing = {"t_s", "theta_deg"} - set(table.columns)
+    """Angle record of an angle export (columns ``t_s``, ``theta_deg``, as Tracker writes).
+
+    Imperfect rows are dealt with and listed in ``info.notes``: rows without a
+    time are dropped; missing or infinite angles are flagged ``lost``; rows out
+    of time order are sorted; exact repeats are dropped; a later row at a time
+    already used is flagged ``duplicate``. Raises :class:`InputError` (naming
+    ``source``) for missing columns, text in a number column, angles beyond
+    ±180°, times repeated in more than 10 % of the rows, or no swing.
+    """
+    missing = set(ANGLE_TABLE_COLUMNS) - set(table.columns)
     if missing:
-        raise ValueError(f"{source}: angle CSV lacks column(s) {sorted(missing)}; expected t_s and theta_deg")
-    table = table.sort_values("t_s", kind="stable").dropna(subset=["t_s"])
-    theta = np.radians(table.theta_deg.to_numpy(float))
-    flag = np.where(np.isfinite(theta), "ok", "lost")
-    return angle_record(
-        table.t_s.to_numpy(float),
-        theta,
-        np.isfinite(theta).astype(float),
+        names = [str(c) for c in table.columns]
+        found = f"found {names[:6]}" if all(n.isprintable() for n in names) else "no readable header: not a text CSV?"
+        raise InputError(
+            f"{source}: angle table lacks column(s) {sorted(missing)}; expected t_s and theta_deg ({found})"
+        )
+    t = _numeric(table, "t_s", source)
+    deg = _numeric(table, "theta_deg", source)
+    notes = []
+    timed = np.isfinite(t)
+    if not timed.all():
+        notes.append(f"{int((~timed).sum())} row(s) without a time dropped")
+        t, deg = t[timed], deg[timed]
+    with np.errstate(invalid="ignore"):
+        beyond = np.abs(deg) > 180
+    if beyond.any():
+        raise InputError(
+            f"{source}: theta_deg reaches {deg[beyond][0]:g}°, beyond ±180°; is the column an angle in degrees?"
+        )
+    if np.any(np.diff(t) < 0):
+        notes.append("rows were not in time order; sorted by t_s")
+        order = np.argsort(t, kind="stable")
+        t, deg = t[order], deg[order]
+    same_row = np.concatenate([[False], (np.diff(t) == 0) & ((deg[1:] == deg[:-1]) | ~np.isfinite(deg[1:]))])
+    if same_row.any():
+        notes.append(f"{int(same_row.sum())} repeated row(s) dropped")
+        t, deg = t[~same_row], deg[~same_row]
+    repeated = np.concatenate([[False], np.diff(t) == 0])
+    if repeated.sum() > MAX_REPEATED_TIME_FRACTION * max(t.size, 1):
+        raise InputError(
+            f"{source}: {int(repeated.sum())} of {t.size} rows repeat an earlier time with another angle; "
+            "export t_s with more decimals"
+        )
+    finite = np.isfinite(deg)
+    flag = np.where(repeated, "duplicate", np.where(finite, "ok", "lost"))
+    if repeated.any():
+        notes.append(f"{int(repeated.sum())} row(s) at an already used time flagged duplicate")
+    if (~finite).any():
+        notes.append(f"{int((~finite).sum())} missing angle(s) flagged lost")
+    table_out, info = angle_record(
+        t,
+        np.radians(np.where(finite, deg, np.nan)),
+        finite.astype(float),
         flag,
         vertical_deg=vertical_deg,
         length_m=length_m,
         source=source,
     )
+    info.notes = notes
+    return table_out, info
 
 
 OUTLIER_TRACK_FACTOR = 8.0  # a track this many times the others' circle RMS off their circle is left out

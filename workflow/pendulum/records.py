@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from pendulum.geometry import InputError, swing_extrema
 from pendulum.physics import Rig
 
 
@@ -96,19 +97,24 @@ def load_record(
     *,
     tolerances: dict | None = None,
     angle_info: dict | None = None,
+    source: str | None = None,
 ) -> AngleRecord:
     """Angle-CSV rows (``time_s``, ``theta_rad``, ``flag``) → the samples to fit.
 
     ``tolerances``: the rig's stated 1σ uncertainties (config ``rigs.<rig>.tolerances``;
     values not stated take :data:`DEFAULT_RELATIVE_TOLERANCES`; None: the rig values
     are exact, no systematic budget — for records generated from known values);
-    ``angle_info``: the angles stage's JSON (arm radius, pivot covariance, vertical).
+    ``angle_info``: the angles stage's JSON (arm radius, pivot covariance, vertical);
+    ``source``: the angle file, named in errors. A record with fewer than 30
+    usable samples or less than about one period (two swing extrema) after the
+    release transient raises :class:`~pendulum.geometry.InputError` ("record too short").
     """
+    where = f"{source} (trial {trial})" if source else f"trial {trial}"
     for column in ("time_s", "theta_rad"):
         if column not in table.columns:
-            raise ValueError(f"trial {trial}: angle table lacks column {column!r}")
-    t = table.time_s.to_numpy(float)
-    th = table.theta_rad.to_numpy(float)
+            raise InputError(f"{where}: angle table lacks column {column!r}")
+    t = pd.to_numeric(table.time_s, errors="coerce").to_numpy(float)
+    th = pd.to_numeric(table.theta_rad, errors="coerce").to_numpy(float)
     ok = np.isfinite(t) & np.isfinite(th)
     if "flag" in table.columns:
         ok &= table.flag.to_numpy(object) == "ok"
@@ -121,7 +127,17 @@ def load_record(
     keep = np.concatenate([[True], np.diff(t) > 0])  # repeated time stamps: keep the first
     t, th = t[keep], th[keep]
     if t.size < 30:
-        raise ValueError(f"trial {trial}: only {t.size} usable angle samples after the release transient")
+        raise InputError(
+            f"{where}: record too short to fit: only {t.size} usable angle samples after the release transient "
+            "(at least 30 needed)"
+        )
+    n_extrema = swing_extrema(th).size
+    if n_extrema < 2:
+        raise InputError(
+            f"{where}: record too short to fit: {t[-1] - t[0]:.3g} s after the release transient "
+            f"with {n_extrema} swing {'extremum' if n_extrema == 1 else 'extrema'}, less than one full period "
+            "(2 needed); record a longer swing"
+        )
     rig = Rig.from_mapping(rig_values)
     info = angle_info or {}
     return AngleRecord(

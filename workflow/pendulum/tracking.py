@@ -33,8 +33,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 import pandas as pd
+from scipy.ndimage import maximum_filter1d
 
-from pendulum.video import iter_luma
+from pendulum.video import VideoError, iter_luma
 
 log = logging.getLogger(__name__)
 
@@ -52,6 +53,9 @@ class TrackerSettings:
     jump_sigmas: float = 6.0
     reacquire_after_frames: int = 10
     max_centroid_disagreement_px: float = 0.4  # linear vs thresholded centroid; more: "occluded"
+    max_width_ratio: float = 1.15  # spot wider across the motion than this × normal (width²): "occluded"
+    min_acquire_score: float = 0.75  # disk-template correlation a spot needs to be taken for the marker
+    min_usable_fraction: float = 0.3  # fewer "ok" frames than this: the video cannot give a record
     centroid: str = "linear"
     # Shutter-open time / frame interval, for the exposure-centre correction; None: measured
     # from the streaks (needs ≥ 10 frames moving more than half a marker radius, else 0.5),
@@ -67,6 +71,8 @@ class TrackerSettings:
             raise ValueError(f"centroid must be 'linear' or 'threshold', got {self.centroid!r}")
         if not self.marker_radius_px > 0:
             raise ValueError("marker_radius_px must be positive")
+        if not 0 < self.min_acquire_score < 1:
+            raise ValueError("min_acquire_score must be between 0 and 1")
 
 
 def _disk_template(radius: float) -> np.ndarray:
@@ -76,10 +82,22 @@ def _disk_template(radius: float) -> np.ndarray:
     return (np.hypot(xx - c, yy - c) <= radius).astype(np.float32)
 
 
-def acquire_marker(image: np.ndarray, settings: TrackerSettings, near=None, search_radius_px=None):
-    """Coarse marker position by normalised template matching of a disk (on a 2× reduced image).
+MIN_MARKER_CONTRAST = 6.0  # grey levels between a marker candidate's disk and its surround
 
-    Returns ``(x, y, score)`` in full-resolution pixels, or None if the search window is empty.
+
+@dataclass(frozen=True)
+class Candidate:
+    x: float
+    y: float
+    score: float  # normalised correlation with a disk of the marker's radius (1 = perfect)
+    contrast: float  # mean grey level inside the disk minus its surround, in the marker's polarity
+
+
+def marker_candidates(image: np.ndarray, settings: TrackerSettings, near=None, search_radius_px=None, n: int = 2):
+    """The ``n`` best disk-like spots by normalised template matching (on a 2× reduced image).
+
+    Spots closer than four marker radii to a better one are not counted (one
+    blurred marker is one spot). Positions in full-resolution pixels.
     """
     img = image if settings.polarity == "bright" else 255 - image
     x0 = y0 = 0
@@ -92,12 +110,44 @@ def acquire_marker(image: np.ndarray, settings: TrackerSettings, near=None, sear
         img = img[y0:y1, x0:x1]
     small = cv2.resize(img, None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA).astype(np.float32)
     template = _disk_template(settings.marker_radius_px / 2)
-    if small.shape[0] <= template.shape[0] or small.shape[1] <= template.shape[1]:
-        return None
+    size = template.shape[0]
+    if small.shape[0] <= size or small.shape[1] <= size:
+        return []
     response = cv2.matchTemplate(small, template, cv2.TM_CCOEFF_NORMED)
-    _, score, _, loc = cv2.minMaxLoc(response)
-    half = template.shape[0] // 2
-    return x0 + 2 * (loc[0] + half) + 0.5, y0 + 2 * (loc[1] + half) + 0.5, float(score)
+    response = np.nan_to_num(response, nan=0.0)
+    inside = template > 0
+    half = size // 2
+    keep_out = int(math.ceil(settings.marker_radius_px * 2))  # 4 radii at full resolution
+    found = []
+    for _ in range(n):
+        _, score, _, loc = cv2.minMaxLoc(response)
+        if score <= 0:
+            break
+        patch = small[loc[1] : loc[1] + size, loc[0] : loc[0] + size]
+        contrast = float(patch[inside].mean() - patch[~inside].mean())
+        found.append(Candidate(x0 + 2 * (loc[0] + half) + 0.5, y0 + 2 * (loc[1] + half) + 0.5, float(score), contrast))
+        response[
+            max(0, loc[1] - keep_out) : loc[1] + keep_out + 1, max(0, loc[0] - keep_out) : loc[0] + keep_out + 1
+        ] = -1
+    return found
+
+
+def acquire_marker(image: np.ndarray, settings: TrackerSettings, near=None, search_radius_px=None):
+    """Coarse marker position by normalised template matching of a disk (on a 2× reduced image).
+
+    Returns ``(x, y, score)`` in full-resolution pixels, or None if the search window is empty.
+    """
+    found = marker_candidates(image, settings, near, search_radius_px, n=1)
+    return (found[0].x, found[0].y, found[0].score) if found else None
+
+
+def _near_any(x: float, y: float, points, distance_px: float) -> bool:
+    return any(math.hypot(x - px, y - py) <= distance_px for px, py in points)
+
+
+def _marker_like(c: Candidate, settings: TrackerSettings, reference_contrast: float | None) -> bool:
+    floor = MIN_MARKER_CONTRAST if reference_contrast is None else max(MIN_MARKER_CONTRAST, 0.5 * reference_contrast)
+    return c.score >= settings.min_acquire_score and c.contrast >= floor
 
 
 @dataclass
@@ -110,6 +160,7 @@ class Measurement:
     at_edge: bool
     disagreement_px: float = 0.0  # |linear − thresholded centroid|: large when something intrudes
     streak2_px2: float = math.nan  # squared length of the exposure streak (linear centroid only)
+    width2_px2: float = math.nan  # 4 × the signal's variance across the motion: ≈ r² for a disk (linear only)
 
 
 def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0.0, marker_level=None, direction=None):
@@ -156,13 +207,13 @@ def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0
         if refined is None:
             return None
         disagreement = math.hypot(refined[0] - cx, refined[1] - cy)
-        cx, cy, streak2, signal = refined
+        cx, cy, streak2, signal, width2 = refined
     else:
         inside = (xs - cx) ** 2 + (ys - cy) ** 2 <= mask_r2
         signal = float(((roi - background) * inside).sum())
-        disagreement, streak2 = 0.0, math.nan
+        disagreement, streak2, width2 = 0.0, math.nan, math.nan
     at_edge = x0 == 0 or y0 == 0 or x1 == w or y1 == h
-    return Measurement(cx, cy, signal, level, background, at_edge, disagreement, streak2)
+    return Measurement(cx, cy, signal, level, background, at_edge, disagreement, streak2, width2)
 
 
 def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=2.5, iterations=2):
@@ -175,10 +226,11 @@ def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=
     soft edge, so its own centroid moves smoothly with the estimate. ``roi`` starts at image
     pixel (x0, y0); (cx, cy) is the starting estimate in image pixels.
 
-    Returns ``(x, y, streak², signal)`` with streak² = 12 (var_along − var_across) of the
-    weights: the squared length of the exposure streak (a disk's own variance is the same in
-    both directions), NaN without a direction; signal = Σ (I − b) over the mask, which blur
-    does not change. None when nothing stands out.
+    Returns ``(x, y, streak², signal, width²)`` with streak² = 12 (var_along − var_across) of
+    the weights: the squared length of the exposure streak (a disk's own variance is the same
+    in both directions), NaN without a direction; signal = Σ (I − b) over the mask, which blur
+    does not change; width² = 4 var_across (r² for a disk, unchanged by blur along the motion:
+    a larger spot in the mask, e.g. an occluder, widens it). None when nothing stands out.
     """
     if direction is None:
         ux, uy, half_len = 1.0, 0.0, 0.0
@@ -219,11 +271,12 @@ def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=
         if total <= 0:
             return None
         ex, ey = float(col @ xr) / total, float(row @ yr) / total
-    if direction is None:
-        return ox + ex, oy + ey, math.nan, total
     # Moments about the last mask centre, within a small fraction of a pixel of the result.
-    streak2 = 12.0 * float((weight * (u * u - v * v)).sum()) / total
-    return ox + ex, oy + ey, streak2, total
+    across2 = float((weight * v * v).sum()) / total
+    if direction is None:
+        return ox + ex, oy + ey, math.nan, total, 4.0 * across2
+    streak2 = 12.0 * float((weight * (u * u)).sum()) / total - 12.0 * across2
+    return ox + ex, oy + ey, streak2, total, 4.0 * across2
 
 
 def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:
@@ -273,11 +326,38 @@ def _leave_one_out_weights(half_window: int = 4, degree: int = 3) -> np.ndarray:
     return full
 
 
+def _fill_gap_residuals(
+    resid: np.ndarray, x: np.ndarray, y: np.ndarray, ok: np.ndarray, half: int, where: np.ndarray
+) -> None:
+    """Leave-one-out residuals for usable frames next to unusable ones (where the fixed stencil has a hole).
+
+    The same prediction, a polynomial through the usable neighbours within ±half
+    frames (cubic with ≥ 6 of them, quadratic with 4–5), evaluated at the frame,
+    its residual scaled to the full stencil's noise; only frames in ``where``,
+    and frames with fewer usable neighbours stay unchecked.
+    """
+    full_noise2 = float(np.sum(_leave_one_out_weights(half) ** 2))
+    for i in np.flatnonzero(ok & ~np.isfinite(resid) & where):
+        offsets = np.array([j for j in range(-half, half + 1) if j and 0 <= i + j < x.size and ok[i + j]])
+        if offsets.size < 4:
+            continue
+        degree = 3 if offsets.size >= 6 else 2
+        design = np.vander(offsets.astype(float), degree + 1, increasing=True)
+        weights = np.linalg.pinv(design)[0]
+        # scaled to the full stencil's noise: a sparser prediction is noisier
+        scale = math.sqrt((1 + full_noise2) / (1 + float(weights @ weights)))
+        resid[i] = scale * math.hypot(x[i] - weights @ x[i + offsets], y[i] - weights @ y[i + offsets])
+
+
 def flag_jumps(x: np.ndarray, y: np.ndarray, usable: np.ndarray, settings: TrackerSettings) -> np.ndarray:
     """Frames whose position departs from a cubic through their 8 neighbours (isolated jumps)."""
     weights = _leave_one_out_weights()
     half = len(weights) // 2
     jumps = np.zeros(x.size, bool)
+    window = 2 * half + 1
+    # Frames beside lost/flagged ones are checked with a sparser stencil, but not frames beside a
+    # jump found here: that would cascade through a genuinely abrupt motion (the release).
+    near_gap = maximum_filter1d((~usable).astype(np.uint8), window) > 0
     for _ in range(4):
         ok = usable & ~jumps
         xv = np.where(ok, x, np.nan)
@@ -285,6 +365,8 @@ def flag_jumps(x: np.ndarray, y: np.ndarray, usable: np.ndarray, settings: Track
         rx = xv - np.convolve(xv, weights[::-1], mode="same")
         ry = yv - np.convolve(yv, weights[::-1], mode="same")
         resid = np.hypot(rx, ry)
+        near_jump = maximum_filter1d(jumps.astype(np.uint8), window) > 0
+        _fill_gap_residuals(resid, xv, yv, ok, half, near_gap & ~near_jump)
         resid[:half] = resid[-half:] = np.nan
         finite = np.isfinite(resid)
         if finite.sum() < 10:
@@ -294,9 +376,10 @@ def flag_jumps(x: np.ndarray, y: np.ndarray, usable: np.ndarray, settings: Track
         over = finite & (resid > limit)
         if not over.any():
             break
-        # Flag only local maxima: a jump also disturbs its neighbours' predictions.
+        # Flag only the largest within ±half frames: a jump also disturbs its neighbours'
+        # predictions (most beside a gap, where the stencil extrapolates); the next pass sees the rest.
         padded = np.where(finite, resid, 0.0)
-        local_max = over & (padded >= np.maximum(np.roll(padded, 1), np.roll(padded, -1)))
+        local_max = over & (padded >= maximum_filter1d(padded, window, mode="constant"))
         jumps |= local_max
     return jumps
 
@@ -306,7 +389,17 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
 
     Columns: ``frame``, ``time_s``, ``x_px``, ``y_px`` (NaN when lost),
     ``quality`` (marker signal relative to normal, 1 = perfect, 0 = lost),
-    ``signal_ratio``, ``flag`` (one of :data:`FLAGS`).
+    ``signal_ratio``, ``flag`` (one of :data:`FLAGS`). Frames the file holds
+    damaged are ``lost``. ``attrs["video"]``: the decoder's report (failed
+    packets, damaged frames, an early end).
+
+    The marker is (re)acquired only where a spot scores at least
+    ``min_acquire_score`` against a disk and stands out of its surround (on
+    re-acquisition by at least half the first spot's contrast). Raises
+    :class:`~pendulum.video.VideoError` when the video cannot give a record: no
+    marker anywhere, two equally marker-like spots at the first acquisition (a
+    reflection; ``start_px`` resolves it), or fewer than ``min_usable_fraction``
+    of the frames usable (marker out of the frame or hidden most of the time).
     """
     rows = []
     history: list[tuple[int, float, float]] = []  # (frame, x, y) of good frames
@@ -314,24 +407,66 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
     marker_level = None
     signal_ref = None
     signals: list[float] = []
+    width_ref = math.nan  # the marker's width² in the first frames: a wider spot is not the marker alone
+    widths: list[float] = []
     lost_run = 0
+    window = None  # (frame, slice, pixels) around the marker in the last good frame: repeated frames
     streak2: dict[int, float] = {}
     started = time.perf_counter()
     n_frames = 0
-    for index, t, image in iter_luma(path):
+    video_report: dict = {}
+    reference_contrast = None  # of the spot first taken for the marker
+    distractors: list[tuple[float, float]] = []  # static marker-like spots seen at the first acquisition
+    keep_off = 1.5 * settings.marker_radius_px
+    intrudes = 2 * settings.marker_radius_px + 7.5  # the ring around the mask reaches r + 6.5 px
+    best_seen: Candidate | None = None  # best spot of any failed acquisition, for the error message
+    for index, t, image in iter_luma(path, damaged=True, report=video_report):
         n_frames = index + 1
+        if image is None:  # damaged in the file
+            rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))
+            lost_run += 1
+            previous = None
+            continue
         # A repeated frame is identical everywhere; every 8th row tells at 1/8 of the cost.
         rows_sample = image[::8]
         duplicate = previous is not None and np.array_equal(rows_sample, previous)
         previous = rows_sample.copy()
         if not history or lost_run >= settings.reacquire_after_frames:
-            near = settings.start_px if not history and settings.start_px is not None else None
-            found = acquire_marker(image, settings, near=near, search_radius_px=None if near is None else 60)
-            if found is None:
+            candidates = marker_candidates(image, settings, n=4)
+            hinted = reference_contrast is None and settings.start_px is not None
+            if hinted:  # the spot near the hint first, then the others (possible distractors)
+                local = marker_candidates(image, settings, near=settings.start_px, search_radius_px=60, n=1)
+                others = [c for c in candidates if not local or not _near_any(c.x, c.y, [(local[0].x, local[0].y)], 4)]
+                candidates = local + others if local and _marker_like(local[0], settings, None) else []
+            likely = [
+                c
+                for c in candidates
+                if _marker_like(c, settings, reference_contrast) and not _near_any(c.x, c.y, distractors, keep_off)
+            ]
+            if not likely:
+                if candidates and (best_seen is None or candidates[0].score > best_seen.score):
+                    best_seen = candidates[0]
                 rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))
                 lost_run += 1
                 continue
-            guess, speed, direction = (found[0], found[1]), 0.0, None
+            if reference_contrast is None:
+                if not hinted:
+                    likely.sort(key=lambda c: -c.contrast)
+                    if len(likely) > 1 and likely[1].contrast >= 0.7 * likely[0].contrast:
+                        a, b = likely[0], likely[1]
+                        raise VideoError(
+                            f"{path}: two marker-like spots at ({a.x:.0f}, {a.y:.0f}) and ({b.x:.0f}, {b.y:.0f}) px "
+                            f"in frame {index} (a reflection?); give the marker's start_px in the trial's sidecar"
+                        )
+                found = likely[0]
+                reference_contrast = found.contrast
+                # Other spots that the marker's threshold would also pick up: never taken for the marker.
+                distractors = [(c.x, c.y) for c in likely[1:] if c.contrast >= 0.5 * found.contrast]
+            elif history:  # several candidates: the one nearest the last good position
+                found = min(likely, key=lambda c: math.hypot(c.x - history[-1][1], c.y - history[-1][2]))
+            else:
+                found = likely[0]
+            guess, speed, direction = (found.x, found.y), 0.0, None
         else:
             (f1, x1, y1) = history[-1]
             if len(history) >= 2 and history[-2][0] == f1 - 1:
@@ -344,10 +479,18 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             step = math.hypot(vx, vy)
             direction = (vx / step, vy / step) if step > 0 else None
             speed = step + 2.0 * (gap - 1) * settings.marker_radius_px
+            if window is not None and window[0] == index - 1 and len(history) == 3 and history[0][0] == f1 - 2:
+                # The marker should have moved (constant-acceleration step ≥ 0.5 px), yet its window
+                # did not change: a repeated frame (re-encoded, so not bit-identical), whose content
+                # belongs to the previous time stamp.
+                xm, ym = history[0][1], history[0][2]
+                expected = math.hypot(2 * vx - (x0 - xm), 2 * vy - (y0 - ym))
+                if expected >= 0.5:
+                    duplicate |= float(np.abs(image[window[1]].astype(np.float32) - window[2]).mean()) < 0.5
         m = measure_marker(
             image, guess[0], guess[1], settings, blur_px=speed, marker_level=marker_level, direction=direction
         )
-        if m is None:
+        if m is None or _near_any(m.x, m.y, distractors, keep_off):  # a known distractor is not the marker
             rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))
             lost_run += 1
             continue
@@ -355,9 +498,11 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             marker_level = m.level
         if signal_ref is None:
             signals.append(m.signal)
+            widths.append(m.width2_px2)
             ratio = 1.0
             if len(signals) >= 5:
                 signal_ref = float(np.median(signals))
+                width_ref = float(np.median(widths))
         else:
             ratio = m.signal / signal_ref
         quality = float(np.clip(min(ratio, 1.0 / ratio) if ratio > 0 else 0.0, 0.0, 1.0))
@@ -367,7 +512,12 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             flag, x, y = "duplicate", m.x, m.y
         elif m.at_edge:
             flag, x, y = "edge", m.x, m.y
-        elif ratio < settings.min_signal_ratio or m.disagreement_px > settings.max_centroid_disagreement_px:
+        elif (
+            ratio < settings.min_signal_ratio
+            or m.disagreement_px > settings.max_centroid_disagreement_px
+            or _near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
+            or m.width2_px2 > settings.max_width_ratio * width_ref
+        ):
             flag, x, y = "occluded", m.x, m.y
         elif ratio > settings.max_signal_ratio:
             flag, x, y = "glare", m.x, m.y
@@ -380,12 +530,23 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             if flag in ("ok", "edge"):
                 history.append((index, x, y))
                 del history[:-3]
+                xi, yi, half = int(round(x)), int(round(y)), int(settings.marker_radius_px + 4)
+                box = np.s_[max(yi - half, 0) : yi + half + 1, max(xi - half, 0) : xi + half + 1]
+                window = (index, box, image[box].astype(np.float32))
         rows.append((index, t, x, y, quality, ratio, flag))
         streak2[index] = m.streak2_px2
         if progress and index % progress_every == 0 and index:
             rate = index / (time.perf_counter() - started)
             progress(f"{path}: tracked frame {index} ({rate:.0f} frames/s)")
     table = pd.DataFrame(rows, columns=["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"])
+    table.attrs["video"] = dict(video_report)
+    if reference_contrast is None:
+        score = "no disk-like spot at all" if best_seen is None else f"the best spot scores {best_seen.score:.2f}"
+        raise VideoError(
+            f"{path}: no marker found in any of its {n_frames} frames ({score}; a marker needs "
+            f"{settings.min_acquire_score:g}); check tracking polarity ({settings.polarity}) and marker_radius_px "
+            f"({settings.marker_radius_px:g}), or give start_px in the trial's sidecar"
+        )
     # The first frames set the reference signal; recompute their ratios against it.
     if signal_ref is not None:
         first = table.index[: len(signals)]
@@ -407,8 +568,28 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             table["x_px"] += exposure_centre_correction(table.x_px.to_numpy(), usable, exposure)
             table["y_px"] += exposure_centre_correction(table.y_px.to_numpy(), usable, exposure)
     table.attrs["exposure_fraction"] = exposure
+    counts = table.flag.value_counts().to_dict()
     if progress:
         rate = n_frames / max(time.perf_counter() - started, 1e-9)
-        counts = table.flag.value_counts().to_dict()
         progress(f"{path}: tracked {n_frames} frames ({rate:.0f} frames/s); flags {counts}")
+    usable_fraction = counts.get("ok", 0) / max(len(table), 1)
+    if usable_fraction < settings.min_usable_fraction:
+        raise VideoError(f"{path}: {unusable_reason(counts, len(table), video_report)}")
     return table
+
+
+def unusable_reason(counts: dict, n_frames: int, video_report: dict | None = None) -> str:
+    """Why a track with too few usable frames cannot give a record (for the error message)."""
+    ok = counts.get("ok", 0)
+    out = counts.get("edge", 0) + counts.get("lost", 0)
+    hidden = counts.get("occluded", 0) + counts.get("glare", 0)
+    damaged = (video_report or {}).get("damaged_frames", 0)
+    if damaged >= max(out - damaged, hidden):
+        cause = f"{damaged} frames are damaged in the file; copy it again"
+    elif out >= hidden:
+        cause = "the marker is out of view (outside the frame or behind something) in most frames"
+    else:
+        cause = "the marker is partly hidden (occluded) or glaring in most frames"
+    flags = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()) if k != "ok")
+    share = f"{100 * ok / max(n_frames, 1):.0f} %"
+    return f"the marker is usable in only {ok} of {n_frames} frames ({share}; {flags}): {cause}"

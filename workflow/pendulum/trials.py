@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from dataclasses import dataclass, field
@@ -35,25 +36,111 @@ class ConfigError(ValueError):
     """A configuration or sidecar problem; the message names the file and the key."""
 
 
-def _validate(document: dict, schema_name: str, source: str) -> None:
+TYPE_WORDS = {
+    "number": "a number",
+    "integer": "a whole number",
+    "string": "text",
+    "boolean": "true or false",
+    "array": "a list",
+    "object": "a mapping (key: value lines)",
+    "null": "empty",
+}
+
+BOUND_WORDS = {
+    "exclusiveMinimum": "greater than",
+    "minimum": "at least",
+    "exclusiveMaximum": "less than",
+    "maximum": "at most",
+}
+
+
+def _short(value, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def _schema_problem(err: jsonschema.ValidationError) -> str:
+    """One schema error in words: where, what is wrong and, for a misspelt key, the likely key."""
+    where = "/".join(str(p) for p in err.absolute_path)
+    at = f" in {where}" if where else ""
+    kind, value = err.validator, err.instance
+    if kind == "additionalProperties" and isinstance(value, dict):
+        known = list(err.schema.get("properties", {}))
+        unknown = [k for k in value if k not in known]
+        parts = []
+        for key in unknown:
+            close = difflib.get_close_matches(str(key), known, n=1, cutoff=0.6)
+            parts.append(f"unknown key {_short(key)}{at}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+        return "; ".join(parts) or err.message
+    if kind == "required":
+        return f"missing key {err.message.split(chr(39))[1]!r}{at}" if "'" in err.message else err.message
+    if kind == "type":
+        expected = err.validator_value if isinstance(err.validator_value, list) else [err.validator_value]
+        words = " or ".join(TYPE_WORDS.get(t, t) for t in expected)
+        return f"{where or 'the document'} is {_short(value)}, not {words}"
+    if kind in ("enum", "const"):
+        return f"{where or 'the value'} is {_short(value)}, not one of {err.validator_value}"
+    if kind in BOUND_WORDS:
+        return f"{where} is {_short(value)}; it must be {BOUND_WORDS[kind]} {err.validator_value:g}"
+    if kind == "minProperties" and where == "variants":
+        return "no model variants: give at least one under variants (e.g. quadratic: [quadratic_drag])"
+    return f"{where or 'the document'}: {err.message}"
+
+
+def _validate(document, schema_name: str, source: str) -> None:
+    if not isinstance(document, dict):
+        raise ConfigError(f"{source}: must be a mapping of keys to values, not {type(document).__name__}")
     schema = yaml.safe_load((SCHEMA_DIR / schema_name).read_text())
     validator = jsonschema.Draft202012Validator(schema)
-    errors = sorted(validator.iter_errors(document), key=lambda e: list(e.absolute_path))
+    errors = sorted(validator.iter_errors(document), key=lambda e: [str(p) for p in e.absolute_path])
     if errors:
-        lines = []
-        for err in errors:
-            where = "/".join(str(p) for p in err.absolute_path) or "(top level)"
-            lines.append(f"  {where}: {err.message}")
-        raise ConfigError(f"{source} is invalid:\n" + "\n".join(lines))
+        problems = list(dict.fromkeys(_schema_problem(e) for e in errors))
+        more = f" (and {len(problems) - 3} more)" if len(problems) > 3 else ""
+        raise ConfigError(f"{source}: " + "; ".join(problems[:3]) + more)
+    bad = _non_finite(document)
+    if bad:
+        raise ConfigError(f"{source}: {bad[0]} is {bad[1]}; give a finite number")
+
+
+def _non_finite(value, where: str = ""):
+    """(path, value) of the first NaN or infinite number in a document, or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return where, value
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+    for key, item in items:
+        found = _non_finite(item, f"{where}/{key}" if where else str(key))
+        if found:
+            return found
+    return None
+
+
+def check_rig_values(values: dict, where: str) -> None:
+    """Physical sense of a rig's values: the pendulum must sink (weight above buoyancy)."""
+    mass, volume = values.get("mass_kg"), values.get("displaced_volume_m3") or 0.0
+    rho, g = values.get("fluid_density_kg_m3", 1000.0), values.get("gravity_m_s2", 9.81)
+    if mass is None:
+        return
+    weight, buoyancy = mass * g, rho * volume * g
+    if buoyancy >= weight:
+        raise ConfigError(
+            f"{where}: the pendulum floats: buoyancy ρ V g = {rho:g} × {volume:g} × {g:g} = {buoyancy:.4g} N is not "
+            f"below the weight m g = {mass:g} × {g:g} = {weight:.4g} N; check mass_kg and displaced_volume_m3 (m³)"
+        )
 
 
 def validate_config(config: dict, source: str = "config.yaml") -> None:
-    """Schema check plus cross-references (default rig exists)."""
+    """Schema check, finite numbers, rigs that sink, and cross-references (default rig exists)."""
+    if isinstance(config, dict) and config.get("variants") in (None, [], {}) and "variants" in config:
+        raise ConfigError(
+            f"{source}: no model variants: give at least one under variants (e.g. quadratic: [quadratic_drag])"
+        )
+    if isinstance(config, dict) and isinstance(config.get("variants"), dict):
+        empty = [name for name, terms in config["variants"].items() if terms is None]
+        if empty:
+            raise ConfigError(f"{source}: variants {empty} have no term list (use [] for added mass only)")
     _validate(config, "config.schema.yaml", source)
-    empty = [name for name, terms in config["variants"].items() if terms is None]
-    if empty:
-        raise ConfigError(f"{source}: variants {empty} have no term list (use [] for added mass only)")
     for rig, values in config["rigs"].items():
+        check_rig_values(values, f"{source}: rigs/{rig}")
         for key, sigma in (values.get("tolerances") or {}).items():
             value = values.get(key)
             if not math.isfinite(sigma):
@@ -100,23 +187,42 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         trial = Trial(name, kind, str(path))
         sidecar = path.with_suffix(".yaml")
         if sidecar.is_file():
-            try:
-                doc = yaml.safe_load(sidecar.read_text()) or {}
-            except yaml.YAMLError as exc:
-                raise ConfigError(f"{sidecar}: not valid YAML ({exc})") from exc
-            if not isinstance(doc, dict):
-                raise ConfigError(f"{sidecar}: must be a mapping of keys to values")
-            _validate(doc, "sidecar.schema.yaml", str(sidecar))
-            trial.sidecar, trial.sidecar_path = doc, str(sidecar)
+            trial.sidecar, trial.sidecar_path = read_sidecar(sidecar), str(sidecar)
         trials[name] = trial
     return trials
 
 
+def read_sidecar(path: str | Path) -> dict:
+    """A trial's sidecar YAML, validated; every problem raises :class:`ConfigError` naming the file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not a text file (byte {exc.start} is not UTF-8); write it as plain YAML") from exc
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"{path}: not valid YAML ({at}{problem}); fix the file") from exc
+    if doc is None:
+        return {}
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{path}: must be a mapping of keys to values (e.g. mass_kg: 3.5), not {type(doc).__name__}")
+    _validate(doc, "sidecar.schema.yaml", str(path))
+    return doc
+
+
 def rig_trials(config: dict, trials: dict[str, Trial]) -> dict[str, list[str]]:
-    """Trial names of each rig (every trial, video or angle table)."""
+    """Trial names of each rig (every trial, video or angle table).
+
+    Called when the workflow is parsed: it also checks every trial's merged
+    settings (a sidecar's rig values), so a bad sidecar stops the run before any job.
+    """
     by_rig: dict[str, list[str]] = {}
     for name in sorted(trials):
-        by_rig.setdefault(rig_name(config, trials[name]), []).append(name)
+        by_rig.setdefault(trial_settings(config, trials[name])["rig_name"], []).append(name)
     return by_rig
 
 
@@ -134,6 +240,8 @@ def trial_settings(config: dict, trial: Trial) -> dict:
     rig = rig_name(config, trial)
     merged_rig = {**config["rigs"][rig]}
     merged_rig.update({k: v for k, v in trial.sidecar.items() if k in RIG_KEYS + GEOMETRY_KEYS})
+    if any(k in RIG_KEYS for k in trial.sidecar):
+        check_rig_values(merged_rig, f"{trial.sidecar_path} (with rig {rig})")
     tracking = {**config["tracking"]}
     tracking.update({k: v for k, v in trial.sidecar.items() if k in TRACKING_KEYS})
     return {

@@ -30,6 +30,49 @@ class VideoInfo:
     nominal_fps: float
     codec: str
     n_packets: int
+    stated_frames: int | None = None  # frame count the container's index states (None: not stated)
+    warnings: tuple[str, ...] = ()  # e.g. a truncated file: readable up to where it ends
+
+
+ISO_BOXES = (b"ftyp", b"moov", b"mdat", b"free", b"skip", b"wide", b"pnot")  # first box of an MP4/MOV file
+
+
+def _mp4_damage(path: Path, size: int) -> str:
+    """What is wrong with the top-level box structure of an MP4/MOV file that no demuxer opens."""
+    offset, boxes = 0, []
+    with open(path, "rb") as fh:
+        while offset + 8 <= size:
+            fh.seek(offset)
+            header = fh.read(16)
+            length, kind = int.from_bytes(header[:4], "big"), header[4:8].decode("latin-1")
+            if length == 1 and len(header) == 16:
+                length = int.from_bytes(header[8:16], "big")
+            elif length == 0:
+                length = size - offset
+            if length < 8 or not kind.isprintable():
+                return f"unreadable data at byte {offset}"
+            if offset + length > size:
+                return f"it ends at byte {size} inside its {kind!r} box, which needs {offset + length} bytes"
+            boxes.append(kind)
+            offset += length
+    if "moov" not in boxes:
+        return "its index (the 'moov' box) is missing, as when a recording is not finished"
+    return "its index cannot be read"
+
+
+def unreadable_reason(path: Path) -> str:
+    """One sentence on why a file that no demuxer opens is not a usable video."""
+    path = Path(path)
+    size = path.stat().st_size
+    if size == 0:
+        return f"{path}: empty file (0 bytes); copy the video again or remove it"
+    with open(path, "rb") as fh:
+        head = fh.read(8)
+    if head[4:8] in ISO_BOXES:
+        damage = _mp4_damage(path, size)
+        kind = "truncated" if damage.startswith("it ends") else "damaged"
+        return f"{path}: {kind} MP4/MOV file ({damage}); copy it again from the camera"
+    return f"{path}: not a video file (no known video container format); remove it or convert it to MP4"
 
 
 def _open(path: Path):
@@ -41,10 +84,10 @@ def _open(path: Path):
     try:
         container = av.open(str(path))
     except Exception as exc:  # PyAV raises several error types for a bad container
-        raise VideoError(f"{path}: not a readable video container ({exc})") from exc
+        raise VideoError(unreadable_reason(path)) from exc
     if not container.streams.video:
         container.close()
-        raise VideoError(f"{path}: contains no video stream")
+        raise VideoError(f"{path}: contains no video stream (audio only?); remove it or convert it")
     return container
 
 
@@ -65,15 +108,22 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         nominal_fps = float(rate)
         tb = stream.time_base
         rows = []
+        warnings = []
         try:
             for packet in container.demux(stream):
                 if packet.size == 0 or packet.pts is None:
                     continue
                 rows.append((packet.pts, bool(packet.is_keyframe), packet.size))
-        except Exception as exc:
-            raise VideoError(f"{path}: container is corrupt after {len(rows)} packets ({exc})") from exc
+        except Exception:  # damaged container: readable up to here, like a truncated file
+            warnings.append(f"{path}: the container is damaged after frame {len(rows)}; the rest is unreadable")
         if not rows:
-            raise VideoError(f"{path}: the video stream holds no frames")
+            raise VideoError(f"{path}: the video stream holds no readable frames; copy the file again")
+        stated = int(stream.frames) or None
+        if stated and len(rows) < stated and not warnings:
+            warnings.append(
+                f"{path}: truncated: only {len(rows)} of the {stated} frames its index lists are in the file; "
+                "the rest of the recording is missing"
+            )
         info = VideoInfo(
             str(path),
             int(stream.codec_context.width),
@@ -81,6 +131,8 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
             nominal_fps,
             stream.codec_context.name,
             len(rows),
+            stated,
+            tuple(warnings),
         )
     finally:
         container.close()
@@ -105,13 +157,21 @@ def luma(frame) -> np.ndarray:
     return rows[:, : frame.width]
 
 
-def iter_luma(path: Path, keyframes_only: bool = False) -> Iterator[tuple[int, float, np.ndarray]]:
+def iter_luma(
+    path: Path, keyframes_only: bool = False, damaged: bool = False, report: dict | None = None
+) -> Iterator[tuple[int, float, np.ndarray | None]]:
     """Decode the video once, yielding ``(frame_index, time_s, Y)`` in presentation order.
 
     Grey (``gray``) and planar YUV streams give their luma directly; other pixel
-    formats are converted to grey.
+    formats are converted to grey. Damaged data does not end the pass: a packet
+    that fails to decode is skipped, and the frames after it up to the next key
+    frame (decoded from broken references) are *damaged*: left out, or with
+    ``damaged=True`` yielded with ``Y = None``. A container that breaks off
+    (truncated file) ends the pass there. ``report``, if given, receives
+    ``failed_packets``, ``damaged_frames`` and ``stopped_early`` (a sentence or None).
     """
     container = _open(path)
+    counts = {"failed_packets": 0, "damaged_frames": 0, "stopped_early": None}
     try:
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
@@ -121,25 +181,48 @@ def iter_luma(path: Path, keyframes_only: bool = False) -> Iterator[tuple[int, f
         start = None
         planar = None
         index = 0
-        try:
-            for frame in container.decode(stream):
+        broken = False  # a packet failed: frames are unreliable until the next key frame
+        packets = container.demux(stream)
+        while True:
+            try:
+                packet = next(packets)
+            except StopIteration:
+                break
+            except Exception:
+                counts["stopped_early"] = (
+                    f"{path}: the container is damaged after frame {index}; the rest is unreadable"
+                )
+                break
+            try:
+                frames = packet.decode()
+            except Exception:
+                counts["failed_packets"] += 1
+                broken = True
+                continue
+            for frame in frames:
                 if frame.pts is None:
                     continue
                 if start is None:
                     start = frame.pts
                     fmt = frame.format.name
                     planar = fmt in ("gray", "gray8") or fmt.startswith(("yuv", "yuvj", "nv12"))
+                if frame.key_frame and not getattr(frame, "is_corrupt", False):
+                    broken = False
+                if broken or getattr(frame, "is_corrupt", False):
+                    counts["damaged_frames"] += 1
+                    if damaged:
+                        yield index, (frame.pts - start) * tb, None
+                        index += 1
+                    continue
                 y = luma(frame) if planar else frame.to_ndarray(format="gray")
                 yield index, (frame.pts - start) * tb, y
                 index += 1
-        except VideoError:
-            raise
-        except Exception as exc:
-            raise VideoError(f"{path}: decoding failed after {index} frames ({exc})") from exc
-        if index == 0:
-            raise VideoError(f"{path}: no frame could be decoded")
+        if index == 0 or index == counts["damaged_frames"]:
+            raise VideoError(f"{path}: no frame could be decoded (damaged video data); copy the file again")
     finally:
         container.close()
+        if report is not None:
+            report.update(counts)
 
 
 def contact_sheet(path: Path, n_tiles: int = 12, tile_width_px: int = 320) -> np.ndarray:

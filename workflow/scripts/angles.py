@@ -6,7 +6,7 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.geometry import angles_from_track, angles_from_tracker_csv, off_rig_circle
+from pendulum.geometry import angles_from_track, angles_from_tracker_csv, off_rig_circle, read_tracker_csv
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
 
@@ -27,7 +27,7 @@ def work():
         source = sm.input.table
         vertical = settings["vertical_deg"] if settings["vertical_deg"] is not None else 0.0
         table, info = angles_from_tracker_csv(
-            pd.read_csv(source), vertical_deg=vertical, length_m=length_m, source=source
+            read_tracker_csv(source), vertical_deg=vertical, length_m=length_m, source=source
         )
     else:
         require_ok(read_json(sm.input.track_summary), "tracks")

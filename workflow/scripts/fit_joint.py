@@ -43,6 +43,7 @@ def work():
             settings,
             tolerances=sm.params.tolerances[n],
             angle_info=angle_info[n],
+            source=angles[n],
         )
         for n in names
     ]

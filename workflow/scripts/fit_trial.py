@@ -27,6 +27,7 @@ def work():
         settings,
         tolerances=sm.params.tolerances,
         angle_info=angle_info,
+        source=sm.input.angles,
     )
     log.info("trial %s, variant %s (%s): %d samples", trial, variant, "+".join(sm.params.terms), record.n_samples)
     fit = fit_trials([record], sm.params.terms, settings)

@@ -34,8 +34,12 @@ def work():
         "dropped_frames": int(timeline.dropped_before.sum()),
         "duplicate_timestamps": int(timeline.duplicate_time.sum()),
         "keyframes": int(timeline.keyframe.sum()),
+        "stated_frames": info.stated_frames,
+        "warnings": list(info.warnings),
     }
     log.info("%s: %s", video, summary)
+    for warning in info.warnings:
+        log.warning("%s", warning)
     if summary["dropped_frames"] or summary["duplicate_timestamps"]:
         log.warning(
             "%s: %d dropped frame(s), %d duplicate timestamp(s)",

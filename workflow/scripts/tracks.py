@@ -23,6 +23,8 @@ started = time.perf_counter()
 def work():
     track = track_video(video, settings, progress=log.info)
     flags = track.flag.value_counts().to_dict()
+    if track.attrs.get("video", {}).get("stopped_early"):
+        log.warning("%s", track.attrs["video"]["stopped_early"])
     write_csv(track, sm.output.track)
     write_json(
         {
@@ -30,6 +32,8 @@ def work():
             "status": "ok",
             "n_frames": int(len(track)),
             "flags": {k: int(v) for k, v in sorted(flags.items())},
+            "exposure_fraction": track.attrs.get("exposure_fraction"),
+            "decoder": track.attrs.get("video", {}),
             "settings": settings.__dict__,
         },
         sm.output.summary,
