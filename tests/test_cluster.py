@@ -2,26 +2,20 @@
 
 import shutil
 
-import yaml
-
 from conftest import DEMO_RAW
-from workflow_run import copy_project, digest, run
-
-ONE_VARIANT = {"variants": {"quadratic": ["quadratic_drag"]}}
+from workflow_run import copy_project, digest, one_variant, run
 
 
 def small_project(work):
     """One demo video, one variant: every rule of the workflow, few jobs."""
-    copy_project(work, raw_files=[DEMO_RAW / "demo_p20.mp4"])
-    (work / "small.yaml").write_text(yaml.safe_dump(ONE_VARIANT))
-    return work
+    return one_variant(copy_project(work, raw_files=[DEMO_RAW / "demo_p20.mp4"]))
 
 
 def test_local_cluster_profile_gives_the_local_runs_bytes(tmp_path):
     local = small_project(tmp_path / "local")
     cluster = small_project(tmp_path / "cluster")
-    run(["-c2", "--configfile", "small.yaml"], local)
-    proc = run(["--profile", "profiles/local-cluster", "--configfile", "small.yaml"], cluster)
+    run(["-c2"], local)
+    proc = run(["--profile", "profiles/local-cluster"], cluster)
     assert "Submitted job" in proc.stdout + proc.stderr, "jobs did not go through the cluster executor"
     produced = digest(cluster / "results")
     assert len(produced) > 10 and produced == digest(local / "results")
@@ -30,5 +24,5 @@ def test_local_cluster_profile_gives_the_local_runs_bytes(tmp_path):
 
 def test_slurm_profile_plans_the_workflow(tmp_path):
     work = small_project(tmp_path / "slurm")
-    proc = run(["--profile", "profiles/slurm", "--configfile", "small.yaml", "-n"], work)
+    proc = run(["--profile", "profiles/slurm", "-n"], work)
     assert "rule tracks" in proc.stdout

@@ -36,6 +36,16 @@ def copy_project(work: Path, raw_files=None) -> Path:
     return work
 
 
+def one_variant(work: Path, variant: str = "quadratic", terms=("quadratic_drag",)) -> Path:
+    """The project's config.yaml with a single model variant (fewer jobs for tests of the machinery)."""
+    import yaml
+
+    config = yaml.safe_load((work / "config.yaml").read_text())
+    config["variants"] = {variant: list(terms)}
+    (work / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+    return work
+
+
 def planned_wildcards(dry_run_output: str) -> list[tuple[str, dict]]:
     """(rule, {wildcard: value}) of every job in a dry run (jobs without wildcards: empty dict)."""
     jobs, rule, wildcards = [], None, {}

@@ -1,0 +1,217 @@
+"""The sections a reader checks the results by: header, truth, tracking quality, failed trials, provenance."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pendulum.report_data import ReportData, failure_text, is_ok, true_value
+from pendulum.report_format import COEFFICIENTS, _finite, _minus, esc, estimate_cell, fmt, png_data_uri, table_html, td
+
+
+class CheckSections(ReportData):
+    """What was built from which code, the synthetic truth, tracking quality, failures and provenance."""
+
+    def header(self) -> str:
+        p = self.provenance
+        commit = p.get("commit")
+        built = (
+            f"Code: commit <code>{esc(commit[:12])}</code> of {esc(str(p.get('commit_time_utc')))}"
+            + (' <span class="warn">with uncommitted changes</span>' if p.get("dirty") else "")
+            if commit
+            else 'Code: <span class="warn">version not recorded (not built from a git commit)</span>'
+        )
+        n_failed = len(self.failed_trials())
+        return (
+            "<header><h1>Free-decay pendulum: added mass and drag coefficient</h1>"
+            f'<p class="subtitle">{len(self.trials)} trial(s) on {len(self.rig_names)} rig(s), '
+            f"{len(self.variants)} model variant(s) fitted side by side"
+            + (f', <span class="warn">{n_failed} trial(s) failed</span>' if n_failed else "")
+            + f". {built}.</p>"
+            '<p class="subtitle">Equation of motion: (I<sub>p</sub> + m<sub>a</sub>L²) θ̈ = −(mg − B) L sin θ '
+            "− ½ρC<sub>d</sub>AL³ θ̇|θ̇| − c θ̇ − τ<sub>f</sub> sgn θ̇; each variant keeps a subset of the "
+            "damping terms. Intervals are 95 % (statistical and rig-value systematic errors combined).</p></header>"
+        )
+
+    def truth_section(self) -> str:
+        """Joint estimates against the synthetic truth: error in standard errors, coverage of the 95 % intervals."""
+        if not self.truth:
+            return (
+                "<p>No truth files (<code>truth_dir</code>): these are real records, so the estimates cannot be "
+                "checked against known values.</p>"
+            )
+        rows, seen = [], set()
+        for rig in self.rig_names:
+            trials = [t for t in self.rig_trials(rig) if t in self.truth]
+            if not trials:
+                continue
+            for v in self.order:
+                joint = self.joint.get((v, rig))
+                if not is_ok(joint):
+                    continue
+                for name, entry in joint["parameters"].items():
+                    truth = self._truth_text(trials, name)
+                    values = {true_value(self.truth[t], name) for t in trials} - {None}
+                    if len(values) != 1:
+                        continue
+                    true = values.pop()
+                    z = (entry["value"] - true) / entry["stderr"] if entry.get("stderr") else float("nan")
+                    inside = entry["ci95"][0] <= true <= entry["ci95"][1]
+                    covered = sum(
+                        1
+                        for t in trials
+                        if is_ok(self.fits.get((v, t)))
+                        and name in self.fits[(v, t)]["parameters"]
+                        and self.fits[(v, t)]["parameters"][name]["ci95"][0]
+                        <= true
+                        <= self.fits[(v, t)]["parameters"][name]["ci95"][1]
+                    )
+                    n_fit = sum(1 for t in trials if is_ok(self.fits.get((v, t))))
+                    first = (rig, v) not in seen
+                    seen.add((rig, v))
+                    rows.append(
+                        [
+                            td(esc(rig) if first else ""),
+                            td(esc(v) if first else "", "vname"),
+                            td(f"{COEFFICIENTS[name][1]}, {COEFFICIENTS[name][0]}"),
+                            td(esc(truth), "num"),
+                            estimate_cell(entry),
+                            td(esc(_minus(f"{z:+.2f}" if abs(z) >= 0.005 else "0.00")) if _finite(z) else "—", "num"),
+                            td("yes" if inside else '<span class="warn">no</span>'),
+                            td(f"{covered} of {n_fit}", "num"),
+                        ]
+                    )
+        header = [
+            "rig",
+            "variant",
+            "coefficient",
+            "truth",
+            "joint estimate (95 %)",
+            "(estimate − truth)/σ",
+            "truth inside",
+            "per-trial intervals covering truth",
+        ]
+        caption = self.table_caption(
+            "The synthetic experiment: each variant's joint estimate against the true value the videos were "
+            "rendered with, the error in units of the estimate's combined standard error σ, and how many of the "
+            "per-trial 95 % intervals cover the truth. Only a variant that contains every effect of the simulation "
+            "can be expected to cover it."
+        )
+        return table_html(header, rows, caption=caption, table_id="truth-table")
+
+    def tracking_section(self) -> str:
+        """Per trial: frames, flags by kind, samples used; then the contact sheets."""
+        rows, sheets = [], []
+        variant_for = {t: self.recommended(self.trials[t]["rig"]) for t in self.trials}
+        for trial in self.trial_order():
+            frames, tracks, angles = (self.docs.get((trial, k)) for k in ("frames", "tracks", "angles"))
+            kind = self.trials[trial].get("kind", "video")
+            if kind != "video":
+                frame_cells = [td("angle table (no video)", "na", span=4)]
+            elif not is_ok(frames):
+                frame_cells = [td(esc(failure_text(frames)), "na fail", span=4)]
+            else:
+                frame_cells = [
+                    td(str(frames.get("n_frames", "—")), "num"),
+                    td(esc(fmt(frames.get("nominal_fps"), 3)), "num"),
+                    td(str(frames.get("dropped_frames", "—")), "num"),
+                    td(str(frames.get("duplicate_timestamps", "—")), "num"),
+                ]
+            if kind != "video":
+                flag_cell = td("—", "na")
+            elif is_ok(tracks):
+                flags = tracks.get("flags") or {}
+                bad = {k: n for k, n in sorted(flags.items()) if k != "ok" and n}
+                flag_cell = td(f"ok {flags.get('ok', 0)}" + "".join(f", {esc(k)} {n}" for k, n in bad.items()))
+            else:
+                flag_cell = td(esc(failure_text(tracks)), "na fail")
+            if is_ok(angles):
+                angle_cells = [
+                    td(str(angles.get("n_samples", "—")), "num"),
+                    td(str(angles.get("n_flagged", "—")), "num"),
+                    td(esc(fmt(angles.get("noise_deg"), 2)), "num"),
+                ]
+            else:
+                angle_cells = [td(esc(failure_text(angles)), "na fail", span=3)]
+            fit = self.fits.get((variant_for[trial], trial)) if variant_for[trial] else None
+            fitted = td(str(fit["n_samples"]), "num") if is_ok(fit) else td("—", "na")
+            rows.append(
+                [td(esc(trial)), td(self.angle_label(trial), "num")]
+                + frame_cells
+                + [flag_cell]
+                + angle_cells
+                + [fitted]
+            )
+            sheet = self.files.get("trials", {}).get(trial, {}).get("contact_sheet")
+            if sheet and Path(sheet).is_file():
+                sheets.append((trial, Path(sheet).read_bytes(), is_ok(frames)))
+        header = [
+            "trial",
+            "release",
+            "frames",
+            "fps",
+            "dropped",
+            "duplicate time stamps",
+            "tracker flags by kind",
+            "angle samples",
+            "flagged",
+            "angle noise (°)",
+            "samples fitted",
+        ]
+        caption = self.table_caption(
+            "Tracking quality per trial: frames in the video (from the container: dropped frames and duplicate time "
+            "stamps), the tracker's flags by kind (flagged frames are never interpolated), the angle samples from "
+            "release to rest and how many of them are flagged, the angle record's noise, and the samples the "
+            "recommended variant's fit used (after the release transient and outliers)."
+        )
+        out = table_html(header, rows, caption=caption, table_id="tracking-table")
+        if sheets:
+            caption = self.figure_caption(
+                "Contact sheets: key frames of each video, for a visual check of the scene, marker and lighting."
+            )
+            items = "".join(
+                f'<figure class="sheet"><img src="{png_data_uri(data)}" alt="contact sheet of {esc(t)}">'
+                f"<figcaption>{esc(t)}{'' if ok else ' (failed)'}</figcaption></figure>"
+                for t, data, ok in sheets
+            )
+            out += f'<div class="sheets">{items}</div><p class="figcaption">{caption}</p>'
+        return out
+
+    def failures_section(self) -> str:
+        """Failed or skipped trials with the stage, the reason and the log to read."""
+        failed = self.failed_trials()
+        n = len(self.trials)
+        if failed.empty:
+            return f"<p>All {n} trial(s) succeeded at every stage (<code>results/status/trials.csv</code>).</p>"
+        rows = [
+            [
+                td(esc(str(r.trial))),
+                td(esc(str(r.stage))),
+                td(esc(str(r.reason))),
+                td(f"<code>{esc(str(r.log))}</code>"),
+            ]
+            for r in failed.itertuples()
+        ]
+        caption = self.table_caption(
+            f"{len(failed)} of {n} trial(s) failed and are missing from the tables and the joint fits above: the "
+            "stage where each failed, the reason and the log to read."
+        )
+        return table_html(["trial", "stage", "reason", "log"], rows, caption=caption, table_id="failed-table")
+
+    def provenance_section(self) -> str:
+        """Commit, configuration digest, fit settings and package versions."""
+        p = self.provenance
+        items = [
+            ("commit", f"<code>{esc(str(p.get('commit') or 'not a git work tree'))}</code>"),
+            ("commit time (UTC)", esc(str(p.get("commit_time_utc") or "—"))),
+            ("uncommitted changes", esc({True: "yes", False: "no"}.get(p.get("dirty"), "unknown"))),
+            ("configuration SHA-256", f"<code>{esc(str(p.get('config_sha256') or '—'))}</code>"),
+            ("Python", esc(str(p.get("python") or "—"))),
+        ]
+        items += [(f"{esc(k)}", esc(str(v or "not installed"))) for k, v in sorted((p.get("packages") or {}).items())]
+        items += [(f"fitting.{esc(k)}", esc(str(v))) for k, v in sorted(self.fitting.items())]
+        rows = [[td(k), td(v)] for k, v in items]
+        caption = self.table_caption(
+            "Provenance: the code version, the digest of the configuration as used, the fit settings and the "
+            "versions of the packages the results depend on."
+        )
+        return table_html(["item", "value"], rows, caption=caption, table_id="provenance-table")
