@@ -1,0 +1,90 @@
+"""Snakemake adapter: discovery of the physics the baseline variant misses, for one group (a body or a rig)."""
+
+import json
+from pathlib import Path
+
+import pandas as pd
+
+import _setup  # noqa: F401
+from pendulum.discovery import Discovery, DiscoveryOptions
+from pendulum.findings import EXTINCTION_COLUMNS, RESIDUAL_COLUMNS
+from pendulum.io import script_logger, write_csv, write_json
+from pendulum.records import FitSettings, load_record
+from pendulum.status import empty_table, is_failed, run_stage
+
+sm = snakemake  # noqa: F821
+log = script_logger(sm.log[0], "discovery")
+group = sm.wildcards.group
+settings = FitSettings(**sm.params.fitting)
+
+
+def read_json(path):
+    return json.loads(Path(path).read_text())
+
+
+def work():
+    angles = {Path(p).stem: p for p in sm.input.angles}
+    angle_info = {Path(p).stem: read_json(p) for p in sm.input.angle_info}
+    fits = {Path(p).stem: read_json(p) for p in sm.input.fits}
+    joints = [doc for doc in map(read_json, sm.input.joint) if not is_failed(doc)]
+    trial_rigs = sm.params.trial_rigs
+    excluded = {}
+    for name in sorted(trial_rigs):
+        failed = next((d for d in (angle_info[name], fits[name]) if is_failed(d)), None)
+        if failed:
+            excluded[name] = f"{failed['failed_stage']} failed: {failed['error']}"
+            log.warning("group %s: %s left out (%s)", group, name, excluded[name])
+    names = [n for n in sorted(trial_rigs) if n not in excluded]
+    if not names:
+        raise ValueError(
+            f"group {group}: no trial has a {sm.params.baseline} fit, so there is nothing to discover from"
+        )
+    records = [
+        load_record(
+            pd.read_csv(angles[n]),
+            n,
+            trial_rigs[n]["values"],
+            settings,
+            tolerances=trial_rigs[n]["tolerances"],
+            angle_info=angle_info[n],
+        )
+        for n in names
+    ]
+    log.info("group %s: %d trial(s) on rig(s) %s, baseline %s", group, len(names), sm.params.rigs, sm.params.baseline)
+    run = Discovery(
+        records,
+        [trial_rigs[n]["name"] for n in names],
+        sm.params.terms,
+        sm.params.candidates,
+        settings=settings,
+        options=DiscoveryOptions(alpha=sm.params.alpha),
+        baseline_fits=joints + [fits[n] for n in names],  # reused: start values, nuisance, kept samples
+        noise_deg=[angle_info[n].get("noise_deg") for n in names],
+    )
+    document = run.run()
+    residuals, extinction = run.tables(document)
+    log.info("group %s: %s", group, document["verdict"])
+    write_csv(residuals, sm.output.residuals)
+    write_csv(extinction, sm.output.extinction)
+    write_json(
+        {
+            "group": group,
+            "status": "ok",
+            "rigs": sm.params.rigs,
+            "baseline_variant": sm.params.baseline,
+            "trials": names,
+            "excluded_trials": excluded,
+            "sources": [angles[n] for n in names] + list(sm.input.joint),
+            **document,
+        },
+        sm.output.document,
+    )
+
+
+def write_failed(document):
+    write_csv(empty_table(RESIDUAL_COLUMNS), sm.output.residuals)
+    write_csv(empty_table(EXTINCTION_COLUMNS), sm.output.extinction)
+    write_json({"group": group, "rigs": sm.params.rigs, **document}, sm.output.document)
+
+
+run_stage("discovery", log, work, write_failed)
