@@ -23,6 +23,7 @@ rule check_trials:
         table="results/status/trials.csv",
         summary="results/fits/summary.csv",
         report=lambda wc: report_targets(),  # so that this check runs last
+        discovery=lambda wc: DISCOVERY_TARGETS,
         code=script_code("check_trials.py"),
     output:
         done="results/status/all_trials_ok.txt",
