@@ -280,7 +280,8 @@ def report_project(tmp_path_factory, demo_project):
     start = time.perf_counter()
     proc = run(["-c1", "--forcerun", "report", "results/report/report.html"], work)
     seconds = time.perf_counter() - start
-    assert {rule for rule, _ in planned_wildcards(proc.stdout + proc.stderr)} == {"report"}
+    planned = {rule for rule, _ in planned_wildcards(proc.stdout + proc.stderr)}
+    assert "report" in planned and planned <= {"report", "check_trials", "all"}, planned
     print(f"report rule: {seconds:.1f} s")
     return work
 
