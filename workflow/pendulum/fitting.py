@@ -79,6 +79,22 @@ def typical_scales(model: PendulumModel) -> dict:
     }
 
 
+def bounded_least_squares(residuals, jacobian, x0, lower, tolerance=1e-10, max_evaluations=200):
+    """min ½‖r(x)‖² subject to x ≥ lower (trust-region reflective, Jacobian-scaled): every fit here."""
+    return least_squares(
+        residuals,
+        x0,
+        jac=jacobian,
+        bounds=(lower, np.full(x0.size, np.inf)),
+        x_scale="jac",
+        method="trf",
+        xtol=tolerance,
+        ftol=1e-2 * tolerance,
+        gtol=tolerance,
+        max_nfev=max_evaluations,
+    )
+
+
 class _Problem:
     """Stacked residuals of N trials sharing the physical parameters; x = [p, (θ0, θ̇0, δ) per trial]."""
 
@@ -148,19 +164,7 @@ class _Problem:
 
     def solve(self, x0, lower, tolerance=1e-10):
         self._cache_key = None
-        x0 = np.maximum(x0, lower)
-        return least_squares(
-            self.residuals,
-            x0,
-            jac=self.jacobian,
-            bounds=(lower, np.full(x0.size, np.inf)),
-            x_scale="jac",
-            method="trf",
-            xtol=tolerance,
-            ftol=1e-2 * tolerance,
-            gtol=tolerance,
-            max_nfev=200,
-        )
+        return bounded_least_squares(self.residuals, self.jacobian, np.maximum(x0, lower), lower, tolerance)
 
 
 # ---------------------------------------------------------------------------

@@ -21,6 +21,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from pendulum.effects import ADDED_MASS, TERMS
+from pendulum.fitting import bounded_least_squares
 from pendulum.physics import PendulumModel, simulate
 from pendulum.records import AngleRecord, FitSettings
 from pendulum.uncertainty import (
@@ -189,18 +190,7 @@ class GroupProblem:
         self._key = None
         lower = self.lower_bounds(settings)
         x0 = np.maximum(np.asarray(x0, float), lower)
-        sol = least_squares(
-            self.residuals,
-            x0,
-            jac=self.jacobian,
-            bounds=(lower, np.full(x0.size, np.inf)),
-            x_scale="jac",
-            method="trf",
-            xtol=tolerance,
-            ftol=1e-2 * tolerance,
-            gtol=tolerance,
-            max_nfev=max_evaluations,
-        )
+        sol = bounded_least_squares(self.residuals, self.jacobian, x0, lower, tolerance, max_evaluations)
         finite = np.isfinite(lower)
         active = np.asarray(sol.active_mask) != 0
         active[finite] |= sol.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))
