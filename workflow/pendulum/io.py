@@ -58,6 +58,10 @@ def write_json(document: dict, path) -> None:
     _atomic(path, lambda p: Path(p).write_text(text))
 
 
+def read_json(path) -> dict:
+    return json.loads(Path(path).read_text())
+
+
 def write_text(text: str, path) -> None:
     _atomic(path, lambda p: Path(p).write_text(text))
 

@@ -56,6 +56,19 @@ def require_ok(document: dict, what: str) -> dict:
     return document
 
 
+def fitted_trials(
+    names, angle_info: dict[str, dict], fits: dict[str, dict], log: logging.Logger, context: str
+) -> tuple[list[str], dict[str, str]]:
+    """The trials whose angles and per-trial fit succeeded, and why each other one is left out (logged)."""
+    excluded = {}
+    for name in sorted(names):
+        bad = next((d for d in (angle_info[name], fits[name]) if is_failed(d)), None)
+        if bad:
+            excluded[name] = f"{bad['failed_stage']} failed: {bad['error']}"
+            log.warning("%s: %s left out (%s)", context, name, excluded[name])
+    return [n for n in sorted(names) if n not in excluded], excluded
+
+
 def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_failed: Callable[[dict], None]) -> bool:
     """Run ``work``; on any exception log it and ``write_failed(failed document)`` instead.
 

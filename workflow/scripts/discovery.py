@@ -1,6 +1,5 @@
 """Snakemake adapter: discovery of the physics the baseline variant misses, for one group (a body or a rig)."""
 
-import json
 from pathlib import Path
 
 import pandas as pd
@@ -8,18 +7,14 @@ import pandas as pd
 import _setup  # noqa: F401
 from pendulum.discovery import Discovery, DiscoveryOptions
 from pendulum.findings import EXTINCTION_COLUMNS, RESIDUAL_COLUMNS
-from pendulum.io import script_logger, write_csv, write_json
+from pendulum.io import read_json, script_logger, write_csv, write_json
 from pendulum.records import FitSettings, load_record
-from pendulum.status import empty_table, is_failed, run_stage
+from pendulum.status import empty_table, fitted_trials, is_failed, run_stage
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "discovery")
 group = sm.wildcards.group
 settings = FitSettings(**sm.params.fitting)
-
-
-def read_json(path):
-    return json.loads(Path(path).read_text())
 
 
 def work():
@@ -28,13 +23,7 @@ def work():
     fits = {Path(p).stem: read_json(p) for p in sm.input.fits}
     joints = [doc for doc in map(read_json, sm.input.joint) if not is_failed(doc)]
     trial_rigs = sm.params.trial_rigs
-    excluded = {}
-    for name in sorted(trial_rigs):
-        failed = next((d for d in (angle_info[name], fits[name]) if is_failed(d)), None)
-        if failed:
-            excluded[name] = f"{failed['failed_stage']} failed: {failed['error']}"
-            log.warning("group %s: %s left out (%s)", group, name, excluded[name])
-    names = [n for n in sorted(trial_rigs) if n not in excluded]
+    names, excluded = fitted_trials(trial_rigs, angle_info, fits, log, f"group {group}")
     if not names:
         raise ValueError(
             f"group {group}: no trial has a {sm.params.baseline} fit, so there is nothing to discover from"

@@ -1,15 +1,14 @@
 """Snakemake adapter: one model variant fitted jointly to every trial of one rig that could be fitted."""
 
-import json
 from pathlib import Path
 
 import pandas as pd
 
 import _setup  # noqa: F401
 from pendulum.fitting import fit_joint
-from pendulum.io import script_logger, write_json
+from pendulum.io import read_json, script_logger, write_json
 from pendulum.records import FitSettings, load_record
-from pendulum.status import is_failed, run_stage
+from pendulum.status import fitted_trials, run_stage
 from pendulum.summary import fit_document
 
 sm = snakemake  # noqa: F821
@@ -18,21 +17,11 @@ rig, variant = sm.wildcards.rig, sm.wildcards.variant
 settings = FitSettings(**sm.params.fitting)
 
 
-def read_json(path):
-    return json.loads(Path(path).read_text())
-
-
 def work():
     angles = {Path(p).stem: p for p in sm.input.angles}
     angle_info = {Path(p).stem: read_json(p) for p in sm.input.angle_info}
     fits = {Path(p).stem: read_json(p) for p in sm.input.fits}
-    excluded = {}
-    for name in sorted(sm.params.trial_rigs):
-        failed = next((d for d in (angle_info[name], fits[name]) if is_failed(d)), None)
-        if failed:
-            excluded[name] = f"{failed['failed_stage']} failed: {failed['error']}"
-            log.warning("rig %s, variant %s: %s left out (%s)", rig, variant, name, excluded[name])
-    names = [n for n in sorted(sm.params.trial_rigs) if n not in excluded]
+    names, excluded = fitted_trials(sm.params.trial_rigs, angle_info, fits, log, f"rig {rig}, variant {variant}")
     if not names:
         raise ValueError(f"rig {rig}: no trial could be fitted with variant {variant}, so there is no joint fit")
     records = [
