@@ -123,7 +123,7 @@ def test_one_body_on_two_rigs_names_the_history_force_and_leaves_out_a_failed_tr
     config["rigs"]["short_arm"] = {**config["rigs"]["paper_rig"], "length_m": 0.40}
     config["bodies"] = {"rov": ["paper_rig", "short_arm"]}
     (work / "config.yaml").write_text(yaml.safe_dump(config))
-    run(["-c2", "results/discovery/rov.json"], work)
+    run(["-c2", "results/discovery/rov.json", "results/fits/linear/body/rov.json"], work)
     doc = json.loads((work / "results/discovery/rov.json").read_text())
     assert (
         doc["group"] == "rov" and doc["rigs"] == ["paper_rig", "short_arm"] and doc["trials"] == ["long_a", "short_a"]
@@ -134,6 +134,13 @@ def test_one_body_on_two_rigs_names_the_history_force_and_leaves_out_a_failed_tr
     low, high = doc["parameters"]["history_coefficient_kg_per_sqrt_s"]["ci95"]
     assert low <= 0.2 <= high
     assert doc["verdict"].startswith("missing effect: Basset–Boussinesq history force, K_h = 0.")
+    # the body fit of a variant: one added mass and drag area, each rig's own linear damping
+    body = json.loads((work / "results/fits/linear/body/rov.json").read_text())
+    assert body["status"] == "ok" and body["rigs"] == ["paper_rig", "short_arm"]
+    assert sorted(body["trials"]) == ["long_a", "short_a"] and "broken" in body["excluded_trials"]
+    assert {"added_mass_kg", "drag_area_m2", "linear_damping_nm_s[paper_rig]", "linear_damping_nm_s[short_arm]"} <= set(
+        body["parameters"]
+    )
     # a body naming a rig that does not exist stops the run before any job, naming it
     config["bodies"] = {"rov": ["paper_rig", "shortarm"]}
     (work / "config.yaml").write_text(yaml.safe_dump(config))

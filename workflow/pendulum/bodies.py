@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import pandas as pd
+
+from pendulum.records import AngleRecord, FitSettings, load_record
 from pendulum.trials import ConfigError, Trial, rig_name, rig_trials, trial_settings
 
 DISCOVERY_DEFAULTS = {
@@ -77,3 +80,27 @@ def group_trial_rigs(config: dict, trials: dict[str, Trial], groups: dict, group
             "tolerances": settings["tolerances"],
         }
     return out
+
+
+def body_groups(config: dict, trials: dict[str, Trial]) -> dict[str, list[str]]:
+    """Body name → its rigs that have trials, for the bodies of config ``bodies`` (their joint body fits)."""
+    bodies = config.get("bodies") or {}
+    return {g: rigs for g, rigs in discovery_groups(config, trials).items() if g in bodies}
+
+
+def group_records(
+    names: list[str], angle_paths: dict, angle_info: dict, trial_rigs: dict, settings: FitSettings
+) -> list[AngleRecord]:
+    """The fit records of a group's trials, each with its own rig's values and tolerances (:func:`group_trial_rigs`)."""
+    return [
+        load_record(
+            pd.read_csv(angle_paths[n]),
+            n,
+            trial_rigs[n]["values"],
+            settings,
+            tolerances=trial_rigs[n]["tolerances"],
+            angle_info=angle_info[n],
+            source=angle_paths[n],
+        )
+        for n in names
+    ]

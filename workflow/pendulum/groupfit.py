@@ -340,3 +340,42 @@ def coefficient_entries(fit: GroupFit, settings: FitSettings, tolerances: dict) 
                 out[label], fit.problem.records[0].rig.frontal_area_m2, tolerances.get("frontal_area_m2", 0.0)
             )
     return out, warnings
+
+
+def fit_body(records: list[AngleRecord], rigs: list[str], terms, documents: list[dict], settings: FitSettings) -> dict:
+    """One model fitted jointly to every trial of one body swung on several rigs (config ``bodies``).
+
+    The body's coefficients (added mass m_a in kg, drag area C_d·A in m², history
+    coefficient K_h) are shared by all trials; linear damping c and Coulomb
+    friction τ_f are each rig's own (``parameter[rig]``). Starts from the per-rig
+    joint and per-trial ``documents``; coefficients are reported as the fit
+    documents report them (statistical, systematic and combined error, 95 % interval).
+    """
+    values, nuisance, masks = start_values(records, rigs, documents)
+    problem = GroupProblem(records, rigs, ordered(terms), masks, settings.max_step_s)
+    fit = problem.solve(problem.start(values, nuisance), settings)
+    entries, warnings = coefficient_entries(fit, settings, records[0].tolerances)
+    if not fit.converged:
+        warnings.append("the body fit did not converge")
+    trials = {}
+    for k, record in enumerate(records):
+        theta0, omega0, offset = fit.nuisance(k)
+        trials[record.trial] = {
+            "rig": rigs[k],
+            "theta0_deg": math.degrees(theta0),
+            "omega0_deg_s": math.degrees(omega0),
+            "rest_offset_deg": math.degrees(offset),
+            "rms_deg": math.degrees(math.sqrt(np.mean(fit.residuals[k] ** 2))),
+            "n_samples": int(fit.residuals[k].size),
+        }
+    return {
+        "terms": list(problem.terms),
+        "rigs": problem.rigs,
+        "parameters": entries,
+        "trials": trials,
+        "rms_deg": math.degrees(fit.rms_rad),
+        "n_samples": fit.n,
+        "converged": fit.converged,
+        "evaluations": fit.evaluations,
+        "warnings": warnings,
+    }

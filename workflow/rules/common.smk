@@ -7,6 +7,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(workflow.basedir) / "workflow"))
 
+from pendulum.bodies import body_groups, group_trial_rigs, group_trials  # noqa: E402
 from pendulum.provenance import config_digest, git_state, package_versions  # noqa: E402
 from pendulum.trials import (  # noqa: E402
     GEOMETRY_KEYS,
@@ -31,6 +32,7 @@ validate_config(
 
 TRIALS = discover_trials(config["raw_dir"])
 VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
+BODIES = body_groups(config, TRIALS)  # body → its rigs with trials (config `bodies`)
 RIGS_NEEDING_GEOMETRY = sorted(
     {
         rig_name(config, TRIALS[n])
@@ -67,6 +69,7 @@ def all_targets():
                 f"results/fits/{variant}/{name}.cycles.csv",
             ]
         targets += joint_fits(variant)
+        targets += body_fits(variant)
     if TRIALS:
         targets.append("results/fits/summary.csv")
     targets += DISCOVERY_TARGETS  # workflow/rules/discovery.smk
@@ -161,6 +164,16 @@ def joint_fits(variant):
         f"results/fits/{variant}/joint/{rig}.json"
         for rig in sorted(rig_trials(config, TRIALS))
     ]
+
+
+def body_fits(variant):
+    """The joint body fits of one variant: one file per body of config `bodies` with trials."""
+    return [f"results/fits/{variant}/body/{body}.json" for body in sorted(BODIES)]
+
+
+def body_trials(wildcards):
+    """Trials of a body's rigs (the inputs of its body fit)."""
+    return group_trials(config, TRIALS, BODIES, wildcards.body)
 
 
 def joint_trials(wildcards):

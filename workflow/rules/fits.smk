@@ -88,3 +88,31 @@ rule fit_summary:
         variants=sorted(config["variants"]),
     script:
         "../scripts/fit_summary.py"
+
+
+rule fit_body:
+    """One variant fitted jointly to every trial of one body on its rigs (config `bodies`): m_a, C_d·A, K_h shared."""
+    input:
+        angles=lambda wc: [f"results/angles/{n}.csv" for n in body_trials(wc)],
+        angle_info=lambda wc: [f"results/angles/{n}.json" for n in body_trials(wc)],
+        fits=lambda wc: [f"results/fits/{wc.variant}/{n}.json" for n in body_trials(wc)],
+        joint=lambda wc: [
+            f"results/fits/{wc.variant}/joint/{rig}.json" for rig in BODIES[wc.body]
+        ],
+        code=script_code("fit_body.py"),
+    output:
+        body="results/fits/{variant}/body/{body}.json",
+    log:
+        "logs/fits/{variant}/body/{body}.log",
+    wildcard_constraints:
+        body=r"[A-Za-z0-9_.+-]+",
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=120,
+    params:
+        terms=variant_terms,
+        trial_rigs=lambda wc: group_trial_rigs(config, TRIALS, BODIES, wc.body),
+        fitting=config["fitting"],
+    script:
+        "../scripts/fit_body.py"

@@ -2,13 +2,12 @@
 
 from pathlib import Path
 
-import pandas as pd
-
 import _setup  # noqa: F401
+from pendulum.bodies import group_records
 from pendulum.discovery import Discovery, DiscoveryOptions
 from pendulum.findings import EXTINCTION_COLUMNS, RESIDUAL_COLUMNS
 from pendulum.io import read_json, script_logger, write_csv, write_json
-from pendulum.records import FitSettings, load_record
+from pendulum.records import FitSettings
 from pendulum.status import empty_table, fitted_trials, is_failed, run_stage
 
 sm = snakemake  # noqa: F821
@@ -28,17 +27,7 @@ def work():
         raise ValueError(
             f"group {group}: no trial has a {sm.params.baseline} fit, so there is nothing to discover from"
         )
-    records = [
-        load_record(
-            pd.read_csv(angles[n]),
-            n,
-            trial_rigs[n]["values"],
-            settings,
-            tolerances=trial_rigs[n]["tolerances"],
-            angle_info=angle_info[n],
-        )
-        for n in names
-    ]
+    records = group_records(names, angles, angle_info, trial_rigs, settings)
     log.info("group %s: %d trial(s) on rig(s) %s, baseline %s", group, len(names), sm.params.rigs, sm.params.baseline)
     run = Discovery(
         records,
