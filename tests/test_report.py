@@ -382,8 +382,8 @@ def test_the_report_renders_in_chromium_with_every_image_and_table3_complete(rep
 
     trials = demo_trials()
     variants = ("friction", "linear", "quadratic")
-    # figures: one per trial, consistency, extinction; one contact sheet per video
-    assert len(result["images"]) == len(trials) + 2 + len(trials), result["images"]
+    # figures: one per trial, consistency, extinction, discovery's residuals and extinction; one contact sheet per video
+    assert len(result["images"]) == len(trials) + 4 + len(trials), result["images"]
     for alt, complete, width, height in result["images"]:
         assert complete and width > 0 and height > 0, alt
     assert sorted(map(tuple, result["table3"])) == sorted((t, v) for t in trials for v in variants)
@@ -396,6 +396,7 @@ def test_the_report_renders_in_chromium_with_every_image_and_table3_complete(rep
         "consistency",
         "extinction",
         "model-comparison",
+        "discovery",
         "truth",
         "tracking",
         "failed-trials",

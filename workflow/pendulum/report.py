@@ -10,7 +10,8 @@ PNG without a software stamp, the executed notebook carries no timestamps and
 fixed cell ids.
 
 The sections live in groups, one module each: ``report_tables`` (Tables 1–3),
-``report_figures``, ``report_comparison`` (summary box, model comparison) and
+``report_figures``, ``report_comparison`` (summary box, model comparison),
+``report_discovery`` (the physics the baseline misses, per group) and
 ``report_checks`` (header, truth, tracking, failures, provenance), over
 ``report_data`` (the results, read once) and ``report_format`` (names, numbers,
 HTML pieces). This module puts them together and runs the notebook.
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 from pendulum.report_checks import CheckSections
 from pendulum.report_comparison import ComparisonSections
+from pendulum.report_discovery import DiscoverySections
 from pendulum.report_figures import FigureSections
 from pendulum.report_format import esc
 from pendulum.report_tables import TableSections
@@ -28,7 +30,7 @@ from pendulum.report_tables import TableSections
 # The report
 
 
-class Report(ComparisonSections, TableSections, FigureSections, CheckSections):
+class Report(ComparisonSections, TableSections, FigureSections, DiscoverySections, CheckSections):
     """The report's sections as HTML, one method per notebook cell; its fields and look-ups: ``ReportData``."""
 
 
@@ -88,6 +90,8 @@ figure.sheet { margin: 0; }
 figure.sheet img { width: 100%; height: auto; display: block; border: 1px solid var(--rule); }
 figure.sheet figcaption { text-align: center; }
 details.fit-warnings { font-size: 0.82rem; color: var(--muted); margin: -8px 0 16px; }
+p.discovery-verdict { border-left: 4px solid #0072B2; background: #f3f8fc; padding: 6px 12px; max-width: 1060px; }
+p.discovery-ending { border-left: 4px solid var(--warn); padding: 4px 12px; max-width: 1060px; }
 details.fit-warnings li { margin: 2px 0; }
 @media print {
   html { font-size: 10pt; }

@@ -328,6 +328,15 @@ def report_files():
             v: {rig: f"results/fits/{v}/joint/{rig}.json" for rig in rigs}
             for v in variants
         },
+        # the discovery rule's outputs (DISCOVERY_GROUPS, DISCOVERY_TARGETS: discovery.smk)
+        "discovery": {
+            g: {
+                "document": f"results/discovery/{g}.json",
+                "residuals": f"results/discovery/{g}.residuals.csv",
+                "extinction": f"results/discovery/{g}.extinction.csv",
+            }
+            for g in sorted(DISCOVERY_GROUPS)
+        },
     }
 
 
