@@ -8,7 +8,9 @@ fitted model lacks, and optionally with effects outside the library
 image; for angle tables a drifting zero). The renderer draws a monochrome camera view: a textured,
 cluttered tank background, the pivot, the rod, the vehicle and a circular
 marker dot; the exposure blur is the average of sub-exposure renders; sensor
-noise is added before lossy H.264 compression.
+noise is added before lossy H.264 compression. Real footage's faults (:class:`Faults`: background
+stripes, letterbox borders, a second moving object, two-tone and shiny bobs, a trimmed clip's
+discarded packets; a long exposure's streak) are off by default, so existing renders stay byte-identical.
 
 Image geometry: x to the right, y down. With the pivot at (x_p, y_p), the
 marker at arm radius R and the camera rolled by φ, the marker is at
@@ -20,7 +22,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import cv2
@@ -49,6 +51,9 @@ class Camera:
     noise_sigma: float = 3.0  # grey levels, before compression
     crf: int = 22  # x264 constant rate factor (lossy compression)
     preset: str = "veryfast"
+    # Largest marker step between sub-exposures: a long exposure gets more sub-exposures (never fewer
+    # than ``exposure_subsamples``) so its streak is smooth. In the truth record only when changed.
+    blur_step_px: float = 1.5
 
 
 @dataclass
@@ -57,6 +62,145 @@ class Occlusions:
 
     fraction_of_frames: float = 0.0
     event_frames: int = 6
+
+
+@dataclass
+class Stripes:
+    """Flat bands across the background with hard edges the marker crosses (a striped wall, tile joints).
+
+    A pixel is in a band when u − offset_px, with u = x cos a + y sin a (a = ``angle_deg``; 0: vertical
+    bands, u = x), lies in [0, width_px) modulo ``period_px`` (0: one band). Bands are drawn with exact
+    pixel coverage at grey ``level`` (below the scene for dark bands, above for bright).
+    """
+
+    width_px: float = 0.0  # 0: no stripes
+    period_px: float = 0.0
+    offset_px: float = 0.0
+    level: float = 30.0
+    angle_deg: float = 0.0
+
+    @property
+    def active(self) -> bool:
+        return self.width_px > 0
+
+
+@dataclass
+class Letterbox:
+    """Black borders (a phone's letterbox/pillarbox) of the given widths, drawn over everything, noise-free."""
+
+    top_px: int = 0
+    bottom_px: int = 0
+    left_px: int = 0
+    right_px: int = 0
+    level: float = 0.0
+
+    @property
+    def active(self) -> bool:
+        return any((self.top_px, self.bottom_px, self.left_px, self.right_px))
+
+
+@dataclass
+class SecondObject:
+    """Another disk in the scene (a bubble, a swaying float) on a non-circular path; ``path: none`` is off.
+
+    ``linear``: back and forth on the segment start→end, p = start + (end − start)(1 − cos 2πt/T)/2.
+    ``bubble``: rises from start to end in T, then again from start (one bubble at a time), with a
+    sideways wobble w sin(2πt/T_w) across the segment. t is video time; T = ``period_s``. Radius and
+    grey level default to the marker's (same size and polarity). Drawn behind the pendulum unless
+    ``in_front``; exposure-blurred like the marker.
+    """
+
+    path: str = "none"
+    start_px: tuple[float, float] = (0.0, 0.0)
+    end_px: tuple[float, float] = (0.0, 0.0)
+    period_s: float = 2.0
+    radius_px: float | None = None
+    level: float | None = None
+    wobble_px: float = 0.0
+    wobble_period_s: float = 0.5
+    in_front: bool = False
+
+    @property
+    def active(self) -> bool:
+        if self.path not in ("none", "linear", "bubble"):
+            raise ValueError(f"second_object.path must be 'none', 'linear' or 'bubble', got {self.path!r}")
+        return self.path != "none"
+
+    def position_px(self, times_s) -> tuple[np.ndarray, np.ndarray]:
+        """Centre at video times ``times_s`` (arrays allowed)."""
+        t = np.asarray(times_s, float)
+        (x0, y0), (x1, y1) = self.start_px, self.end_px
+        if self.path == "linear":
+            u = 0.5 * (1 - np.cos(2 * np.pi * t / self.period_s))
+            return x0 + u * (x1 - x0), y0 + u * (y1 - y0)
+        u = np.mod(t / self.period_s, 1.0)
+        length = math.hypot(x1 - x0, y1 - y0) or 1.0
+        nx, ny = -(y1 - y0) / length, (x1 - x0) / length  # across the path
+        w = self.wobble_px * np.sin(2 * np.pi * t / self.wobble_period_s)
+        return x0 + u * (x1 - x0) + w * nx, y0 + u * (y1 - y0) + w * ny
+
+
+@dataclass
+class Bob:
+    """The marker's look: plain (default), two-tone and/or shiny.
+
+    ``two_tone``: the half on the +x side of a line through the centre (at ``split_deg`` from the rod,
+    turning with the bob) has grey ``other_level`` (None: the opposite polarity's marker grey).
+    ``highlight_radius_px`` > 0: a specular spot of grey ``highlight_level`` at
+    ``highlight_offset`` marker radii from the centre, in image direction
+    ``highlight_direction_deg + highlight_gain·θ`` (degrees from +x toward +y; gain 0: a sphere under a fixed
+    lamp, the spot stays put while the bob turns under it; gain 1: it turns with the bob).
+    The truth's marker centre is always the disk's geometric centre.
+    """
+
+    two_tone: bool = False
+    other_level: float | None = None
+    split_deg: float = 0.0
+    highlight_radius_px: float = 0.0
+    highlight_level: float = 255.0
+    highlight_offset: float = 0.5
+    highlight_direction_deg: float = -135.0
+    highlight_gain: float = 0.0
+
+    @property
+    def active(self) -> bool:
+        return self.two_tone or self.highlight_radius_px > 0
+
+
+@dataclass
+class Faults:
+    """Real-world faults for the tracker and the frames stage; all off by default (renders unchanged).
+
+    ``trimmed_lead_frames``: the video file holds this many extra frames before its first shown
+    frame, as packets an MP4 edit list tells the decoder to discard (a phone's trimmed clip); the
+    truth describes the shown frames only (frame 0 at time 0).
+    """
+
+    stripes: Stripes = field(default_factory=Stripes)
+    letterbox: Letterbox = field(default_factory=Letterbox)
+    second_object: SecondObject = field(default_factory=SecondObject)
+    bob: Bob = field(default_factory=Bob)
+    trimmed_lead_frames: int = 0
+
+    @property
+    def active(self) -> bool:
+        parts = (self.stripes, self.letterbox, self.second_object, self.bob)
+        return any(p.active for p in parts) or self.trimmed_lead_frames > 0
+
+    @classmethod
+    def from_mapping(cls, values: dict | None) -> Faults:
+        values = dict(values or {})
+        second = dict(values.get("second_object") or {})
+        for key in ("start_px", "end_px"):
+            if key in second:
+                second[key] = tuple(second[key])
+        return cls(
+            stripes=Stripes(**(values.get("stripes") or {})),
+            letterbox=Letterbox(**(values.get("letterbox") or {})),
+            second_object=SecondObject(**second),
+            bob=Bob(**(values.get("bob") or {})),
+            trimmed_lead_frames=int(values.get("trimmed_lead_frames", 0)),
+        )
 
 
 @dataclass(frozen=True)
@@ -114,6 +258,7 @@ class TrialSpec:
     camera: Camera = field(default_factory=Camera)
     occlusions: Occlusions = field(default_factory=Occlusions)
     disturbances: Disturbances = field(default_factory=Disturbances)
+    faults: Faults = field(default_factory=Faults)
 
     @classmethod
     def from_mapping(cls, values: dict) -> TrialSpec:
@@ -127,6 +272,7 @@ class TrialSpec:
         if "pivot_drift_px" in disturbances:
             disturbances["pivot_drift_px"] = tuple(disturbances["pivot_drift_px"])
         values["disturbances"] = Disturbances(**disturbances)
+        values["faults"] = Faults.from_mapping(values.get("faults"))
         return cls(**values)
 
 
@@ -241,7 +387,41 @@ def _draw_disk(canvas, cx, cy, radius, value):
     patch += cover * (value - patch)
 
 
-def _draw_pendulum(canvas, camera: Camera, theta_rad: float, shades: dict, pivot_px=None):
+def _draw_disk_part(canvas, cx, cy, radius, value, normal=None):
+    """As :func:`_draw_disk`, restricted to the half (x − c)·normal ≥ 0 when ``normal`` is given."""
+    x0c, x1c = max(int(math.floor(cx - radius - 2)), 0), min(int(math.ceil(cx + radius + 2)), canvas.shape[1])
+    y0c, y1c = max(int(math.floor(cy - radius - 2)), 0), min(int(math.ceil(cy + radius + 2)), canvas.shape[0])
+    if x0c >= x1c or y0c >= y1c:
+        return
+    offs = (np.arange(4) + 0.5) / 4 - 0.5
+    ys = (np.arange(y0c, y1c)[:, None] + offs[None, :]).reshape(-1)[:, None] - cy
+    xs = (np.arange(x0c, x1c)[:, None] + offs[None, :]).reshape(-1)[None, :] - cx
+    inside = (xs**2 + ys**2) <= radius**2
+    if normal is not None:
+        inside &= xs * normal[0] + ys * normal[1] >= 0
+    cover = inside.reshape(y1c - y0c, 4, x1c - x0c, 4).mean(axis=(1, 3)).astype(np.float32)
+    patch = canvas[y0c:y1c, x0c:x1c]
+    patch += cover * (value - patch)
+
+
+def _draw_bob(canvas, cx, cy, camera: Camera, bob: Bob, phi: float, shades: dict):
+    """The marker disk with a two-tone half and/or a specular highlight (see :class:`Bob`)."""
+    r = camera.marker_radius_px
+    _draw_disk(canvas, cx, cy, r, shades["marker"])
+    if bob.two_tone:
+        other = bob.other_level
+        if other is None:
+            other = _shades(replace(camera, polarity="dark" if camera.polarity == "bright" else "bright"))["marker"]
+        rod = math.atan2(math.cos(phi), math.sin(phi)) + math.radians(bob.split_deg)  # line direction in the image
+        _draw_disk_part(canvas, cx, cy, r, float(other), (math.sin(rod), -math.cos(rod)))
+    if bob.highlight_radius_px > 0:
+        direction = math.radians(bob.highlight_direction_deg + bob.highlight_gain * math.degrees(phi))
+        hx = cx + bob.highlight_offset * r * math.cos(direction)
+        hy = cy + bob.highlight_offset * r * math.sin(direction)
+        _draw_disk(canvas, hx, hy, bob.highlight_radius_px, bob.highlight_level)
+
+
+def _draw_pendulum(canvas, camera: Camera, theta_rad: float, shades: dict, pivot_px=None, bob: Bob | None = None):
     phi = theta_rad + math.radians(camera.roll_deg)
     s, c = math.sin(phi), math.cos(phi)
     px, py = camera.pivot_px if pivot_px is None else pivot_px
@@ -262,7 +442,86 @@ def _draw_pendulum(canvas, camera: Camera, theta_rad: float, shades: dict, pivot
         corners.append(fixed(body_centre[0] + lx * c + ly * s, body_centre[1] - lx * s + ly * c))
     cv2.fillConvexPoly(canvas, np.array(corners, np.int32), shades["body"], cv2.LINE_AA, shift)
     cv2.circle(canvas, fixed(px, py), 14 * scale, shades["hub"], -1, cv2.LINE_AA, shift)
-    _draw_disk(canvas, body_centre[0], body_centre[1], camera.marker_radius_px, shades["marker"])
+    if bob is None or not bob.active:
+        _draw_disk(canvas, body_centre[0], body_centre[1], camera.marker_radius_px, shades["marker"])
+    else:
+        _draw_bob(canvas, body_centre[0], body_centre[1], camera, bob, phi, shades)
+
+
+def stripe_coverage(shape: tuple[int, int], stripes: Stripes) -> np.ndarray:
+    """Fraction of each pixel inside a band of ``stripes`` (4×4 supersampled; float32, shape (h, w))."""
+    h, w = shape
+    offs = (np.arange(4) + 0.5) / 4 - 0.5
+    a = math.radians(stripes.angle_deg)
+    cover = np.zeros((h, w), np.float32)
+    ys = np.arange(h, dtype=np.float64)[:, None]
+    xs = np.arange(w, dtype=np.float64)[None, :]
+    for dy in offs:
+        for dx in offs:
+            u = (xs + dx) * math.cos(a) + (ys + dy) * math.sin(a) - stripes.offset_px
+            if stripes.period_px > 0:
+                u = np.mod(u, stripes.period_px)
+            cover += ((u >= 0) & (u < stripes.width_px)).astype(np.float32)
+    return cover / 16.0
+
+
+def letterbox_mask(shape: tuple[int, int], letterbox: Letterbox) -> np.ndarray:
+    """Boolean (h, w) mask of the letterbox borders."""
+    h, w = shape
+    mask = np.zeros((h, w), bool)
+    mask[: letterbox.top_px, :] = True
+    mask[h - letterbox.bottom_px :, :] = True
+    mask[:, : letterbox.left_px] = True
+    mask[:, w - letterbox.right_px :] = True
+    return mask
+
+
+def _disk_halfplane_fraction(radius: float, distance: float) -> float:
+    """Fraction of a disk beyond a straight edge at signed ``distance`` from its centre (> 0: centre inside)."""
+    d = max(-radius, min(radius, distance))
+    if d >= radius:
+        return 0.0
+    segment = radius**2 * math.acos(d / radius) - d * math.sqrt(radius**2 - d**2)
+    return segment / (math.pi * radius**2)
+
+
+def letterbox_covered_fraction(camera: Camera, letterbox: Letterbox, x: float, y: float) -> float:
+    """Fraction of the marker disk at (x, y) hidden under the letterbox (edges summed, capped at 1)."""
+    r, w, h = camera.marker_radius_px, camera.width_px, camera.height_px
+    distances = [y - letterbox.top_px, (h - letterbox.bottom_px) - y, x - letterbox.left_px]
+    distances.append((w - letterbox.right_px) - x)
+    widths = (letterbox.top_px, letterbox.bottom_px, letterbox.left_px, letterbox.right_px)
+    return min(1.0, sum(_disk_halfplane_fraction(r, d) for d, width in zip(distances, widths, strict=True) if width))
+
+
+def exposure_subsamples(spec: TrialSpec) -> int:
+    """Sub-exposures per frame: ``exposure_subsamples``, raised so no object moves more than ``blur_step_px``
+    between two of them (the streak's length over k sub-exposures spaced by exposure/k)."""
+    cam = spec.camera
+    k = cam.exposure_subsamples
+    streak = float(np.max(streak_length_px(spec, k), initial=0.0))
+    second = spec.faults.second_object
+    if second.active:
+        times = frame_times_s(spec)
+        e = cam.exposure_fraction / cam.fps
+        x0, y0 = second.position_px(times - e / 2)
+        x1, y1 = second.position_px(times + e / 2)
+        streak = max(streak, float(np.max(np.hypot(x1 - x0, y1 - y0), initial=0.0)))
+    return max(k, int(math.ceil(streak / cam.blur_step_px)))
+
+
+def streak_length_px(spec: TrialSpec, k: int | None = None) -> np.ndarray:
+    """Marker path length during each frame's exposure (px), from ``k`` sub-exposure positions:
+    the polyline through them scaled by k/(k − 1) (they span (k − 1)/k of the exposure)."""
+    cam = spec.camera
+    k = cam.exposure_subsamples if k is None else k
+    times = frame_times_s(spec)
+    e = cam.exposure_fraction / cam.fps
+    sub = times[:, None] + (((np.arange(k) + 0.5) / k - 0.5) * e)[None, :]
+    x, y = marker_position_px(cam, true_angle_rad(spec, sub.reshape(-1)).reshape(sub.shape))
+    if k < 2:
+        return np.zeros(times.size)
+    return np.hypot(np.diff(x, axis=1), np.diff(y, axis=1)).sum(axis=1) * k / (k - 1)
 
 
 def occlusion_schedule(spec: TrialSpec, n_frames: int, first_frame: int) -> list[tuple[int, int]]:
@@ -279,18 +538,30 @@ def occlusion_schedule(spec: TrialSpec, n_frames: int, first_frame: int) -> list
 
 @dataclass
 class RenderedTrial:
-    frames: list  # uint8 grey frames
-    truth: pd.DataFrame  # per-frame truth
+    frames: list  # uint8 grey frames (the shown frames)
+    truth: pd.DataFrame  # per-frame truth of the shown frames
+    lead_frames: list = field(default_factory=list)  # frames before the first shown one (trimmed clip)
 
 
 def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
-    """Render every frame of a trial and return it with its per-frame truth."""
+    """Render every frame of a trial and return it with its per-frame truth.
+
+    With faults (:class:`Faults`) the truth gains columns: ``streak_px`` (marker path length
+    during the exposure), ``second_x_px``/``second_y_px`` (the second object's exposure-mean centre),
+    and ``occluded_fraction`` counts the letterbox and a second object in front. A bubble wrapping
+    from the end back to the start during a frame's exposure has no centre there (NaN).
+    """
     cam = spec.camera
+    faults = spec.faults
     shades = _shades(cam)
+    n_lead = faults.trimmed_lead_frames
     times = frame_times_s(spec)
+    if n_lead:
+        times = np.concatenate([np.arange(-n_lead, 0) / cam.fps, times])
     n = times.size
     exposure_s = cam.exposure_fraction / cam.fps
-    k = cam.exposure_subsamples
+    k = exposure_subsamples(spec)
+    extras = faults.active or k > cam.exposure_subsamples
     sub_offsets = ((np.arange(k) + 0.5) / k - 0.5) * exposure_s
     sub_times = times[:, None] + sub_offsets[None, :]
     theta_sub = true_angle_rad(spec, sub_times.reshape(-1)).reshape(n, k)
@@ -300,7 +571,7 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     mx, my = marker_position_px(cam, theta_sub, pivot_sub)
     truth = pd.DataFrame(
         {
-            "frame": np.arange(n),
+            "frame": np.arange(n) - n_lead,
             "time_s": times,
             "theta_rad": theta_mid,
             "marker_x_px": mx.mean(axis=1),  # centroid of the exposure-blurred disk
@@ -310,22 +581,46 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     )
     if drifting:
         truth["pivot_x_px"], truth["pivot_y_px"] = pivot_position_px(spec, times)
+    second = faults.second_object
+    second_sub = second.position_px(sub_times) if second.active else None
+    if extras:
+        steps = np.hypot(np.diff(mx, axis=1), np.diff(my, axis=1)).sum(axis=1)
+        truth["streak_px"] = steps * k / (k - 1) if k > 1 else 0.0
+    if second_sub is not None:
+        truth["second_x_px"], truth["second_y_px"] = second_sub[0].mean(axis=1), second_sub[1].mean(axis=1)
+        if second.path == "bubble":  # a bubble leaving at the end and one entering at the start: no one centre
+            cycle = np.floor(sub_times / second.period_s)
+            wraps = cycle[:, 0] != cycle[:, -1]
+            truth.loc[wraps, ["second_x_px", "second_y_px"]] = np.nan
+        second_radius = cam.marker_radius_px if second.radius_px is None else second.radius_px
+        second_level = shades["marker"] if second.level is None else second.level
     background = render_background(cam, spec.seed)
+    if faults.stripes.active:
+        cover = stripe_coverage(background.shape, faults.stripes)
+        background += cover * (np.float32(faults.stripes.level) - background)
+    border = letterbox_mask(background.shape, faults.letterbox) if faults.letterbox.active else None
     rng = np.random.default_rng(spec.seed + 15485863)
     noise_bank = [rng.standard_normal(background.shape).astype(np.float32) * cam.noise_sigma for _ in range(4)]
     release_frame = int(np.searchsorted(times, release_time_s(spec)))
-    events = occlusion_schedule(spec, n, release_frame)
+    schedule = occlusion_schedule(spec, n - n_lead, release_frame - n_lead)
+    events = [(start + n_lead, length) for start, length in schedule]
     occluder_value = 0.5 * (shades["marker"] + shades["body"])
+    bob = faults.bob if faults.bob.active else None
     frames = []
     accum = np.empty_like(background)
     canvas = np.empty_like(background)
     for i in range(n):
-        if i == 0 or drifting or not np.array_equal(theta_sub[i], theta_sub[i - 1]):  # held: reuse the exposure
+        moved = drifting or second_sub is not None or not np.array_equal(theta_sub[i], theta_sub[i - 1])
+        if i == 0 or moved:  # held and nothing else moving: reuse the exposure
             accum.fill(0.0)
             for j in range(k):
                 np.copyto(canvas, background)
                 pivot = None if pivot_sub is None else (pivot_sub[0][i, j], pivot_sub[1][i, j])
-                _draw_pendulum(canvas, cam, float(theta_sub[i, j]), shades, pivot)
+                if second_sub is not None and not second.in_front:
+                    _draw_disk(canvas, second_sub[0][i, j], second_sub[1][i, j], second_radius, second_level)
+                _draw_pendulum(canvas, cam, float(theta_sub[i, j]), shades, pivot, bob)
+                if second_sub is not None and second.in_front:
+                    _draw_disk(canvas, second_sub[0][i, j], second_sub[1][i, j], second_radius, second_level)
                 accum += canvas
             accum /= k
         frame = accum.copy()
@@ -348,10 +643,24 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
                 d = math.hypot(ox - truth.marker_x_px[i], oy - truth.marker_y_px[i])
                 truth.loc[i, "occluded_fraction"] = _disk_overlap_fraction(cam.marker_radius_px, r_occ, d)
         frame += noise_bank[i % len(noise_bank)] if i % 2 == 0 else np.flip(noise_bank[i % len(noise_bank)], axis=1)
-        frames.append(np.clip(np.rint(frame), 0, 255).astype(np.uint8))
+        image = np.clip(np.rint(frame), 0, 255).astype(np.uint8)
+        if border is not None:
+            image[border] = np.uint8(np.clip(round(faults.letterbox.level), 0, 255))
+        frames.append(image)
         if progress and (i % 100 == 0 or i == n - 1):
             progress(f"{spec.name}: rendered frame {i + 1}/{n}")
-    return RenderedTrial(frames, truth)
+    if border is not None or (second_sub is not None and second.in_front):
+        hidden = truth.occluded_fraction.to_numpy().copy()
+        for i in range(n):
+            x, y = truth.marker_x_px[i], truth.marker_y_px[i]
+            if border is not None:
+                hidden[i] = max(hidden[i], letterbox_covered_fraction(cam, faults.letterbox, x, y))
+            if second_sub is not None and second.in_front:
+                d = math.hypot(truth.second_x_px[i] - x, truth.second_y_px[i] - y)
+                hidden[i] = max(hidden[i], _disk_overlap_fraction(cam.marker_radius_px, second_radius, d))
+        truth["occluded_fraction"] = hidden
+    truth = truth.iloc[n_lead:].reset_index(drop=True)
+    return RenderedTrial(frames[n_lead:], truth, frames[:n_lead])
 
 
 def _disk_overlap_fraction(r_marker: float, r_other: float, distance: float) -> float:
@@ -367,8 +676,12 @@ def _disk_overlap_fraction(r_marker: float, r_other: float, distance: float) -> 
     return (a1 + a2 - a3) / (math.pi * r * r)
 
 
-def write_video(frames: list, path: Path, fps: float, crf: int, preset: str) -> None:
-    """Encode grey frames as H.264 (yuv420p) in MP4, deterministically (one encoder thread)."""
+def write_video(frames: list, path: Path, fps: float, crf: int, preset: str, lead_frames: list = ()) -> None:
+    """Encode grey frames as H.264 (yuv420p) in MP4, deterministically (one encoder thread).
+
+    ``lead_frames`` (a trimmed clip): encoded before ``frames`` with negative timestamps, so the
+    file holds their packets but its edit list starts at ``frames[0]`` and decoders discard them.
+    """
     from fractions import Fraction
 
     import av
@@ -382,8 +695,11 @@ def write_video(frames: list, path: Path, fps: float, crf: int, preset: str) -> 
         stream.pix_fmt = "yuv420p"
         keyint = str(max(1, int(round(2 * fps))))  # a key frame every 2 s, as cameras do
         stream.options = {"crf": str(crf), "preset": preset, "threads": "1", "g": keyint}
-        for img in frames:
+        rate = Fraction(fps).limit_denominator(1001)
+        for i, img in enumerate([*lead_frames, *frames]):
             vf = av.VideoFrame.from_ndarray(img, format="gray")
+            if len(lead_frames):
+                vf.pts, vf.time_base = i - len(lead_frames), 1 / rate
             for packet in stream.encode(vf):
                 container.mux(packet)
         for packet in stream.encode():
@@ -395,6 +711,11 @@ def truth_record(spec: TrialSpec) -> dict:
     """Everything known about a trial, for data/truth/<trial>.yaml."""
     cam = asdict(spec.camera)
     cam["pivot_px"] = list(spec.camera.pivot_px)
+    if spec.camera.blur_step_px == Camera.blur_step_px:  # newer fields: recorded only when changed
+        del cam["blur_step_px"]
+    subsamples = exposure_subsamples(spec)
+    if subsamples > spec.camera.exposure_subsamples:
+        cam["exposure_subsamples_used"] = subsamples
     record = {
         "trial": spec.name,
         "release_deg": spec.release_deg,
@@ -410,6 +731,11 @@ def truth_record(spec: TrialSpec) -> dict:
     }
     if spec.disturbances.active:  # effects outside the library (absent: none)
         record["disturbances"] = {**asdict(spec.disturbances), "pivot_drift_px": list(spec.disturbances.pivot_drift_px)}
+    if spec.faults.active:  # real-world faults (absent: none)
+        faults = asdict(spec.faults)
+        for key in ("start_px", "end_px"):
+            faults["second_object"][key] = list(faults["second_object"][key])
+        record["faults"] = faults
     return record
 
 
@@ -420,7 +746,8 @@ def generate_trial(spec: TrialSpec, video_dir: Path, truth_dir: Path, progress=p
     truth_dir.mkdir(parents=True, exist_ok=True)
     rendered = render_trial(spec, progress=progress)
     video = video_dir / f"{spec.name}.mp4"
-    write_video(rendered.frames, video, spec.camera.fps, spec.camera.crf, spec.camera.preset)
+    cam = spec.camera
+    write_video(rendered.frames, video, cam.fps, cam.crf, cam.preset, lead_frames=rendered.lead_frames)
     rendered.truth.to_csv(truth_dir / f"{spec.name}.csv", index=False, float_format="%.9g")
     with open(truth_dir / f"{spec.name}.yaml", "w") as fh:
         yaml.safe_dump(truth_record(spec), fh, sort_keys=False)
