@@ -132,3 +132,19 @@ def test_clean_records_and_a_wrong_model_are_not_flagged():
     assert binom.sf(1, 25, 0.01) < 0.03
     assert flagged <= 1, flagged
     assert 0.8 < np.median(ratios) < 1.25 and max(ratios) < 2.0  # measured 0.9–1.1
+
+
+def test_an_unreliable_trial_is_left_out_of_the_joint_fit_and_discovery_with_its_reason():
+    """`status.fitted_trials` (joint fits, body fits, discovery) leaves out a trial whose fit is unreliable."""
+    import logging
+
+    from pendulum.status import fitted_trials
+
+    good = fit(table(3))
+    garbage = fit(table(4, rest_offset_deg=24.0))
+    info = {"good": {"status": "ok"}, "garbage": {"status": "ok"}}
+    names, excluded = fitted_trials(
+        ["good", "garbage"], info, {"good": good, "garbage": garbage}, logging.getLogger("test"), "rig r"
+    )
+    assert names == ["good"]
+    assert excluded["garbage"].startswith("unreliable record: trial t: fitted rest angle +24.0° from the vertical")

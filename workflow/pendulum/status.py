@@ -59,12 +59,23 @@ def require_ok(document: dict, what: str) -> dict:
 def fitted_trials(
     names, angle_info: dict[str, dict], fits: dict[str, dict], log: logging.Logger, context: str
 ) -> tuple[list[str], dict[str, str]]:
-    """The trials whose angles and per-trial fit succeeded, and why each other one is left out (logged)."""
+    """The trials whose angles and per-trial fit succeeded on a reliable record, and why each other one is left out.
+
+    A fit marked ``reliable: false`` (its record failed the garbage checks of
+    :func:`pendulum.fitting.record_checks`) is left out too: one mis-tracked video
+    must not move the coefficients of every trial it would be pooled with.
+    """
     excluded = {}
     for name in sorted(names):
         bad = next((d for d in (angle_info[name], fits[name]) if is_failed(d)), None)
         if bad:
             excluded[name] = f"{bad['failed_stage']} failed: {bad['error']}"
+        elif fits[name].get("reliable") is False:
+            problems = [
+                p for t in fits[name].get("trials", {}).values() for p in t.get("record_checks", {}).get("problems", [])
+            ]
+            excluded[name] = "unreliable record: " + (problems[0] if problems else "see its fit's warnings")
+        if name in excluded:
             log.warning("%s: %s left out (%s)", context, name, excluded[name])
     return [n for n in sorted(names) if n not in excluded], excluded
 
