@@ -4,7 +4,7 @@ warnings (and so in the summary's ``warnings`` column), ``reliable`` false, and 
 ``identifiable``. Clean records, and a wrong model on clean records, are not flagged.
 
 Records are synthetic angle tables (the demo rig and physics) corrupted the way a tracker on the
-wrong object corrupts them; thresholds are those of :func:`pendulum.fitting.record_checks`.
+wrong object corrupts them; thresholds are those of :func:`pendulum.record_checks.record_checks`.
 """
 
 import math
@@ -14,8 +14,9 @@ import pandas as pd
 import pytest
 from scipy.stats import binom
 
-from pendulum.fitting import MAX_REST_OFFSET_DEG, fit_trials
+from pendulum.fitting import fit_trials
 from pendulum.physics import PendulumModel, Rig, simulate
+from pendulum.record_checks import MAX_REST_OFFSET_DEG
 from pendulum.records import FitSettings, load_record
 from pendulum.summary import fit_document, summary_table
 from pendulum.synthetic import angle_noise_rad, synthetic_angle_table

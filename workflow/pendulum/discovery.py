@@ -55,7 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pendulum import diagnosis, findings
-from pendulum.fitting import MISFIT_RATIO, fit_trials
+from pendulum.fitting import fit_trials
 from pendulum.groupfit import (
     GroupFit,
     GroupProblem,
@@ -66,6 +66,7 @@ from pendulum.groupfit import (
     solve_many,
     start_values,
 )
+from pendulum.record_checks import MISFIT_RATIO
 from pendulum.records import AngleRecord, FitSettings
 
 

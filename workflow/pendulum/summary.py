@@ -71,7 +71,7 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
                 "bic": fit["bic"],
                 "samples_digest": fit.get("samples_digest"),
                 "consistency": fit.get("consistency", {}).get("verdict"),
-                "reliable": fit.get("reliable", True),  # False: garbage in (fitting.record_checks)
+                "reliable": fit.get("reliable", True),  # False: garbage in (record_checks.record_checks)
                 "n_warnings": len(fit["warnings"]),
                 "warnings": " | ".join(fit["warnings"]),
             }
