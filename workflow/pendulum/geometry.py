@@ -31,12 +31,17 @@ class CircleFit:
     effective_points: float | None = None  # n corrected for the residuals' autocorrelation
 
 
-def fit_circle(x, y) -> CircleFit:
-    """Geometric least-squares circle (algebraic Kåsa fit as the start), minimising Σ (|p − c| − R)²."""
+def fit_circle(x, y, weights=None) -> CircleFit:
+    """Geometric least-squares circle (algebraic Kåsa fit as the start), minimising Σ w (|p − c| − R)².
+
+    ``weights`` w per point (None: all 1). The pivot covariance is σ² (JᵀWJ)⁻¹
+    with σ² = Σ w r² / (n − 3), inflated for the residuals' lag-1 correlation.
+    """
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     good = np.isfinite(x) & np.isfinite(y)
     x, y = x[good], y[good]
+    root_w = None if weights is None else np.sqrt(np.asarray(weights, float)[good])
     if x.size < 10:
         raise ValueError(f"a circle fit needs at least 10 tracked points, got {x.size}")
     a = np.column_stack([x, y, np.ones_like(x)])
@@ -48,7 +53,10 @@ def fit_circle(x, y) -> CircleFit:
     def residual(p):
         return np.hypot(x - p[0], y - p[1]) - p[2]
 
-    sol = least_squares(residual, [cx, cy, r0], x_scale="jac")
+    if root_w is None:
+        sol = least_squares(residual, [cx, cy, r0], x_scale="jac")
+    else:
+        sol = least_squares(lambda p: root_w * residual(p), [cx, cy, r0], x_scale="jac")
     cx, cy, r = sol.x
     ang = np.degrees(np.arctan2(x - cx, y - cy))
     # Covariance σ² (JᵀJ)⁻¹, with n replaced by an effective count n (1 − ρ)/(1 + ρ):
@@ -62,7 +70,7 @@ def fit_circle(x, y) -> CircleFit:
         float(cx),
         float(cy),
         float(r),
-        float(np.sqrt(np.mean(res**2))),
+        float(np.sqrt(np.mean(res**2))) if root_w is None else float(np.sqrt(np.mean(residual(sol.x) ** 2))),
         int(x.size),
         float(np.ptp(ang)),
         cov[:2, :2].tolist(),
@@ -113,6 +121,45 @@ def oscillation_centre_rad(theta: np.ndarray, noise_rad: float) -> float | None:
     if len(centres) < 2:
         return None
     return float(np.median(centres))
+
+
+def swing_centre_rad(theta: np.ndarray) -> tuple[float, int] | None:
+    """Centre of a decaying oscillation of any amplitude, robust to sample noise: (centre, triplets used).
+
+    The extrema are the confirmed ones of :func:`swing_extrema` (hysteresis of
+    10 σ, so noise makes none, at any frame rate), each refined by a parabola
+    through the samples within a sixth of the way to its neighbouring extrema.
+    Per triplet (p₀, q, p₁), locally geometric decay gives
+    c = (p₀ p₁ − q²) / (p₀ + p₁ − 2 q); the median over triplets whose swing is
+    above 20 σ. None if no such triplet.
+    """
+    th = np.asarray(theta, float)
+    idx = np.flatnonzero(np.isfinite(th))
+    if idx.size < 20:
+        return None
+    v = th[idx]
+    sigma = noise_level(v)
+    ext = np.flatnonzero(np.isin(idx, swing_extrema(v)))
+    values = []
+    for k, i in enumerate(ext):
+        gaps = [i - ext[k - 1] if k > 0 else None, ext[k + 1] - i if k + 1 < ext.size else None]
+        half = max(2, min(g for g in gaps if g is not None) // 6) if any(gaps) else 2
+        lo, hi = max(0, i - half), min(v.size, i + half + 1)
+        value = v[i]
+        if hi - lo >= 5:
+            a, b, c = np.polyfit(np.arange(lo, hi) - i, v[lo:hi], 2)
+            if a != 0 and abs(b / (2 * a)) <= half:
+                value = c - b * b / (4 * a)
+        values.append(value)
+    centres = []
+    for k in range(len(values) - 2):
+        p0, q, p1 = values[k : k + 3]
+        swing = abs(q - 0.5 * (p0 + p1))
+        if swing > 20 * sigma and np.sign(p0 - q) == np.sign(p1 - q) and p0 + p1 - 2 * q != 0:
+            centres.append((p0 * p1 - q * q) / (p0 + p1 - 2 * q))
+    if not centres:
+        return None
+    return float(np.median(centres)), len(centres)
 
 
 def noise_level(theta: np.ndarray) -> float:
@@ -464,10 +511,29 @@ def _radial_rms_px(track: pd.DataFrame, circle: CircleFit) -> float:
     return float(np.sqrt(np.mean(d.to_numpy(float) ** 2))) if ok.any() else math.inf
 
 
+NOISY_TRACK_FACTOR = 2.0  # a track more than this × the median track's RMS off the circle is down-weighted
+
+
 def _pooled_circle(tracks: dict[str, pd.DataFrame]) -> CircleFit:
-    xs = np.concatenate([t.x_px[t.flag == "ok"].to_numpy(float) for t in tracks.values()])
-    ys = np.concatenate([t.y_px[t.flag == "ok"].to_numpy(float) for t in tracks.values()])
-    return fit_circle(xs, ys)
+    """Circle through the pooled paths, each track weighted min(1, (2 σ_median / σ_k)²).
+
+    σ_k is track k's RMS distance from the unweighted pooled circle: a track
+    noisier than twice the median counts by its inverse variance. When no track
+    is that noisy every weight is 1 and the unweighted fit is the answer.
+    """
+    names = list(tracks)  # the callers' order: the pooled sums are the same numbers every time
+    xs = np.concatenate([tracks[n].x_px[tracks[n].flag == "ok"].to_numpy(float) for n in names])
+    ys = np.concatenate([tracks[n].y_px[tracks[n].flag == "ok"].to_numpy(float) for n in names])
+    circle = fit_circle(xs, ys)
+    if len(tracks) < 2:
+        return circle
+    spread = {n: _radial_rms_px(tracks[n], circle) for n in names}
+    median = float(np.median([v for v in spread.values() if math.isfinite(v)] or [0.0]))
+    weight = {n: min(1.0, (NOISY_TRACK_FACTOR * median / spread[n]) ** 2) if spread[n] > 0 else 1.0 for n in names}
+    if all(w == 1.0 for w in weight.values()):
+        return circle
+    w = np.concatenate([np.full(int((tracks[n].flag == "ok").sum()), weight[n]) for n in names])
+    return fit_circle(xs, ys, weights=w)
 
 
 def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, str]]:
@@ -513,14 +579,36 @@ def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
     return None
 
 
+def pivot_uncertainty(pivot_covariance_px2, radius_px: float, vertical_deg: float) -> dict:
+    """Standard errors of an estimated pivot and the angle offset they cause.
+
+    A pivot error δp moves every angle by the component of δp across the arm at
+    rest, divided by the arm: σ_θ = √(eᵀ C e) / R with e = (cos φ, −sin φ), φ the
+    vertical's image angle (a constant offset, absorbed by the fits' rest offset).
+    """
+    cov = np.asarray(pivot_covariance_px2, float)
+    phi = math.radians(vertical_deg)
+    e = np.array([math.cos(phi), -math.sin(phi)])
+    return {
+        "pivot_stderr_px": [float(math.sqrt(max(cov[0, 0], 0.0))), float(math.sqrt(max(cov[1, 1], 0.0)))],
+        "angle_offset_stderr_deg": float(math.degrees(math.sqrt(max(e @ cov @ e, 0.0)) / radius_px)),
+    }
+
+
 def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertical_deg=None) -> dict:
     """Pivot (circle through the pooled marker paths, outlying tracks left out) and vertical.
 
-    The vertical is the median oscillation centre of the tracks used. Values
-    given are kept; only the missing ones are estimated.
+    The vertical is the median oscillation centre (:func:`swing_centre_rad`, any
+    amplitude) of the tracks used; when no track has a clean swing it is the
+    image vertical (0°) with a warning under ``warnings`` (the fits' rest offset
+    absorbs a camera roll). Values given are kept; only the missing ones are
+    estimated. An estimated pivot comes with ``pivot_stderr_px`` and
+    ``angle_offset_stderr_deg``.
     """
-    result: dict = {"trials": sorted(tracks), "rejected_trials": {}}
+    result: dict = {"trials": sorted(tracks), "rejected_trials": {}, "warnings": []}
     if pivot_px is None:
+        if not tracks:
+            raise ValueError("no trial has a usable track to estimate the pivot from; give pivot_px")
         circle, rejected = pooled_pivot(tracks)
         tracks = {k: v for k, v in tracks.items() if k not in rejected}
         pivot_px = [circle.pivot_x_px, circle.pivot_y_px]
@@ -535,14 +623,23 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         centres = []
         for track in tracks.values():
             th = image_angle_rad(track.x_px.where(track.flag == "ok"), track.y_px.where(track.flag == "ok"), pivot_px)
-            c = oscillation_centre_rad(th, noise_level(th))
-            if c is not None:
-                centres.append(c)
-        if not centres:
-            raise ValueError("cannot estimate the vertical: no trial has enough clean swings; give vertical_deg")
-        vertical_deg = math.degrees(float(np.median(centres)))
-        result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
+            found = swing_centre_rad(th)
+            if found is not None:
+                centres.append(found[0])
+        if centres:
+            vertical_deg = math.degrees(float(np.median(centres)))
+            result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
+        else:
+            vertical_deg = 0.0
+            why = "no usable track" if not tracks else "no trial has a clean swing (three extrema above the noise)"
+            result["vertical_source"] = "image vertical (not estimated)"
+            result["warnings"].append(
+                f"cannot estimate the vertical ({why}); the image vertical (0°) is used: the fits' rest offset "
+                "absorbs a camera roll, give vertical_deg to state it"
+            )
     else:
         result["vertical_source"] = "given"
     result["vertical_deg"] = float(vertical_deg)
+    if result.get("circle") and result["pivot_covariance_px2"] is not None:
+        result.update(pivot_uncertainty(result["pivot_covariance_px2"], result["circle"]["radius_px"], vertical_deg))
     return result

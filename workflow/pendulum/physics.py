@@ -338,12 +338,49 @@ def simulate(
     ``history_origin_s`` (the release: the fitter's and the synthetic records'
     times count from it) and θ̈ constant since, so θ̇ grew linearly to θ̇₀; an
     origin at or after t[0] means an impulsive start with θ̇₀.
+
+    A start state or coefficients that make the fixed-step RK4 unstable (e.g.
+    θ̇₀ of thousands of °/s from a jump in an angle record's first samples: the
+    drag term's rate 2D|θ̇|/I times the step beyond ≈ 2.8) would run the state to
+    infinity; that raises :class:`SimulationDiverged` naming the start state,
+    not a bare "math domain error" from sin(∞).
     """
-    if not model.has_memory and external_torque_nm is None:
-        return _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s)
-    return _simulate_with_memory(
-        model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s, history_origin_s, external_torque_nm
-    )
+    if not (math.isfinite(theta0_rad) and math.isfinite(omega0_rad_s)):
+        raise SimulationDiverged(
+            f"the simulation's start state is not finite (θ0 = {theta0_rad!r} rad, θ̇0 = {omega0_rad_s!r} rad/s)"
+        )
+    try:
+        if not model.has_memory and external_torque_nm is None:
+            theta, omega = _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s)
+        else:
+            theta, omega = _simulate_with_memory(
+                model,
+                params,
+                theta0_rad,
+                omega0_rad_s,
+                times_s,
+                substeps,
+                max_step_s,
+                history_origin_s,
+                external_torque_nm,
+            )
+    except (OverflowError, ValueError) as exc:
+        if not isinstance(exc, OverflowError) and str(exc) != "math domain error":
+            raise
+        theta = omega = np.array([math.inf])
+    if not (np.isfinite(theta).all() and np.isfinite(omega).all()):
+        raise SimulationDiverged(
+            f"the simulation diverged (θ → ∞) from θ0 = {math.degrees(theta0_rad):.4g}°, θ̇0 = "
+            f"{math.degrees(omega0_rad_s):.4g}°/s with "
+            + ", ".join(f"{k} = {float(v):.4g}" for k, v in params.items())
+            + ": a start state or coefficient far from any "
+            "physical swing, e.g. a jump in the angle record's first samples (mis-tracked start?)"
+        )
+    return theta, omega
+
+
+class SimulationDiverged(ValueError):
+    """The fixed-step simulation ran away to infinity: a start state or coefficient far from a physical swing."""
 
 
 def _step_counts(times, substeps, max_step_s):

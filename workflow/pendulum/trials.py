@@ -26,6 +26,7 @@ RIG_KEYS = (
     "kinematic_viscosity_m2_s",
 )
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
+REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined in a sidecar must give these
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px")
 ANGLE_TABLE_EXTENSIONS = (".csv",)
 TRIAL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
@@ -151,6 +152,17 @@ def validate_config(config: dict, source: str = "config.yaml") -> None:
                     f"{key} = {value:g}; tolerances are 1σ in the value's own unit (e.g. {0.01 * abs(value):.3g} "
                     "for 1 %), not fractions"
                 )
+    cameras = config.get("cameras") or {}
+    for rig, values in config["rigs"].items():
+        if values.get("camera") is not None and values["camera"] not in cameras:
+            raise ConfigError(
+                f"{source}: rigs/{rig}/camera is {values['camera']!r}, not one of cameras {sorted(cameras)}"
+            )
+    for name, setup in cameras.items():
+        if not setup.get("calibration_video") and not setup.get("plane_video"):
+            raise ConfigError(
+                f"{source}: cameras/{name} gives neither calibration_video (lens) nor plane_video (swing plane)"
+            )
     if config["default_rig"] not in config["rigs"]:
         raise ConfigError(
             f"{source}: default_rig {config['default_rig']!r} is not one of rigs {sorted(config['rigs'])}"
@@ -230,9 +242,38 @@ def rig_name(config: dict, trial: Trial) -> str:
     name = trial.sidecar.get("rig", config["default_rig"])
     if name not in config["rigs"]:
         raise ConfigError(
-            f"{trial.sidecar_path}: rig {name!r} is not one of rigs {sorted(config['rigs'])} in config.yaml"
+            f"{trial.sidecar_path}: rig {name!r} is not one of rigs {sorted(config['rigs'])} in config.yaml; "
+            f"define it there, or give its {', '.join(REQUIRED_RIG_KEYS)} in this sidecar"
         )
     return name
+
+
+def add_sidecar_rigs(config: dict, trials: dict[str, Trial]) -> list[str]:
+    """Rigs defined in sidecars, added to ``config["rigs"]``; returns their names.
+
+    A sidecar that names a rig not in config and gives at least its
+    mass_kg, length_m and frontal_area_m2 defines that rig (its rig values and
+    ``camera``; the first such sidecar by trial name). Its other trials may
+    name it without values. The geometry (pivot, vertical) stays estimated.
+    """
+    added = []
+    for name in sorted(trials):
+        trial = trials[name]
+        rig = trial.sidecar.get("rig")
+        if rig is None or rig in config["rigs"] or not all(k in trial.sidecar for k in REQUIRED_RIG_KEYS):
+            continue
+        values = {k: trial.sidecar[k] for k in RIG_KEYS if k in trial.sidecar}
+        check_rig_values(values, f"{trial.sidecar_path} (defining rig {rig})")
+        if trial.sidecar.get("camera") is not None:
+            if trial.sidecar["camera"] not in (config.get("cameras") or {}):
+                raise ConfigError(
+                    f"{trial.sidecar_path}: camera {trial.sidecar['camera']!r} is not one of cameras "
+                    f"{sorted(config.get('cameras') or {})} in config.yaml"
+                )
+            values["camera"] = trial.sidecar["camera"]
+        config["rigs"][rig] = values
+        added.append(rig)
+    return added
 
 
 def trial_settings(config: dict, trial: Trial) -> dict:
@@ -244,6 +285,12 @@ def trial_settings(config: dict, trial: Trial) -> dict:
         check_rig_values(merged_rig, f"{trial.sidecar_path} (with rig {rig})")
     tracking = {**config["tracking"]}
     tracking.update({k: v for k, v in trial.sidecar.items() if k in TRACKING_KEYS})
+    camera = config["rigs"][rig].get("camera")
+    if "camera" in trial.sidecar and trial.sidecar["camera"] != camera:
+        raise ConfigError(
+            f"{trial.sidecar_path}: camera {trial.sidecar['camera']!r} differs from rig {rig}'s camera {camera!r}; "
+            "camera setups belong to a rig: define a rig for this camera (in config or in this sidecar)"
+        )
     return {
         "rig_name": rig,
         "rig": {k: merged_rig[k] for k in RIG_KEYS if k in merged_rig},
@@ -251,20 +298,32 @@ def trial_settings(config: dict, trial: Trial) -> dict:
         "pivot_px": merged_rig.get("pivot_px"),
         "vertical_deg": merged_rig.get("vertical_deg"),
         "geometry_from_sidecar": any(k in trial.sidecar for k in GEOMETRY_KEYS),
+        "own_pivot": "pivot_px" in trial.sidecar,
+        "camera": camera,
         "tracking": tracking,
     }
 
 
 def needs_rig_geometry(config: dict, trial: Trial) -> bool:
-    """True when a video trial's pivot or vertical must be estimated from the rig's pooled tracks."""
+    """True when a video trial's pivot or vertical must be estimated from the rig's pooled tracks.
+
+    A trial whose sidecar gives its own pivot_px but no vertical estimates the
+    vertical from its own track (at the angles stage), not from the rig's.
+    """
     s = trial_settings(config, trial)
-    return trial.kind == "video" and (s["pivot_px"] is None or s["vertical_deg"] is None)
+    if trial.kind != "video" or s["own_pivot"]:
+        return False
+    return s["pivot_px"] is None or s["vertical_deg"] is None
 
 
 def pooled_trials(config: dict, trials: dict[str, Trial], rig: str) -> list[str]:
-    """Video trials whose tracks define the rig's estimated geometry (not those with their own)."""
-    return sorted(
-        name
-        for name, t in trials.items()
-        if t.kind == "video" and rig_name(config, t) == rig and not trial_settings(config, t)["geometry_from_sidecar"]
-    )
+    """Video trials whose tracks define the rig's estimated geometry (not those with their own).
+
+    When every trial of the rig gives a vertical_deg of its own (but no pivot),
+    their tracks are pooled for the pivot.
+    """
+    videos = [n for n, t in trials.items() if t.kind == "video" and rig_name(config, t) == rig]
+    pooled = sorted(n for n in videos if not trial_settings(config, trials[n])["geometry_from_sidecar"])
+    if not pooled:
+        pooled = sorted(n for n in videos if not trial_settings(config, trials[n])["own_pivot"])
+    return pooled

@@ -12,6 +12,7 @@ from pendulum.provenance import config_digest, git_state, package_versions  # no
 from pendulum.trials import (  # noqa: E402
     GEOMETRY_KEYS,
     RIG_KEYS,
+    add_sidecar_rigs,
     discover_trials,
     needs_rig_geometry,
     pooled_trials,
@@ -31,6 +32,8 @@ validate_config(
 )
 
 TRIALS = discover_trials(config["raw_dir"])
+# rigs defined in sidecars join config["rigs"]
+SIDECAR_RIGS = add_sidecar_rigs(config, TRIALS)
 VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
 BODIES = body_groups(config, TRIALS)  # body → its rigs with trials (config `bodies`)
 RIGS_NEEDING_GEOMETRY = sorted(
@@ -110,9 +113,35 @@ def geometry_trials(wildcards):
 
 def geometry_inputs(wildcards):
     names = geometry_trials(wildcards)
-    return {
+    inputs = {
         "tracks": [f"results/tracks/{name}.csv" for name in names],
         "summaries": [f"results/tracks/{name}.json" for name in names],
+    }
+    camera = config["rigs"][wildcards.rig].get("camera")
+    if camera:
+        inputs["calibration"] = f"results/calibration/{camera}.json"
+    return inputs
+
+
+def camera_setup(wildcards):
+    """A camera setup's settings (config `cameras`), with the defaults filled in."""
+    setup = (config.get("cameras") or {}).get(wildcards.camera)
+    if setup is None:
+        raise ValueError(f"camera setup {wildcards.camera!r} is not in config cameras")
+    return {
+        "pattern_inner_corners": list(setup.get("pattern_inner_corners", [9, 6])),
+        "square_size_m": setup["square_size_m"],
+        "plane_frame": int(setup.get("plane_frame", 0)),
+    }
+
+
+def calibration_inputs(wildcards):
+    """The checkerboard clips of a camera setup (lens and/or swing plane)."""
+    setup = (config.get("cameras") or {}).get(wildcards.camera) or {}
+    return {
+        key: setup[key]
+        for key in ("calibration_video", "plane_video")
+        if setup.get(key)
     }
 
 
@@ -127,18 +156,25 @@ def angles_inputs(wildcards):
         }
         if needs_rig_geometry(config, trial):
             inputs["geometry"] = f"results/geometry/{rig_name(config, trial)}.json"
+        camera = trial_settings(config, trial)["camera"]
+        if camera:
+            inputs["calibration"] = f"results/calibration/{camera}.json"
     return inputs
 
 
 def angles_settings(wildcards):
     """Only what the angles stage uses, so that changing a mass or a tolerance reruns the fits, not the angles."""
     s = trial_settings(config, TRIALS[wildcards.trial])
-    return {
+    settings = {
         "rig_name": s["rig_name"],
         "length_m": s["rig"]["length_m"],
         "pivot_px": s["pivot_px"],
         "vertical_deg": s["vertical_deg"],
     }
+    # (absent without a camera: the params of existing trials stay as they were)
+    if s["camera"]:
+        settings["camera"] = s["camera"]
+    return settings
 
 
 def variant_terms(wildcards):

@@ -6,7 +6,14 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.geometry import angles_from_track, angles_from_tracker_csv, off_rig_circle, read_tracker_csv
+from pendulum.calibration import ImageToPlane, map_point, map_track
+from pendulum.geometry import (
+    angles_from_track,
+    angles_from_tracker_csv,
+    estimate_rig_geometry,
+    off_rig_circle,
+    read_tracker_csv,
+)
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
 
@@ -32,9 +39,13 @@ def work():
     else:
         require_ok(read_json(sm.input.track_summary), "tracks")
         source = sm.input.track
-        track = pd.read_csv(source)
-        pivot, vertical = settings["pivot_px"], settings["vertical_deg"]
+        calibration = None
+        if "calibration" in sm.input.keys():
+            calibration = require_ok(read_json(sm.input.calibration), "calibration")
+        track = map_track(pd.read_csv(source), calibration)
+        pivot, vertical = map_point(settings["pivot_px"], calibration), settings["vertical_deg"]
         pivot_cov = None
+        notes = [ImageToPlane(calibration).describe()] if calibration else []
         if "geometry" in sm.input.keys():
             geometry = require_ok(read_json(sm.input.geometry), "geometry")
             if pivot is None:
@@ -43,6 +54,13 @@ def work():
                     raise ValueError(f"{sm.input.track}: {problem}")
                 pivot, pivot_cov = geometry["pivot_px"], geometry.get("pivot_covariance_px2")
             vertical = vertical if vertical is not None else geometry["vertical_deg"]
+        if vertical is None:  # the trial's own pivot (sidecar), no vertical: from its own swings
+            own = estimate_rig_geometry({trial: track}, pivot_px=pivot)
+            vertical = own["vertical_deg"]
+            notes.append(f"vertical {vertical:.4g}°: {own['vertical_source']}")
+            for warning in own["warnings"]:
+                log.warning("trial %s: %s", trial, warning)
+                notes.append(warning)
         table, info = angles_from_track(
             track,
             pivot_px=pivot,
@@ -51,6 +69,7 @@ def work():
             source=source,
             pivot_covariance_px2=pivot_cov,
         )
+        info.notes = notes + info.notes
     log.info("trial %s: %s", trial, info)
     write_csv(table, sm.output.angles)
     write_json({"trial": trial, "rig": settings["rig_name"], "status": "ok", **info.to_dict()}, sm.output.summary)

@@ -3,33 +3,83 @@
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 import _setup  # noqa: F401
+from pendulum.calibration import ImageToPlane, map_point, map_track, path_tilt
 from pendulum.geometry import estimate_rig_geometry
 from pendulum.io import script_logger, write_json
-from pendulum.status import is_failed, run_stage
+from pendulum.status import is_failed, require_ok, run_stage
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "rig_geometry")
 rig = sm.wildcards.rig
+PIVOT_STDERR_WARN_FRACTION = 0.05  # pivot standard error above this fraction of the arm: poorly determined
+
+
+def read_json(path):
+    return json.loads(Path(path).read_text())
+
+
+def tilt_warning(tracks: dict) -> tuple[dict | None, str | None]:
+    """The ellipse test of the pooled marker paths: a swing plane not facing the camera, detected, not corrected."""
+    ok = [t[t.flag == "ok"] for t in tracks.values()]
+    if not ok:
+        return None, None
+    tilt = path_tilt(
+        np.concatenate([t.x_px.to_numpy(float) for t in ok]), np.concatenate([t.y_px.to_numpy(float) for t in ok])
+    )
+    if not tilt or not tilt["significant"]:
+        return tilt, None
+    return tilt, (
+        f"the marker path is an ellipse (axis ratio {tilt['axis_ratio']:.3f} ± {tilt['axis_ratio_stderr']:.3f}): "
+        f"the swing plane seems turned about the image's {tilt['tilt_axis']} by about {tilt['tilt_deg']:.0f}° "
+        "against the camera, which compresses the angles (not corrected); film a checkerboard held in the swing "
+        "plane (cameras: plane_video) or face the plane squarely"
+    )
 
 
 def work():
+    calibration = None
+    if "calibration" in sm.input.keys():
+        calibration = require_ok(read_json(sm.input.calibration), "calibration")
+        log.info("rig %s: %s", rig, ImageToPlane(calibration).describe())
     tracks, failed = {}, {}
     for path, summary_path in zip(sm.input.tracks, sm.input.summaries, strict=True):
-        summary = json.loads(Path(summary_path).read_text())
+        summary = read_json(summary_path)
         name = Path(path).stem
         if is_failed(summary):
             failed[name] = summary["error"]
             log.warning("%s: left out of the pooled geometry (tracking failed: %s)", name, summary["error"])
         else:
-            tracks[name] = pd.read_csv(path)
-    if not tracks:
-        raise ValueError(f"rig {rig}: no trial has a usable track to estimate the pivot from; give pivot_px in config")
-    geometry = estimate_rig_geometry(tracks, pivot_px=sm.params.pivot_px, vertical_deg=sm.params.vertical_deg)
+            tracks[name] = map_track(pd.read_csv(path), calibration)
+    pivot = map_point(sm.params.pivot_px, calibration)
+    if not tracks and pivot is None:
+        why = f"the tracks of {', '.join(sorted(failed))} failed" if failed else "no trial of the rig is pooled"
+        raise ValueError(
+            f"rig {rig}: no usable track to estimate the pivot from ({why}); give pivot_px (and vertical_deg) "
+            "in config or in the trials' sidecars"
+        )
+    geometry = estimate_rig_geometry(tracks, pivot_px=pivot, vertical_deg=sm.params.vertical_deg)
     for name, reason in geometry["rejected_trials"].items():
         log.warning("%s: left out of the pooled geometry: %s", name, reason)
+    circle = geometry.get("circle")
+    if circle and max(geometry.get("pivot_stderr_px", [0, 0])) > PIVOT_STDERR_WARN_FRACTION * circle["radius_px"]:
+        geometry["warnings"].append(
+            f"the pivot is poorly determined by the marker paths (standard error {max(geometry['pivot_stderr_px']):.3g}"
+            f" px on an arm of {circle['radius_px']:.0f} px over an arc of {circle['arc_span_deg']:.0f}°); "
+            "give pivot_px or film larger swings"
+        )
+    if not (calibration and calibration.get("plane")):
+        kept = {k: v for k, v in tracks.items() if k not in geometry["rejected_trials"]}
+        geometry["path_tilt"], warning = tilt_warning(kept)
+        if warning:
+            geometry["warnings"].append(warning)
+    if calibration:
+        geometry["coordinates"] = ImageToPlane(calibration).describe()
+    for warning in geometry["warnings"]:
+        log.warning("rig %s: %s", rig, warning)
     log.info("rig %s: %s", rig, geometry)
     inputs = sorted(Path(p).stem for p in sm.input.tracks)
     write_json(

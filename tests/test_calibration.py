@@ -1,0 +1,220 @@
+"""Lens and view: checkerboard calibration of rendered cameras; angles through a distorting lens or a tilted plane.
+
+Renders are small (640×360) and made once per session. The acceptance figures
+(angle RMS against the truth after calibration, and without) are printed by
+``pytest -s -k through``.
+"""
+
+import math
+from dataclasses import replace
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+
+from conftest import DEMO_SPEC, ROOT
+from pendulum.calibration import CalibrationError, Lens, calibrate_camera_setup, map_track, path_tilt
+from pendulum.geometry import angles_from_track, estimate_rig_geometry
+from pendulum.synthetic import load_specs, write_video
+from pendulum.synthetic_optics import Optics, render_lens_clip, render_plane_clip, render_trial_through, write_clip
+from pendulum.tracking import TrackerSettings, track_video
+from pendulum.trials import ConfigError, validate_config
+
+PATTERN = (9, 6)
+SQUARE_M = 0.025
+# Barrel distortion k1 = −0.3 (with k2 and a slightly decentred lens: tangential p1, p2, which the fisheye model lacks)
+BARREL = Optics(distortion=(-0.3, 0.08, 0.003, -0.002, 0.0))
+# A strong fisheye: equidistant projection r = f θ, 95° from the axis in the image corners
+FISHEYE = Optics(focal_px=220.0, lens_model="fisheye", distortion=(0.0, 0.0, 0.0, 0.0))
+# A swing plane turned 15° about the vertical, seen with a longer lens (the marker's size varies < 3 % in the frame)
+TILTED = Optics(focal_px=1400.0, distortion=(0.0, 0.0, 0.0, 0.0, 0.0), plane_tilt_deg=15.0)
+
+
+@pytest.fixture(scope="session")
+def optics_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("optics")
+
+
+@pytest.fixture(scope="session")
+def barrel_calibration(optics_dir):
+    frames, _ = render_lens_clip(BARREL, PATTERN, SQUARE_M, n_views=30, seed=5)
+    clip = write_clip(frames, optics_dir / "barrel.mp4")
+    return calibrate_camera_setup("barrel", PATTERN, SQUARE_M, calibration_video=clip)
+
+
+def _similarity_residual_px(a, b) -> float:
+    """Largest distance between point sets a and b after the best similarity (scale, turn, shift) of a onto b."""
+    m, _ = cv2.estimateAffinePartial2D(a, b, ransacReprojThreshold=1e9)
+    return float(np.max(np.hypot(*(a @ m[:, :2].T + m[:, 2] - b).T)))
+
+
+@pytest.mark.slow
+def test_lens_calibration_recovers_the_rendered_camera(barrel_calibration):
+    doc = barrel_calibration
+    assert len(doc["views"]) >= 25
+    assert doc["focal_length_px"] == pytest.approx([560.0, 560.0], rel=0.01)  # measured 0.1 %
+    assert doc["principal_point_px"] == pytest.approx(BARREL.camera_matrix[:2, 2], abs=3.0)
+    for model in ("rational", "fisheye"):
+        assert doc["models"][model]["held_out_rms_px"] < 0.5  # measured 0.15 and 0.18
+    # tangential distortion is beyond the fisheye model: the rational one wins on held-out views
+    assert doc["chosen_model"] == "rational"
+    assert doc["models"]["rational"]["held_out_rms_px"] < 0.95 * doc["models"]["fisheye"]["held_out_rms_px"]
+    # undistorted marker centres: the ideal image up to a similarity (angles keep), where a pendulum swings
+    grid = np.array([[x, y] for x in np.linspace(100, 540, 9) for y in np.linspace(60, 300, 7)])
+    residual = _similarity_residual_px(Lens.from_dict(doc["lens"]).undistort_px(grid), BARREL.lens.undistort_px(grid))
+    assert residual < 0.3  # measured 0.20 px (the uncorrected lens: 8 px)
+
+
+@pytest.mark.slow
+def test_model_choice_picks_fisheye_for_a_strong_fisheye_lens(optics_dir):
+    frames, _ = render_lens_clip(FISHEYE, PATTERN, SQUARE_M, n_views=24, seed=7)
+    doc = calibrate_camera_setup(
+        "fisheye", PATTERN, SQUARE_M, calibration_video=write_clip(frames, optics_dir / "f.mp4")
+    )
+    assert doc["chosen_model"] == "fisheye"
+    assert doc["focal_length_px"] == pytest.approx([220.0, 220.0], rel=0.01)
+    assert doc["models"]["fisheye"]["held_out_rms_px"] < 0.5
+
+
+def test_the_lens_models_invert_each_other():
+    pts = np.array([[x, y] for x in np.linspace(5, 635, 8) for y in np.linspace(5, 355, 6)])
+    for optics in (BARREL, FISHEYE):
+        lens = optics.lens
+        assert np.abs(lens.distort_px(lens.undistort_px(pts)) - pts).max() < 1e-6
+
+
+def _trial(name, seed, release_deg=30.0):
+    base = {s.name: s for s in load_specs(DEMO_SPEC)}["demo_p20"]
+    camera = replace(
+        base.camera, width_px=640, height_px=360, pivot_px=(320.3, 12.6), marker_arm_px=310.0, marker_radius_px=8.0
+    )
+    return replace(base, name=name, release_deg=release_deg, seed=seed, duration_s=6.0, camera=camera)
+
+
+def _angle_rms_deg(track, truth, calibration=None) -> float:
+    """Pivot fitted to the (mapped) track, vertical 0 (true in the swing plane); RMS of θ − θ_true over ok frames."""
+    mapped = map_track(track, calibration)
+    geometry = estimate_rig_geometry({"t": mapped}, vertical_deg=0.0)
+    table, _ = angles_from_track(mapped, pivot_px=geometry["pivot_px"], vertical_deg=0.0, length_m=0.76, source="t")
+    ok = table.flag.to_numpy() == "ok"
+    assert ok.sum() > 60
+    true = truth.set_index("frame").theta_rad.loc[table.frame[ok]].to_numpy()
+    return float(np.degrees(np.sqrt(np.mean((table.theta_rad.to_numpy()[ok] - true) ** 2))))
+
+
+@pytest.mark.slow
+def test_angles_through_a_barrel_lens_after_calibration(optics_dir, barrel_calibration):
+    rendered = render_trial_through(_trial("barrel_trial", 41), BARREL)
+    video = optics_dir / "barrel_trial.mp4"
+    write_video(rendered.frames, video, 30.0, 22, "veryfast")
+    track = track_video(video, TrackerSettings(marker_radius_px=8.0))
+    with_calibration = _angle_rms_deg(track, rendered.truth, barrel_calibration)
+    without = _angle_rms_deg(track, rendered.truth)
+    print(f"barrel lens k1 = -0.3: angle RMS {with_calibration:.4f}° calibrated, {without:.3f}° without")
+    assert with_calibration <= 0.05  # measured 0.014–0.027°
+    assert without > 10 * with_calibration and without > 0.2  # measured 0.35–0.59°
+
+
+@pytest.mark.slow
+def test_angles_in_a_tilted_swing_plane_after_the_plane_homography(optics_dir):
+    rendered = render_trial_through(_trial("tilted_trial", 43), TILTED)
+    video = optics_dir / "tilted_trial.mp4"
+    write_video(rendered.frames, video, 30.0, 22, "veryfast")
+    plane_clip = write_clip(render_plane_clip(TILTED, PATTERN, square_m=SQUARE_M), optics_dir / "plane.mp4")
+    calibration = calibrate_camera_setup("tilted", PATTERN, SQUARE_M, plane_video=plane_clip, plane_frame=1)
+    assert calibration["plane"]["plane_tilt_deg"] == pytest.approx(15.0, abs=1.0)
+    track = track_video(video, TrackerSettings(marker_radius_px=8.0))
+    with_plane = _angle_rms_deg(track, rendered.truth, calibration)
+    without = _angle_rms_deg(track, rendered.truth)
+    print(f"swing plane tilted 15°: angle RMS {with_plane:.4f}° with the plane homography, {without:.3f}° without")
+    assert with_plane <= 0.05  # measured 0.013–0.016°
+    assert without > 0.5  # measured 1.2–1.3° (the cos 15° compression of the swing)
+
+
+@pytest.mark.slow
+def test_a_flat_port_is_corrected_by_a_lens_clip_filmed_through_it(optics_dir):
+    """Refraction at a flat port (camera at the port, water n = 1.333) is a radial map: a lens model takes it."""
+    port = Optics(focal_px=400.0, distortion=(0.0, 0.0, 0.0, 0.0, 0.0), port_refractive_index=1.333)
+    spec = _trial("port_trial", 44)  # smaller in the water: the port magnifies it 1.33–1.5×
+    spec = replace(spec, camera=replace(spec.camera, pivot_px=(320.3, 62.0), marker_arm_px=230.0, marker_radius_px=6.0))
+    rendered = render_trial_through(spec, port)
+    video = optics_dir / "port_trial.mp4"
+    write_video(rendered.frames, video, 30.0, 22, "veryfast")
+    frames, _ = render_lens_clip(port, PATTERN, SQUARE_M, n_views=24, seed=9)
+    lens = calibrate_camera_setup("port", PATTERN, SQUARE_M, calibration_video=write_clip(frames, optics_dir / "p.mp4"))
+    plane_clip = write_clip(render_plane_clip(port, PATTERN, square_m=SQUARE_M), optics_dir / "port_plane.mp4")
+    plane = calibrate_camera_setup("port_plane", PATTERN, SQUARE_M, plane_video=plane_clip)
+    track = track_video(video, TrackerSettings(marker_radius_px=8.0))
+    with_lens = _angle_rms_deg(track, rendered.truth, lens)
+    plane_only = _angle_rms_deg(track, rendered.truth, plane)
+    without = _angle_rms_deg(track, rendered.truth)
+    print(f"flat port: angle RMS {with_lens:.4f}° lens clip, {plane_only:.3f}° plane homography only, {without:.3f}°")
+    assert with_lens <= 0.05  # measured 0.015°
+    assert plane_only > 0.3 and without > 0.3  # measured 0.83° and 0.91°: the homography takes only the first order
+
+
+def test_a_turned_swing_plane_is_detected_from_a_long_arc_only():
+    rng = np.random.default_rng(4)
+    t = np.linspace(0, 20, 600)
+
+    def path(amplitude_deg, squeeze):
+        theta = math.radians(amplitude_deg) * np.cos(2 * np.pi * t / 1.7) * np.exp(-t / 40)
+        return 320 + 310 * squeeze * np.sin(theta) + rng.normal(0, 0.05, t.size), 12 + 310 * np.cos(theta) + rng.normal(
+            0, 0.05, t.size
+        )
+
+    turned = path(60.0, math.cos(math.radians(15)))
+    found = path_tilt(*turned)
+    assert found["significant"] and found["tilt_axis"] == "vertical"
+    assert found["tilt_deg"] == pytest.approx(15.0, abs=1.0)
+    assert not path_tilt(*path(60.0, 1.0))["significant"]
+    assert not path_tilt(*path(20.0, math.cos(math.radians(15))))["significant"]  # arc too short to judge
+
+
+def test_a_clip_without_a_checkerboard_is_refused_naming_the_file(tmp_path):
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 255, (120, 160), dtype=np.uint8) for _ in range(6)]
+    clip = write_clip(frames, tmp_path / "noise.mp4")
+    with pytest.raises(
+        CalibrationError, match=r"noise.mp4: the checkerboard \(9×6 inner corners\) was found in only 0"
+    ):
+        calibrate_camera_setup("x", PATTERN, SQUARE_M, calibration_video=clip)
+    with pytest.raises(CalibrationError, match=r"noise.mp4: no 9×6 checkerboard found in frame 2"):
+        calibrate_camera_setup("x", PATTERN, SQUARE_M, plane_video=clip, plane_frame=2)
+
+
+def test_camera_setups_in_config_are_checked():
+    config = yaml.safe_load((ROOT / "config.yaml").read_text())
+    config["cameras"] = {"g": {"square_size_m": 0.02}}
+    with pytest.raises(ConfigError, match="cameras/g gives neither calibration_video .* nor plane_video"):
+        validate_config(config)
+    config["cameras"]["g"]["calibration_video"] = "data/calibration/g.mp4"
+    config["rigs"]["paper_rig"]["camera"] = "h"
+    with pytest.raises(ConfigError, match=r"rigs/paper_rig/camera is 'h', not one of cameras \['g'\]"):
+        validate_config(config)
+    config["rigs"]["paper_rig"]["camera"] = "g"
+    validate_config(config)
+
+
+@pytest.mark.slow
+def test_a_rig_with_a_camera_setup_takes_its_calibration_as_an_input(tmp_path):
+    """Wiring (dry run): calibrate_camera once per setup; the rig's geometry and each trial's angles read its JSON."""
+    from workflow_run import copy_project, planned_wildcards, run
+
+    work = copy_project(tmp_path / "p", raw_files=[])
+    for name in ("a", "b"):
+        (work / "data" / "raw" / f"{name}.mp4").write_bytes(b"")  # a dry run reads no video
+    (work / "data" / "calibration").mkdir(parents=True)
+    (work / "data" / "calibration" / "tank_cam.mp4").write_bytes(b"")
+    config = yaml.safe_load((work / "config.yaml").read_text())
+    config["cameras"] = {"tank_cam": {"calibration_video": "data/calibration/tank_cam.mp4", "square_size_m": 0.025}}
+    config["rigs"]["paper_rig"].update(camera="tank_cam", vertical_deg=None)
+    (work / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+    out = run(["-n", "results/angles/a.csv", "results/angles/b.csv"], work).stdout
+    rules = [rule for rule, _ in planned_wildcards(out)]
+    assert rules.count("calibrate_camera") == 1 and rules.count("rig_geometry") == 1 and rules.count("angles") == 2
+    blocks = out.split("rule ")
+    for rule in ("rig_geometry", "angles"):
+        for block in (b for b in blocks if b.startswith(f"{rule}:")):
+            assert "results/calibration/tank_cam.json" in block.split("output:")[0], block
