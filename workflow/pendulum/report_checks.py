@@ -4,8 +4,53 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pendulum.report_data import ReportData, failure_text, is_ok, true_value
-from pendulum.report_format import COEFFICIENTS, _finite, _minus, esc, estimate_cell, fmt, png_data_uri, table_html, td
+from pendulum.report_data import ReportData, failure_text, is_ok, problem_text, record_problems, true_value
+from pendulum.report_format import (
+    COEFFICIENTS,
+    _finite,
+    _minus,
+    esc,
+    estimate_cell,
+    fmt,
+    garbage_badge,
+    png_data_uri,
+    table_html,
+    td,
+)
+
+NOTES_STYLE = "max-width:22em;min-width:14em"  # one note a line, wider than Table 3's warning column
+# Frames-stage warnings that :func:`frame_notes` says in its own words (video.probe's sentences).
+_NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
+
+
+def frame_notes(frames: dict) -> list[str]:
+    """What is notable about a video's frames (the frames stage's summary.json), as short notes; [] if clean.
+
+    A trimmed clip's discarded packets, a variable frame rate, rotation metadata (frames used as stored),
+    a bit depth above 8, dropped frames and duplicate time stamps; then every other warning of the
+    stage (truncated or damaged file, stated rate unlike the frames'), without its path prefix.
+    """
+    notes = []
+    if frames.get("discarded_packets"):
+        notes.append(f"trimmed clip: {frames['discarded_packets']} packet(s) before the first shown frame discarded")
+    if frames.get("variable_frame_rate"):
+        interval = frames.get("frame_interval_s")
+        details = [f"{frames['irregular_intervals']} irregular intervals"] if frames.get("irregular_intervals") else []
+        details += [f"median {fmt(1e3 * interval, 3)} ms"] if _finite(interval) else []
+        notes.append("variable frame rate" + (f" ({', '.join(details)})" if details else ""))
+    if _finite(frames.get("rotation_deg")) and float(frames["rotation_deg"]) % 360:
+        notes.append(f"rotation metadata {float(frames['rotation_deg']):g}°: frames used as stored")
+    if _finite(frames.get("bit_depth")) and int(frames["bit_depth"]) > 8:
+        pixel_format = f" ({frames['pixel_format']})" if frames.get("pixel_format") else ""
+        notes.append(f"{int(frames['bit_depth'])}-bit{pixel_format}")
+    for key, text in (("dropped_frames", "dropped frame(s)"), ("duplicate_timestamps", "duplicate time stamp(s)")):
+        if frames.get(key):
+            notes.append(f"{frames[key]} {text}")
+    prefix = f"{frames.get('video')}: "
+    for warning in frames.get("warnings") or []:
+        if not any(k in warning for k in _NOTED):
+            notes.append(warning.removeprefix(prefix))
+    return notes
 
 
 class CheckSections(ReportData):
@@ -21,11 +66,17 @@ class CheckSections(ReportData):
             else 'Code: <span class="warn">version not recorded (not built from a git commit)</span>'
         )
         n_failed = len(self.failed_trials())
+        n_garbage = sum(bool(self.trial_problems(t)) for t in self.trials)
         return (
             "<header><h1>Free-decay pendulum: added mass and drag coefficient</h1>"
             f'<p class="subtitle">{len(self.trials)} trial(s) on {len(self.rig_names)} rig(s), '
             f"{len(self.variants)} model variant(s) fitted side by side"
             + (f', <span class="warn">{n_failed} trial(s) failed</span>' if n_failed else "")
+            + (
+                f', <span class="warn">{n_garbage} trial(s) on unreliable records</span> {garbage_badge()}'
+                if n_garbage
+                else ""
+            )
             + f". {built}.</p>"
             '<p class="subtitle">Equation of motion: (I<sub>p</sub> + m<sub>a</sub>L²) θ̈ = −(mg − B) L sin θ '
             "− ½ρC<sub>d</sub>AL³ θ̇|θ̇| − c θ̇ − τ<sub>f</sub> sgn θ̇; each variant keeps a subset of the "
@@ -40,6 +91,7 @@ class CheckSections(ReportData):
                 "checked against known values.</p>"
             )
         rows, seen = [], set()
+        garbage = [t for t in self.trial_order() if t in self.truth and self.trial_problems(t)]
         for rig in self.rig_names:
             trials = [t for t in self.rig_trials(rig) if t in self.truth]
             if not trials:
@@ -56,16 +108,17 @@ class CheckSections(ReportData):
                     true = values.pop()
                     z = (entry["value"] - true) / entry["stderr"] if entry.get("stderr") else float("nan")
                     inside = entry["ci95"][0] <= true <= entry["ci95"][1]
+                    clean = [t for t in trials if not record_problems(self.fits.get((v, t)))]
                     covered = sum(
                         1
-                        for t in trials
+                        for t in clean
                         if is_ok(self.fits.get((v, t)))
                         and name in self.fits[(v, t)]["parameters"]
                         and self.fits[(v, t)]["parameters"][name]["ci95"][0]
                         <= true
                         <= self.fits[(v, t)]["parameters"][name]["ci95"][1]
                     )
-                    n_fit = sum(1 for t in trials if is_ok(self.fits.get((v, t))))
+                    n_fit = sum(1 for t in clean if is_ok(self.fits.get((v, t))))
                     first = (rig, v) not in seen
                     seen.add((rig, v))
                     rows.append(
@@ -95,12 +148,17 @@ class CheckSections(ReportData):
             "rendered with, the error in units of the estimate's combined standard error σ, and how many of the "
             "per-trial 95 % intervals cover the truth. Only a variant that contains every effect of the simulation "
             "can be expected to cover it."
+            + (
+                f" The per-trial fits on unreliable records ({esc(', '.join(garbage))}) are not counted."
+                if garbage
+                else ""
+            )
         )
         return table_html(header, rows, caption=caption, table_id="truth-table")
 
     def tracking_section(self) -> str:
         """Per trial: frames, flags by kind, samples used; then the contact sheets."""
-        rows, sheets = [], []
+        rows, sheets, attrs = [], [], []
         variant_for = {t: self.recommended(self.trials[t]["rig"]) for t in self.trials}
         for trial in self.trial_order():
             frames, tracks, angles = (self.docs.get((trial, k)) for k in ("frames", "tracks", "angles"))
@@ -110,11 +168,19 @@ class CheckSections(ReportData):
             elif not is_ok(frames):
                 frame_cells = [td(esc(failure_text(frames)), "na fail", span=4)]
             else:
+                fps = frames.get("mean_fps") if _finite(frames.get("mean_fps")) else frames.get("nominal_fps")
+                variable = ' <span class="warn">variable</span>' if frames.get("variable_frame_rate") else ""
                 frame_cells = [
                     td(str(frames.get("n_frames", "—")), "num"),
-                    td(esc(fmt(frames.get("nominal_fps"), 3)), "num"),
-                    td(str(frames.get("dropped_frames", "—")), "num"),
-                    td(str(frames.get("duplicate_timestamps", "—")), "num"),
+                    td(esc(fmt(fps, 4)) + variable, "num"),
+                    td(
+                        str(frames.get("dropped_frames", "—")),
+                        "num" + (" fail" if frames.get("dropped_frames") else ""),
+                    ),
+                    td(
+                        str(frames.get("duplicate_timestamps", "—")),
+                        "num" + (" fail" if frames.get("duplicate_timestamps") else ""),
+                    ),
                 ]
             if kind != "video":
                 flag_cell = td("—", "na")
@@ -134,13 +200,19 @@ class CheckSections(ReportData):
                 angle_cells = [td(esc(failure_text(angles)), "na fail", span=3)]
             fit = self.fits.get((variant_for[trial], trial)) if variant_for[trial] else None
             fitted = td(str(fit["n_samples"]), "num") if is_ok(fit) else td("—", "na")
+            notes = [esc(n) for n in frame_notes(frames)] if kind == "video" and is_ok(frames) else []
+            problems = record_problems(fit) or self.trial_problems(trial)
+            if problems:
+                found = problem_text(trial, problems[0], first_clause=True)
+                notes.insert(0, f"{garbage_badge(problems[0])} {esc(found)}")
             rows.append(
                 [td(esc(trial)), td(self.angle_label(trial), "num")]
                 + frame_cells
                 + [flag_cell]
                 + angle_cells
-                + [fitted]
+                + [fitted, f'<td class="warncell notes" style="{NOTES_STYLE}">' + "<br>".join(notes) + "</td>"]
             )
+            attrs.append({"data-trial": trial, **({"data-notes": str(len(notes))} if notes else {})})
             sheet = self.files.get("trials", {}).get(trial, {}).get("contact_sheet")
             if sheet and Path(sheet).is_file():
                 sheets.append((trial, Path(sheet).read_bytes(), is_ok(frames)))
@@ -156,14 +228,19 @@ class CheckSections(ReportData):
             "flagged",
             "angle noise (°)",
             "samples fitted",
+            "notes",
         ]
         caption = self.table_caption(
             "Tracking quality per trial: frames in the video (from the container: dropped frames and duplicate time "
             "stamps), the tracker's flags by kind (flagged frames are never interpolated), the angle samples from "
             "release to rest and how many of them are flagged, the angle record's noise, and the samples the "
-            "recommended variant's fit used (after the release transient and outliers)."
+            "recommended variant's fit used (after the release transient and outliers). fps: mean rate of the "
+            "frames the decoder yields (“variable”: a variable-frame-rate file, every frame keeps its own time "
+            "stamp). Notes: only what is notable — a trimmed clip's discarded packets, rotation metadata, more than "
+            "8 bits, dropped or duplicate frames, other warnings of the frames stage, and a record that failed the "
+            "fit's garbage checks."
         )
-        out = table_html(header, rows, caption=caption, table_id="tracking-table")
+        out = table_html(header, rows, caption=caption, table_id="tracking-table", row_attrs=attrs)
         if sheets:
             caption = self.figure_caption(
                 "Contact sheets: key frames of each video, for a visual check of the scene, marker and lighting."

@@ -11,15 +11,17 @@ from __future__ import annotations
 import numpy as np
 
 from pendulum.physics import TERMS
-from pendulum.report_data import ReportData, failure_text, is_ok, nested_parent
+from pendulum.report_data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report_format import (
     COEFFICIENTS,
     TERM_LABELS,
+    UNRELIABLE_STYLE,
     _finite,
     esc,
     estimate_cell,
     estimate_parts,
     fmt,
+    garbage_badge,
     table_html,
     td,
 )
@@ -47,14 +49,19 @@ class ComparisonSections(ReportData):
             truths = [self.truth.get(t) for t in trials if t in self.truth]
             header = ["coefficient", "estimate", "95 % interval"] + (["truth (synthetic)"] if truths else [])
             rows = []
+            joint_problems = record_problems(joint)
             for name, entry in joint.get("parameters", {}).items():
                 symbol, label, unit = COEFFICIENTS.get(name, (esc(name), name, ""))
                 value, qualifier = estimate_parts(entry)
-                row = [
-                    td(f"{label}, {symbol} ({unit})" if unit != "–" else f"{label}, {symbol}"),
-                    td(f"<b>{esc(value)}</b>", "num"),
-                    td(esc(qualifier), "num"),
-                ]
+                row = [td(f"{label}, {symbol} ({unit})" if unit != "–" else f"{label}, {symbol}")]
+                if joint_problems:  # garbage in: struck, grey, never a plain number
+                    row += [
+                        f'<td class="num unreliable" style="{UNRELIABLE_STYLE}"><s>{esc(value)}</s></td>',
+                        f'<td class="num unreliable" style="{UNRELIABLE_STYLE}"><s>{esc(qualifier)}</s> '
+                        f"{garbage_badge(joint_problems[0])}</td>",
+                    ]
+                else:
+                    row += [td(f"<b>{esc(value)}</b>", "num"), td(esc(qualifier), "num")]
                 if truths:
                     row.append(td(esc(self._truth_text(trials, name)), "num"))
                 rows.append(row)
@@ -119,6 +126,35 @@ class ComparisonSections(ReportData):
                 f'<span class="warn">{len(failed)} trial(s) failed and are not in the fit: {names}</span> '
                 '(see <a href="#failed-trials">Failed trials</a>).'
             )
+        joint_problems = record_problems(joint)
+        if joint_problems:
+            out.append(
+                f'{garbage_badge()} <span class="warn">The recommended joint fit itself rests on an unreliable '
+                f"record: its coefficients are not measurements</span> ({esc(joint_problems[0])})."
+            )
+        unreliable, n_fits = self.unreliable_fits(self.rig_trials(rig))
+        if unreliable:
+            trials = sorted({t for _, t in unreliable}, key=self.rig_trials(rig).index)
+            items = "; ".join(f"<b>{esc(t)}</b>: {esc(problem_text(t, self.trial_problems(t)[0]))}" for t in trials)
+            out.append(
+                f'{garbage_badge()} <span class="warn">{len(unreliable)} of {n_fits} fits rest on unreliable '
+                f"records</span> (garbage in; coefficients struck through in Table 3, the joint fits leave these "
+                f"trials out): {items}."
+            )
+        said = set(failed.trial) | {t for _, t in unreliable}
+        left_out = {
+            t: r
+            for t, r in self.left_out(rig).items()
+            if not (t in said and (r[0].startswith("unreliable record") or t in set(failed.trial)))
+        }
+        if left_out:
+            items = "; ".join(
+                f"{esc(t)}"
+                + ("" if len(vs) == len(self.order) else f" (by {esc(', '.join(vs))})")
+                + f" — {esc(reason)}"
+                for t, (reason, vs) in left_out.items()
+            )
+            out.append(f"Left out of the joint fits: {items}.")
         if not best["comparable"]:
             out.append("The variants' joint fits used different samples: their AIC values are not strictly comparable.")
         for name, entry in joint.get("parameters", {}).items():
@@ -137,10 +173,11 @@ class ComparisonSections(ReportData):
         for w in joint.get("warnings", []):
             if "lower bound" not in w and "not identifiable" not in w:  # said above, in words
                 out.append(esc(w))
-        per_trial = [
+        per_trial = [  # other than the garbage-in problems, said above
             t
             for t in self.rig_trials(rig)
-            if is_ok(self.fits.get((variant, t))) and self.fits[(variant, t)].get("warnings")
+            if is_ok(self.fits.get((variant, t)))
+            and set(self.fits[(variant, t)].get("warnings", [])) - set(record_problems(self.fits[(variant, t)]))
         ]
         if per_trial:
             out.append(
@@ -163,16 +200,14 @@ class ComparisonSections(ReportData):
                 joint = self.joint.get((v, rig))
                 if not is_ok(joint):
                     rows.append([td(esc(v)), td(esc(failure_text(joint)), "na fail", span=8)])
+                    attrs.append({"data-variant": v})
                     continue
-                lag1 = [
-                    self.fits[(v, t)]["trials"][t].get("residual_lag1_autocorrelation")
-                    for t in trials
-                    if is_ok(self.fits.get((v, t)))
-                ]
+                clean = [t for t in trials if is_ok(self.fits.get((v, t))) and not record_problems(self.fits[(v, t)])]
+                lag1 = [self.fits[(v, t)]["trials"][t].get("residual_lag1_autocorrelation") for t in clean]
                 lag1 = [x for x in lag1 if _finite(x)]
                 ratio = [
                     self.fits[(v, t)]["rms_deg"] / self.docs[(t, "angles")]["noise_deg"]
-                    for t in trials
+                    for t in clean
                     if is_ok(self.fits.get((v, t)))
                     and is_ok(self.docs.get((t, "angles")))
                     and _finite(self.docs[(t, "angles")].get("noise_deg"))
@@ -187,9 +222,13 @@ class ComparisonSections(ReportData):
                     ),
                     default=None,
                 )
+                problems = record_problems(joint)
                 rows.append(
                     [
-                        td(f"<b>{esc(v)}</b>" if best and v == best["variant"] else esc(v)),
+                        td(
+                            (f"<b>{esc(v)}</b>" if best and v == best["variant"] else esc(v))
+                            + (f" {garbage_badge(problems[0])}" if problems else "")
+                        ),
                         td(esc(", ".join(TERM_LABELS.get(t, t) for t in self.variants[v]) or "—")),
                         td(str(joint.get("n_parameters", "—")), "num"),
                         td(esc(fmt(joint["rms_deg"], 2)), "num"),
@@ -204,6 +243,7 @@ class ComparisonSections(ReportData):
                     ]
                 )
                 attrs.append({"data-variant": v})
+            unreliable = sorted({t for _, t in self.unreliable_fits(trials)[0]}, key=trials.index)
             header = [
                 "variant",
                 "damping terms",
@@ -222,6 +262,12 @@ class ComparisonSections(ReportData):
                 "estimates. Caveat: AIC and BIC treat the samples as independent; the residuals are autocorrelated "
                 "(lag-1 up to the value shown), so the effective number of samples is smaller and the differences "
                 "overstate the evidence. Read them with the RMS against the noise and the consistency across trials."
+                + (
+                    f" The medians leave out the per-trial fits on unreliable records ({esc(', '.join(unreliable))}), "
+                    "as the joint fits do."
+                    if unreliable
+                    else ""
+                )
             )
             out.append(table_html(header, rows, caption=caption, table_id=f"model-comparison-{rig}", row_attrs=attrs))
             out.append(self._term_evidence(rig, best))

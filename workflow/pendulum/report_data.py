@@ -123,6 +123,34 @@ def best_variant(summary: pd.DataFrame, fit_label: str, trials: list[str]) -> di
     }
 
 
+def record_problems(document: dict | None) -> list[str]:
+    """The garbage-in sentences of a fit whose record failed the checks (``reliable: false``); [] otherwise.
+
+    From ``trials.<name>.record_checks.problems`` (:func:`pendulum.record_checks.record_checks`); a document
+    marked unreliable without them gives one sentence saying so.
+    """
+    if not is_ok(document) or document.get("reliable", True) is not False:
+        return []
+    problems = [
+        p
+        for entry in (document.get("trials") or {}).values()
+        for p in (entry.get("record_checks") or {}).get("problems", [])
+    ]
+    return problems or ["the fit marks its angle record unreliable (see its warnings)"]
+
+
+def problem_text(trial: str, problem: str, first_clause: bool = False) -> str:
+    """A garbage-in sentence shown next to its trial's name: without its leading "trial <name>: ";
+    ``first_clause``: only up to the first colon (what was found, not the advice)."""
+    text = problem.removeprefix(f"trial {trial}: ")
+    return text.split(": ", 1)[0] if first_clause else text
+
+
+def is_unreliable(document: dict | None) -> bool:
+    """A fit that succeeded on a record that failed the garbage checks: its numbers are not measurements."""
+    return bool(record_problems(document))
+
+
 def short_warning(text: str) -> str:
     """A fit warning in two or three words (Table 3's warning column)."""
     lowered = text.lower()
@@ -227,6 +255,32 @@ class ReportData:
     def trial_order(self) -> list[str]:
         """By rig, then largest release first (as the paper's tables), then by name; trials without an angle last."""
         return list(self._trial_order)
+
+    def trial_problems(self, trial: str) -> list[str]:
+        """Garbage-in sentences of a trial's record: those of its first per-trial fit (in variant order) marked
+        unreliable; [] when every fit of it passed the checks."""
+        for v in self.order:
+            problems = record_problems(self.fits.get((v, trial)))
+            if problems:
+                return problems
+        return []
+
+    def unreliable_fits(self, trials: list[str]) -> tuple[list[tuple[str, str]], int]:
+        """The (variant, trial) per-trial fits of ``trials`` on unreliable records, and how many fits succeeded."""
+        fitted = [(v, t) for t in trials for v in self.order if is_ok(self.fits.get((v, t)))]
+        return [(v, t) for v, t in fitted if record_problems(self.fits[(v, t)])], len(fitted)
+
+    def left_out(self, rig: str) -> dict[str, tuple[str, list[str]]]:
+        """Trials the rig's joint fits left out: trial → (reason, variants), from each joint's ``excluded_trials``."""
+        out: dict[str, tuple[str, list[str]]] = {}
+        for v in self.order:
+            joint = self.joint.get((v, rig))
+            if not is_ok(joint):
+                continue
+            for trial, reason in sorted((joint.get("excluded_trials") or {}).items()):
+                reason = str(reason).replace(f": trial {trial}: ", ": ", 1)  # named already
+                out.setdefault(trial, (reason, []))[1].append(v)
+        return out
 
     def kc(self, variant: str, trial: str) -> float | None:
         fit = self.fits.get((variant, trial))

@@ -171,12 +171,33 @@ def td(content: str, cls: str | None = None, span: int = 1, title: str | None = 
     return f"<td{attrs}>{content}</td>"
 
 
-def estimate_cell(entry: dict | None, missing: str = "—") -> str:
+# Garbage in (issue 12): styled inline, so the marks read the same in any page the sections are shown in.
+UNRELIABLE_STYLE = "color:#8a8a8a"
+BADGE_STYLE = (
+    "display:inline-block;padding:0 5px;margin:0 2px;border:1px solid #a33a00;border-radius:3px;"
+    "color:#a33a00;background:#fff4ec;font-size:0.78rem;font-weight:600;font-style:normal;white-space:nowrap"
+)
+
+
+def garbage_badge(problem: str | None = None) -> str:
+    """The "garbage in" mark of a fit on an unreliable record; ``problem`` (its first sentence) as tooltip."""
+    title = f' title="{esc(problem)}"' if problem else ""
+    return f'<span class="garbage-in" style="{BADGE_STYLE}"{title}>garbage in</span>'
+
+
+def estimate_cell(entry: dict | None, missing: str = "—", unreliable: bool = False) -> str:
+    """One coefficient's cell: value over its interval; ``unreliable`` (garbage in): struck through and grey."""
     if entry is None:
         return td(missing, "na", title="not a parameter of this variant")
-    value, qualifier = estimate_parts(entry)
-    flag = " flagged" if entry.get("at_bound") or entry.get("identifiable") is False else ""
+    value, qualifier = estimate_parts({**entry, "identifiable": True} if unreliable else entry)
     title = entry.get("note") or entry.get("reason")
+    if unreliable:  # the badge says why; "not identifiable" would repeat it
+        return (
+            f'<td class="num unreliable" style="{UNRELIABLE_STYLE}"'
+            + (f' title="{esc(title)}"' if title else "")
+            + f'><span class="v"><s>{esc(value)}</s></span><span class="q"><s>{esc(qualifier)}</s></span></td>'
+        )
+    flag = " flagged" if entry.get("at_bound") or entry.get("identifiable") is False else ""
     return td(f'<span class="v">{esc(value)}</span><span class="q">{esc(qualifier)}</span>', "num" + flag, title=title)
 
 

@@ -8,8 +8,26 @@ from __future__ import annotations
 
 from pendulum.physics import Rig
 from pendulum.records import rig_tolerances
-from pendulum.report_data import ReportData, failure_text, is_ok, short_warning, true_value
-from pendulum.report_format import COEFFICIENTS, RIG_LABELS, esc, estimate_cell, fmt, table_html, td
+from pendulum.report_data import (
+    ReportData,
+    failure_text,
+    is_ok,
+    problem_text,
+    record_problems,
+    short_warning,
+    true_value,
+)
+from pendulum.report_format import (
+    COEFFICIENTS,
+    RIG_LABELS,
+    UNRELIABLE_STYLE,
+    esc,
+    estimate_cell,
+    fmt,
+    garbage_badge,
+    table_html,
+    td,
+)
 
 
 class TableSections(ReportData):
@@ -104,31 +122,17 @@ class TableSections(ReportData):
         for trial in self.trial_order():
             angles = self.docs.get((trial, "angles"), {})
             noise = angles.get("noise_deg") if is_ok(angles) else None
-            row = [td(esc(trial)), td(self.angle_label(trial), "num"), td(esc(fmt(noise, 2)), "num")]
+            problems = self.trial_problems(trial)
+            badge = f" {garbage_badge(problems[0])}" if problems else ""
+            row = [td(esc(trial) + badge), td(self.angle_label(trial), "num"), td(esc(fmt(noise, 2)), "num")]
             for v in order:
-                fit = self.fits.get((v, trial))
-                if is_ok(fit):
-                    row += [
-                        td(esc(fmt(fit["rms_rad"], 2)), "num"),
-                        td(esc(fmt(fit["rms_deg"], 2)), "num"),
-                        td(esc(fmt(1000 * fit["rms_arc_m"], 2)), "num"),
-                    ]
-                else:
-                    row.append(td("failed", "na fail", span=3, title=failure_text(fit)))
+                row += self._rms_cells(self.fits.get((v, trial)), "failed")
             rows.append(row)
-            attrs.append({"data-trial": trial})
+            attrs.append({"data-trial": trial, **({"data-reliable": "false"} if problems else {})})
         for rig in self.rig_names:
             row = [td(f"<b>joint</b> {esc(rig)}"), td("all", "num"), td("", "na")]
             for v in order:
-                joint = self.joint.get((v, rig))
-                if is_ok(joint):
-                    row += [
-                        td(esc(fmt(joint["rms_rad"], 2)), "num"),
-                        td(esc(fmt(joint["rms_deg"], 2)), "num"),
-                        td(esc(fmt(1000 * joint["rms_arc_m"], 2)), "num"),
-                    ]
-                else:
-                    row.append(td("—", "na", span=3))
+                row += self._rms_cells(self.joint.get((v, rig)), "—")
             rows.append(row)
             attrs.append({"data-trial": f"joint:{rig}", "class": "joint"})
         caption = self.table_caption(
@@ -137,7 +141,45 @@ class TableSections(ReportData):
             "noise of the tracked record: a variant that captures the physics leaves an RMS close to it."
             + self.dagger_note()
         )
-        return table_html(header, rows, caption=caption, table_id="table2", row_attrs=attrs)
+        return table_html(header, rows, caption=caption, table_id="table2", row_attrs=attrs, note=self.garbage_note())
+
+    def _rms_cells(self, fit: dict | None, missing: str) -> list[str]:
+        """Three RMS cells (rad, °, arc mm) of one fit; grey with the problem as tooltip on an unreliable record."""
+        if not is_ok(fit):
+            if missing == "failed":
+                return [td("failed", "na fail", span=3, title=failure_text(fit))]
+            return [td(missing, "na", span=3)]
+        values = (fit["rms_rad"], fit["rms_deg"], 1000 * fit["rms_arc_m"])
+        problems = record_problems(fit)
+        if not problems:
+            return [td(esc(fmt(x, 2)), "num") for x in values]
+        return [
+            f'<td class="num unreliable" style="{UNRELIABLE_STYLE}" title="{esc(problems[0])}">{esc(fmt(x, 2))}</td>'
+            for x in values
+        ]
+
+    @staticmethod
+    def _garbage_cell(problem: str, span: int) -> str:
+        """A row-wide cell under an unreliable trial's fits: the badge and the record's first problem."""
+        return td(
+            f"{garbage_badge()} <b>not measurements</b> (struck through): {esc(problem)}.",
+            "garbage-note",
+            span=span,
+        )
+
+    def garbage_note(self) -> str | None:
+        """The table note naming each trial whose record failed the garbage checks, with its first problem."""
+        items = [(t, self.trial_problems(t)) for t in self.trial_order()]
+        items = [(t, p) for t, p in items if p]
+        if not items:
+            return None
+        return (
+            f"{garbage_badge()} {len(items)} trial(s) rest on unreliable records (the garbage checks of the fit: "
+            "usable fraction, rest angle, jumping residuals, record noise); their numbers are shown grey and "
+            "their coefficients struck through, not measurements, and the joint fits leave them out: "
+            + "; ".join(f"<b>{esc(t)}</b>: {esc(problem_text(t, p[0]))}" for t, p in items)
+            + "."
+        )
 
     def coefficient_table(self) -> str:
         """Table 3 (as the paper's, done right): coefficients per trial and variant with 95 % intervals."""
@@ -157,12 +199,19 @@ class TableSections(ReportData):
                 row = label_cells + [td(esc(v)), td(esc(failure_text(fit)), "na fail", span=len(names) + 1)]
             else:
                 warnings = fit.get("warnings", [])
-                short = sorted({short_warning(w) for w in warnings})
+                problems = record_problems(fit)
+                short = sorted({short_warning(w) for w in warnings if w not in problems})
                 if warnings:
                     notes.append((kind, trial, v, warnings))
                 row = label_cells + [td(esc(v), "vname")]
-                row += [estimate_cell(fit["parameters"].get(n)) if self._has(v, n) else td("—", "na") for n in names]
-                row.append(td(esc(", ".join(short)) or "", "warncell"))
+                row += [
+                    estimate_cell(fit["parameters"].get(n), unreliable=bool(problems))
+                    if self._has(v, n)
+                    else td("—", "na")
+                    for n in names
+                ]
+                badge = garbage_badge(problems[0]) + (" " if short else "") if problems else ""
+                row.append(td(badge + esc(", ".join(short)), "warncell"))
             rows.append(row)
             attrs.append({"data-trial": trial, "data-variant": v, "data-kind": kind})
 
@@ -177,6 +226,12 @@ class TableSections(ReportData):
                 ]
                 fit_row(label, v, self.fits.get((v, trial)), "trial", trial)
                 first = False
+            problems = self.trial_problems(trial)
+            if problems:
+                rows.append(
+                    [td(""), td(""), td(""), self._garbage_cell(problem_text(trial, problems[0]), len(names) + 2)]
+                )
+                attrs.append({"data-trial": trial, "data-kind": "garbage"})
             if trial in self.truth:
                 rows.append(
                     [td(""), td(""), td(""), td("truth", "truth")]
@@ -201,6 +256,23 @@ class TableSections(ReportData):
                 fit_row(label, v, joint, "joint", f"joint:{rig}")
                 attrs[-1]["class"] = "joint"
                 first = False
+            left_out = self.left_out(rig)
+            if left_out:
+                items = "; ".join(
+                    f"<b>{esc(t)}</b>"
+                    + ("" if len(vs) == len(self.order) else f" ({esc(', '.join(vs))})")
+                    + f": {esc(reason)}"
+                    for t, (reason, vs) in left_out.items()
+                )
+                rows.append(
+                    [
+                        td(""),
+                        td(""),
+                        td(""),
+                        td(f"Left out of the joint fits: {items}.", "left-out", span=len(names) + 2),
+                    ]
+                )
+                attrs.append({"data-trial": f"joint:{rig}", "data-kind": "left-out", "class": "joint"})
             trials = self.rig_trials(rig)
             if any(t in self.truth for t in trials):
                 rows.append(
