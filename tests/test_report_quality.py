@@ -252,3 +252,10 @@ def test_the_tracking_table_keeps_a_clean_trial_quiet_and_notes_a_phone_file(gar
     assert '<td class="num">1844</td>' in phone and "trimmed clip: 213 packet(s)" in phone
     assert "</span> fitted rest angle −12.0° from the vertical (more than 2°)<br>trimmed clip: 213 packet(s)" in phone
     assert phone.count("<br>") == 5  # one note a line, the fit's verdict first
+
+
+def test_the_consistency_figure_leaves_out_fits_on_unreliable_records_and_says_which(garbage, tmp_path):
+    html = garbage.consistency_figure()
+    assert "Not plotted: the fits of t10 (unreliable records, Table 3)." in html
+    (tmp_path / "clean").mkdir()
+    assert "Not plotted" not in _report(tmp_path / "clean", garbage=False).consistency_figure()

@@ -12,7 +12,7 @@ import io
 import numpy as np
 
 from pendulum.physics import ADDED_MASS
-from pendulum.report_data import ReportData, is_ok, true_value
+from pendulum.report_data import ReportData, is_ok, record_problems, true_value
 from pendulum.report_format import MARKERS, PLAIN_SYMBOLS, _finite, esc, figure_html, fmt
 
 FIGURE_DPI = 110
@@ -150,8 +150,8 @@ class FigureSections(ReportData):
                             xs, ys, lo, hi, hollow = [], [], [], [], []
                             for t in trials:
                                 fit = self.fits.get((v, t))
-                                if not is_ok(fit) or name not in fit["parameters"]:
-                                    continue
+                                if not is_ok(fit) or name not in fit["parameters"] or record_problems(fit):
+                                    continue  # failed, or a fit on an unreliable record: not a measurement
                                 e = fit["parameters"][name]
                                 x = self.release_deg(t) if xkind == "release" else self.kc(v, t)
                                 if x is None:
@@ -219,6 +219,7 @@ class FigureSections(ReportData):
                     frameon=False,
                 )
                 png = figure_png(fig)
+            unreliable = sorted({t for t in trials for v in self.order if record_problems(self.fits.get((v, t)))})
             caption = self.figure_caption(
                 f"Consistency across the trials of rig {esc(rig)}: each coefficient of each trial's fit against the "
                 "release angle (left) and the Keulegan–Carpenter number (right), per variant (markers slightly "
@@ -227,6 +228,11 @@ class FigureSections(ReportData):
                 "Line and band: each variant's joint fit with its statistical 95 % interval widened by the scale "
                 "factor S. Hollow markers: at the lower bound"
                 + ("; dashed: truth." if self.truth else ".")
+                + (
+                    f" Not plotted: the fits of {esc(', '.join(unreliable))} (unreliable records, Table 3)."
+                    if unreliable
+                    else ""
+                )
                 + " A model that captures the physics gives the same value at every release."
             )
             out.append(figure_html(png, caption, alt=f"coefficients against release angle and KC, rig {rig}"))
