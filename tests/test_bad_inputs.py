@@ -596,3 +596,19 @@ def test_less_than_one_period_is_refused_before_fitting():
     table = syn.synthetic_angle_table(model, PAPER_TRUTH, 20.0, duration_s=3.5, rng=np.random.default_rng(0))
     with pytest.raises(InputError, match=r"trial brief: record too short to fit: 3.2\d s .* 1 swing extremum"):
         load_record(table, "brief", PAPER, FitSettings())
+
+
+def test_a_record_that_ends_before_the_release_transient_is_refused_naming_its_time_span():
+    """Every sample before release_skip_s (0.2 s of record, or times in minutes): was an IndexError."""
+    model = PendulumModel(Rig.from_mapping(PAPER), tuple(EFFECTS))
+    table = syn.synthetic_angle_table(model, PAPER_TRUTH, 20.0, duration_s=0.2)
+    assert table.time_s.max() < FitSettings().release_skip_s
+    with pytest.raises(
+        InputError,
+        match=r"^results/angles/early\.csv \(trial early\): record too short to fit: its 6 usable angle samples "
+        r"span 0\.0333 to 0\.2 s after the release, all before the release transient ends "
+        r"\(fitting\.release_skip_s = 0\.25 s\); is the time column in seconds",
+    ):
+        load_record(table, "early", PAPER, FitSettings(), source="results/angles/early.csv")
+    with pytest.raises(InputError, match=r"^trial lost: no usable angle sample: all 6 rows are flagged"):
+        load_record(table.assign(flag="lost"), "lost", PAPER, FitSettings())

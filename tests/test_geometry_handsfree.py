@@ -13,7 +13,7 @@ from scipy.stats import binom
 from conftest import ROOT
 from pendulum.fitting import fit_trials
 from pendulum.geometry import estimate_rig_geometry, fit_circle, pooled_pivot
-from pendulum.physics import PendulumModel, Rig, SimulationDiverged
+from pendulum.physics import PendulumModel, Rig, SimulationDiverged, simulate
 from pendulum.records import FitSettings, load_record
 from pendulum.synthetic import synthetic_angle_table
 from pendulum.trials import ConfigError, Trial, add_sidecar_rigs, needs_rig_geometry, pooled_trials, trial_settings
@@ -205,8 +205,10 @@ def test_a_geometry_failure_is_written_to_the_rule_log(tmp_path, monkeypatch):
     assert "x: left out of the pooled geometry (tracking failed: x.mp4: no marker found)" in text
 
 
-def test_a_jump_at_the_start_of_a_record_names_the_diverging_simulation_not_a_math_domain_error():
-    """The real fit's `ValueError: math domain error`: a jump in the first samples gave θ̇0 ≈ −4700°/s, RK4 ran to ∞."""
+def test_a_jump_at_the_start_of_a_record_is_left_out_and_the_fit_finds_the_truth():
+    """The real fit's `ValueError: math domain error`: a jump in the first samples gave θ̇0 ≈ −4700°/s, RK4 ran
+    to ∞. The decay analysis now finds the 3 jumped samples and the fit leaves them out (truth m_a = 2.5 kg);
+    the guard stays for a start far from any physical swing."""
     model = PendulumModel(Rig.from_mapping(PAPER_RIG), ("quadratic_drag",))
     table = synthetic_angle_table(
         model, {"added_mass_kg": 2.5, "drag_area_m2": 0.0258}, 20.0, rng=np.random.default_rng(1), duration_s=8.0
@@ -214,5 +216,16 @@ def test_a_jump_at_the_start_of_a_record_names_the_diverging_simulation_not_a_ma
     first = np.flatnonzero(table.time_s >= 0.25)[:3]
     table.loc[first, "theta_rad"] += math.radians(170)
     record = load_record(table, "x", PAPER_RIG, FitSettings())
-    with pytest.raises(SimulationDiverged, match=r"simulation diverged .*θ̇0 = .*°/s.*first samples"):
-        fit_trials([record], ["quadratic_drag"])
+    fit = fit_trials([record], ["quadratic_drag"])
+    assert fit["parameters"]["added_mass_kg"]["value"] == pytest.approx(2.5, abs=0.002)
+    assert fit["parameters"]["drag_area_m2"]["value"] == pytest.approx(0.0258, rel=0.002)
+    assert fit["trials"]["x"]["outlier_times_s"][:3] == pytest.approx(record.time_s[:3].tolist())
+    with pytest.raises(SimulationDiverged, match=r"simulation diverged .*θ̇0 = -4727°/s.*first samples"):
+        simulate(
+            model,
+            {"added_mass_kg": 2.342, "drag_area_m2": 0.0297},
+            math.radians(189.8),
+            math.radians(-4727),
+            record.time_s,
+            max_step_s=0.02,
+        )

@@ -10,9 +10,9 @@ import math
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import nnls
+from scipy.optimize import least_squares, nnls
 
-from pendulum.geometry import noise_level, oscillation_centre_rad, turning_points
+from pendulum.geometry import noise_level, swing_centre_rad, turning_points
 from pendulum.physics import ADDED_MASS, TERMS, PendulumModel
 from pendulum.records import AngleRecord
 
@@ -41,17 +41,23 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
     With A the swing amplitude, the small-damping energy balance over one half
     cycle gives the amplitude loss ΔA = 2τ_f/K + (π c / 2Iω₀) A + (4 D / 3I) A²,
     K = (mg − B)L, D = ½ρ C_dA L³. The large-amplitude period is
-    T = T₀ (1 + A²/16 + 11A⁴/3072), T₀ = 2π √(I/K).
+    T = T₀ (1 + A²/16 + 11A⁴/3072), T₀ = 2π √(I/K). The rest offset is the
+    swing centre (:func:`~pendulum.geometry.swing_centre_rad`, right at any frame
+    rate), else the median of the last fifth; θ0, θ̇0 come from :func:`start_state`
+    without the jumps of :func:`_start_outliers` (``start_outlier_samples``, left
+    out of the extinction curve too).
     """
     rig = model.rig
     t, th = record.time_s, record.theta_rad
     sigma = noise_level(th)
-    centre = oscillation_centre_rad(th, sigma)
-    if centre is None:
-        centre = float(np.median(th[-max(10, th.size // 5) :]))
+    found = swing_centre_rad(th)
+    centre = found[0] if found is not None else float(np.median(th[-max(10, th.size // 5) :]))
     x = th - centre
     K = rig.restoring_torque_nm
     _, a0, a1, half_t = _half_cycle_pairs(t, x, max(20 * sigma, 1e-4))
+    outliers = _start_outliers(t, x, _start_period_s(half_t, rig), sigma)
+    if outliers.any():  # jumps at the start would add false extrema to the extinction curve
+        _, a0, a1, half_t = _half_cycle_pairs(t[~outliers], x[~outliers], max(20 * sigma, 1e-4))
     mean_amp, loss = 0.5 * (a0 + a1), a0 - a1
     start = {}
     if half_t.size >= 1:
@@ -87,17 +93,124 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
         start[TERMS[name].parameter] = float(value * to_coefficient[name])
     for name in model.terms:
         start.setdefault(TERMS[name].parameter, 0.0)
-    # initial state at the first sample: local quadratic through the first samples
-    n0 = min(7, t.size)
-    poly = np.polyfit(t[:n0] - t[0], x[:n0], 2)
+    state = start_state(t, x, _start_period_s(half_t, rig), math.sqrt(K / inertia), outliers)
     return {
         "physical": start,
-        "theta0_rad": float(poly[2]),
-        "omega0_rad_s": float(poly[1]),
+        "theta0_rad": state.pop("theta0_rad"),
+        "omega0_rad_s": state.pop("omega0_rad_s"),
         "rest_offset_rad": float(centre),
         "period_s": period0,
         "n_half_cycles": int(half_t.size),
+        "start_outlier_samples": np.flatnonzero(outliers).tolist(),
+        **state,
     }
+
+
+START_WINDOW_PERIODS = 0.75  # the robust decaying sinusoid is fitted to the record's first 3/4 period
+LOCAL_WINDOW_PERIODS = 1 / 8  # the local cubic spans the first 1/8 period (at least LOCAL_MIN_SAMPLES)
+LOCAL_MIN_SAMPLES = 9
+START_OUTLIER_SIGMAS = 8.0  # a sample further than this (robust σ of the sinusoid's residuals) is a jump
+SPEED_MARGIN = 1.5  # |θ̇0| up to 1.5 × the largest speed a release from the record's largest swing gives
+
+
+def _start_period_s(half_t, rig) -> float:
+    """Period at the record's start: twice the median of its first three half periods (else with m_a = ρV)."""
+    if half_t.size:
+        return float(2 * np.median(half_t[:3]))
+    inertia = rig.pivot_inertia_kg_m2 + rig.fluid_density_kg_m3 * rig.displaced_volume_m3 * rig.length_m**2
+    return 2 * math.pi * math.sqrt(inertia / rig.restoring_torque_nm)
+
+
+def _start_window(t, period_s) -> np.ndarray:
+    return (t - t[0]) <= START_WINDOW_PERIODS * period_s
+
+
+def _fit_decaying_sinusoid(tau, x, omega_rad_s, robust_scale=None):
+    """Least squares x ≈ e^{−λτ}(a cos ωτ + b sin ωτ) + c, ω within a factor 2 and 0 ≤ λ ≤ ω/5 free; (a, b, ω, λ, c).
+
+    ``robust_scale``: Cauchy loss with that scale (a few wild samples barely pull the fit), else plain.
+    """
+    basis = np.column_stack([np.cos(omega_rad_s * tau), np.sin(omega_rad_s * tau), np.ones_like(tau)])
+    (a, b, c), *_ = np.linalg.lstsq(basis, x, rcond=None)
+
+    def residual(p):
+        return np.exp(-p[3] * tau) * (p[0] * np.cos(p[2] * tau) + p[1] * np.sin(p[2] * tau)) + p[4] - x
+
+    lower = [-np.inf, -np.inf, 0.5 * omega_rad_s, 0.0, -np.inf]
+    upper = [np.inf, np.inf, 2.0 * omega_rad_s, 0.2 * omega_rad_s, np.inf]
+    loss = {} if robust_scale is None else {"loss": "cauchy", "f_scale": robust_scale}
+    sol = least_squares(residual, [a, b, omega_rad_s, 0.0, c], bounds=(lower, upper), x_scale="jac", **loss)
+    return sol.x
+
+
+def _sinusoid(p, tau):
+    a, b, w, lam, c = p
+    return np.exp(-lam * tau) * (a * np.cos(w * tau) + b * np.sin(w * tau)) + c
+
+
+def _start_outliers(t, x, period_s, sigma) -> np.ndarray:
+    """Samples of the first 3/4 period that jump off a decaying sinusoid fitted to it (mis-tracked frames).
+
+    Fitted with a Cauchy loss (scale: the robust σ of a first linear fit), then
+    by least squares without the samples whose residual exceeds
+    max(8 robust σ, 8 σ_noise), robust σ = 1.4826 × median |residual|, until
+    the set is stable (on clean records the largest residual is ≤ 4 robust σ,
+    also at 75° swings). Samples outside the window are never outliers.
+    """
+    out = np.zeros(t.size, bool)
+    window = np.flatnonzero(_start_window(t, period_s))
+    if window.size < 12:
+        return out
+    tau, xw = t[window] - t[0], x[window]
+    omega = 2 * math.pi / period_s
+    basis = np.column_stack([np.cos(omega * tau), np.sin(omega * tau), np.ones_like(tau)])
+    first = xw - basis @ np.linalg.lstsq(basis, xw, rcond=None)[0]
+    params = _fit_decaying_sinusoid(tau, xw, omega, max(1.4826 * float(np.median(np.abs(first))), sigma, 1e-9))
+    keep = np.ones(window.size, bool)
+    for _ in range(5):
+        r = _sinusoid(params, tau) - xw
+        scale = 1.4826 * float(np.median(np.abs(r[keep])))
+        new = np.abs(r) <= START_OUTLIER_SIGMAS * max(scale, sigma, 1e-12)
+        if (new == keep).all() or new.sum() < 12:
+            break
+        keep = new
+        params = _fit_decaying_sinusoid(tau[keep], xw[keep], omega)
+    out[window[~keep]] = True
+    return out
+
+
+def start_state(t, x, period_s, natural_rad_s, outliers) -> dict:
+    """θ0, θ̇0 of a record (θ about the rest offset) at its first sample, robust to jumps there.
+
+    A cubic through the samples of the first 1/8 period that are not ``outliers``
+    (at least 9), evaluated at t0. A θ̇0 no release could give, beyond
+    1.5 ω_max with ω_max = 2 ω_n sin(θ_max/2) (energy from rest at the record's
+    largest inlying |θ|, θ_max, over the first 3/4 period; ω_n = √(K/I)), or a
+    θ0 beyond 1.5 θ_max, is refused: the decaying sinusoid fitted to the first
+    3/4 period (inliers) gives θ(t0), θ̇(t0) instead (biased by up to 20 % at
+    75° swings, never wild), clipped to those bounds.
+    """
+    good = ~outliers & np.isfinite(x)
+    window = _start_window(t, period_s) & good
+    theta_max = float(min(np.max(np.abs(x[window])), math.pi)) if window.any() else float(np.nanmax(np.abs(x)))
+    speed_limit = SPEED_MARGIN * 2 * natural_rad_s * math.sin(theta_max / 2)
+    idx = np.flatnonzero(good)
+    n_local = max(LOCAL_MIN_SAMPLES, int(np.sum(t[idx] - t[0] <= LOCAL_WINDOW_PERIODS * period_s)))
+    idx = idx[: min(n_local, idx.size)]
+    poly = np.polyfit(t[idx] - t[0], x[idx], min(3, idx.size - 1))
+    theta0, omega0 = float(poly[-1]), float(poly[-2])
+    state = {"start_method": "local cubic", "start_speed_limit_rad_s": speed_limit}
+    if abs(omega0) <= speed_limit and abs(theta0) <= SPEED_MARGIN * theta_max:
+        return state | {"theta0_rad": theta0, "omega0_rad_s": omega0}
+    state["refused_start"] = {"theta0_rad": theta0, "omega0_rad_s": omega0}
+    in_window = np.flatnonzero(window)
+    if in_window.size >= 8:
+        a, b, w, lam, c = _fit_decaying_sinusoid(t[in_window] - t[0], x[in_window], 2 * math.pi / period_s)
+        theta0, omega0 = float(a + c), float(-lam * a + w * b)  # θ(0), θ̇(0) of the sinusoid
+        state["start_method"] = "decaying sinusoid"
+    theta0 = float(np.clip(theta0, -SPEED_MARGIN * theta_max, SPEED_MARGIN * theta_max))
+    omega0 = float(np.clip(omega0, -speed_limit, speed_limit))
+    return state | {"theta0_rad": theta0, "omega0_rad_s": omega0}
 
 
 def _half_cycle_pairs(t, x, min_amplitude_rad):

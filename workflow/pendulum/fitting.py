@@ -196,17 +196,21 @@ def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None =
     lower = np.array([lower_bound(n) for n in names] + [-np.inf] * (3 * len(records)))
     lower[0] = _added_mass_lower_kg(records, settings)
     problem = _Problem(model_for, records, names, settings.max_step_s)
+    for k, start in enumerate(starts):  # jumps in a record's first samples (decay analysis) are never fitted:
+        problem.masks[k][start.get("start_outlier_samples", [])] = False  # least squares would chase them (θ̇0 → ∞)
+    n_outliers = sum(len(s.get("start_outlier_samples", [])) for s in starts)
     sol = problem.solve(x0, lower)
     # one pass of outlier rejection (mis-tracked points), then refit from the solution
-    n_outliers = 0
+    n_rejected = 0
     parts = problem.trial_residuals(sol.x)
     for k, r in enumerate(parts):
         robust = 1.4826 * np.median(np.abs(r - np.median(r)))
         bad = np.abs(r - np.median(r)) > settings.outlier_sigmas * max(robust, 1e-12)
         if bad.any():
-            problem.masks[k] = ~bad
-            n_outliers += int(bad.sum())
-    if n_outliers:
+            problem.masks[k][np.flatnonzero(problem.masks[k])[bad]] = False
+            n_rejected += int(bad.sum())
+    n_outliers += n_rejected
+    if n_rejected:
         sol = problem.solve(sol.x, lower)
     jac = problem.jacobian(sol.x)
     res_parts = problem.trial_residuals(sol.x)

@@ -89,6 +89,20 @@ def characteristic_length_m(rig_values: dict) -> float:
     return math.sqrt(4 * float(rig_values["frontal_area_m2"]) / math.pi)
 
 
+def _no_sample_after_the_transient(where: str, usable_time_s: np.ndarray, n_flagged: int, skip_s: float):
+    """Raise the InputError for a record with no usable sample at or after ``release_skip_s``."""
+    if usable_time_s.size == 0:
+        raise InputError(
+            f"{where}: no usable angle sample: all {n_flagged} rows are flagged or lack a time or an angle"
+        )
+    raise InputError(
+        f"{where}: record too short to fit: its {usable_time_s.size} usable angle samples span "
+        f"{usable_time_s.min():.3g} to {usable_time_s.max():.3g} s after the release, all before the release "
+        f"transient ends (fitting.release_skip_s = {skip_s:g} s); is the time column in seconds, and does the "
+        "record run past the release?"
+    )
+
+
 def load_record(
     table: pd.DataFrame,
     trial: str,
@@ -121,6 +135,8 @@ def load_record(
     n_flagged = int((~ok).sum())
     early = t < settings.release_skip_s
     use = ok & ~early
+    if not use.any():
+        _no_sample_after_the_transient(where, t[ok], n_flagged, settings.release_skip_s)
     t, th = t[use], th[use]
     order = np.argsort(t, kind="stable")
     t, th = t[order], th[order]

@@ -6,7 +6,6 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.calibration import ImageToPlane, map_point, map_track
 from pendulum.geometry import (
     angles_from_track,
     angles_from_tracker_csv,
@@ -16,6 +15,7 @@ from pendulum.geometry import (
 )
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
+from pendulum.view import ImageToPlane, map_point, map_track
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "angles")
