@@ -97,32 +97,6 @@ def turning_points(theta: np.ndarray, min_separation: int = 3) -> np.ndarray:
     return np.array(keep)
 
 
-def oscillation_centre_rad(theta: np.ndarray, noise_rad: float) -> float | None:
-    """Centre c of a decaying oscillation from extremum triplets (p₀, q, p₁), median over triplets.
-
-    Locally geometric decay, |q − c|² = |p₀ − c| |p₁ − c|, gives
-    c = (p₀ p₁ − q²) / (p₀ + p₁ − 2 q). Only swings well above the noise and
-    below 15° count. None if fewer than two triplets.
-    """
-    theta = np.asarray(theta, float)
-    finite = np.isfinite(theta)
-    if finite.sum() < 20:
-        return None
-    smooth = pd.Series(theta).interpolate(limit_direction="both").rolling(3, center=True, min_periods=1).mean()
-    values = smooth.to_numpy()
-    ext = turning_points(values)
-    ext = ext[(ext > 2) & (ext < values.size - 3)]  # an extremum needs samples on both sides
-    centres = []
-    for k in range(len(ext) - 2):
-        p0, q, p1 = values[ext[k : k + 3]]
-        swing = abs(q - 0.5 * (p0 + p1))
-        if 20 * noise_rad < swing < math.radians(15) and np.sign(p0 - q) == np.sign(p1 - q):
-            centres.append((p0 * p1 - q * q) / (p0 + p1 - 2 * q))
-    if len(centres) < 2:
-        return None
-    return float(np.median(centres))
-
-
 def swing_centre_rad(theta: np.ndarray) -> tuple[float, int] | None:
     """Centre of a decaying oscillation of any amplitude, robust to sample noise: (centre, triplets used).
 
