@@ -21,6 +21,16 @@ Finally each position is moved from the exposure's mean to the frame time,
 x(t) = x̄ − ẍ τ²/24, with the exposure τ measured from the streaks' lengths
 (see :func:`exposure_centre_correction`). Flagged frames keep their flag;
 nothing is interpolated.
+
+Without hints (``polarity: auto``, ``marker_radius_px: None``) the marker is first
+found by :func:`pendulum.detection.detect_marker`, which also gives the static
+scene and the picture inside letterbox borders: a marker with no body around it
+is then measured as its coverage of the scene (:func:`_coverage_centroid`), so
+the flags mean "this measurement is biased" (part of the marker over scene of
+its own grey, something else in its surround) rather than "the brightness
+changed". After lost frames the window follows the arc and stays bounded; a long
+streak's coarse centroid is taken within the capsule it can occupy, thresholded
+at half its own peak.
 """
 
 from __future__ import annotations
@@ -28,7 +38,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -44,8 +54,9 @@ FLAGS = ("ok", "occluded", "glare", "jump", "duplicate", "edge", "lost")
 
 @dataclass(frozen=True)
 class TrackerSettings:
-    marker_radius_px: float = 10.0
-    polarity: str = "bright"  # "bright" marker on a darker scene, or "dark" on a brighter one
+    # None: found by :func:`pendulum.detection.detect_marker` (so is "auto" polarity); given values win.
+    marker_radius_px: float | None = 10.0
+    polarity: str = "bright"  # "bright" marker on a darker scene, "dark" on a brighter one, or "auto"
     start_px: tuple[float, float] | None = None  # a hint where the marker is in the first frame
     min_signal_ratio: float = 0.9  # marker signal below this fraction of normal: "occluded"
     max_signal_ratio: float = 1.12  # above this: "glare"
@@ -64,13 +75,20 @@ class TrackerSettings:
         None  # "linear": Σ (I − b) x in a soft streak mask; "threshold": Σ max(I − T, 0) x
     )
 
+    max_unresolved: float = 0.03  # share of the marker over scene of its own grey, unmeasurable: "occluded"
+    max_lost_step_radii: float = 2.0  # search window growth per lost frame, in marker radii (bounded, see below)
+
     def __post_init__(self):
-        if self.polarity not in ("bright", "dark"):
-            raise ValueError(f"marker polarity must be 'bright' or 'dark', got {self.polarity!r}")
+        if self.polarity not in ("bright", "dark", "auto"):
+            raise ValueError(f"marker polarity must be 'bright', 'dark' or 'auto', got {self.polarity!r}")
         if self.centroid not in ("linear", "threshold"):
             raise ValueError(f"centroid must be 'linear' or 'threshold', got {self.centroid!r}")
-        if not self.marker_radius_px > 0:
+        if self.marker_radius_px is not None and not self.marker_radius_px > 0:
             raise ValueError("marker_radius_px must be positive")
+
+    @property
+    def needs_detection(self) -> bool:
+        return self.polarity == "auto" or self.marker_radius_px is None
         if not 0 < self.min_acquire_score < 1:
             raise ValueError("min_acquire_score must be between 0 and 1")
 
@@ -161,33 +179,63 @@ class Measurement:
     disagreement_px: float = 0.0  # |linear − thresholded centroid|: large when something intrudes
     streak2_px2: float = math.nan  # squared length of the exposure streak (linear centroid only)
     width2_px2: float = math.nan  # 4 × the signal's variance across the motion: ≈ r² for a disk (linear only)
+    unresolved: float = 0.0  # share of the marker over scene of its own grey, not measured (coverage only)
+    mode_coverage: bool = False  # measured as coverage of the scene (else against the ring's median)
 
 
-def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0.0, marker_level=None, direction=None):
+def measure_marker(
+    image,
+    x_guess,
+    y_guess,
+    settings: TrackerSettings,
+    blur_px=0.0,
+    marker_level=None,
+    direction=None,
+    background=None,
+    bounds=None,
+):
     """Sub-pixel intensity-weighted centroid of the marker near (x_guess, y_guess).
 
-    ``blur_px`` (expected streak length) widens the ROI and the mask. Returns
-    None when no pixel stands out from the local background.
+    ``blur_px`` (expected streak length) widens the ROI and the mask. ``bounds``
+    (x0, y0, x1, y1): the picture inside letterbox borders; the ROI never leaves it
+    and touching it counts as the edge. ``background``: the static scene (grey, as
+    :func:`pendulum.detection.detect_marker` gives it); where the marker's
+    surround is that scene (no body around the marker), the marker is measured as
+    its coverage of the scene (:func:`_coverage_centroid`), so a striped or
+    uneven scene behind it does not move the centroid. Returns None when no pixel
+    stands out from the local background.
     """
     r = settings.marker_radius_px
     half = int(math.ceil(2.0 * r + 0.5 * blur_px + 4))
     h, w = image.shape
+    bx0, by0, bx1, by1 = (0, 0, w, h) if bounds is None else bounds
     xi, yi = int(round(x_guess)), int(round(y_guess))
-    x0, x1 = max(0, xi - half), min(w, xi + half + 1)
-    y0, y1 = max(0, yi - half), min(h, yi + half + 1)
+    x0, x1 = max(bx0, xi - half), min(bx1, xi + half + 1)
+    y0, y1 = max(by0, yi - half), min(by1, yi + half + 1)
     if x1 - x0 < 3 or y1 - y0 < 3:
         return None
     roi = image[y0:y1, x0:x1].astype(np.float32)
     if settings.polarity == "dark":
         roi = 255.0 - roi
     border = np.concatenate([roi[0], roi[-1], roi[1:-1, 0], roi[1:-1, -1]])
-    background = float(np.median(border))
-    level = marker_level if marker_level is not None else float(np.percentile(roi, 99.5))
-    threshold = background + 0.5 * (level - background)
-    weight = roi - threshold
-    np.maximum(weight, 0, out=weight)
+    background_level = float(np.median(border))
     ys = np.arange(y0, y1, dtype=np.float32)[:, None]
     xs = np.arange(x0, x1, dtype=np.float32)[None, :]
+    level = float(np.percentile(roi, 99.5)) if marker_level is None else marker_level
+    streak_zone = None
+    if direction is not None and blur_px > r:
+        # A long streak is dimmer than the marker (its peak coverage ≈ 2r / length) and the ROI holds
+        # more of the scene: threshold halfway to the streak's own peak, within the capsule it can occupy.
+        u = (xs - x_guess) * direction[0] + (ys - y_guess) * direction[1]
+        v = (ys - y_guess) * direction[0] - (xs - x_guess) * direction[1]
+        excess = np.abs(u) - np.minimum(np.abs(u), 0.5 * blur_px + 2.0)
+        streak_zone = v * v + excess * excess <= (r + 4.0) ** 2
+        level = min(level, float(roi[streak_zone].max())) if streak_zone.any() else level
+    threshold = background_level + 0.5 * (level - background_level)
+    weight = roi - threshold
+    np.maximum(weight, 0, out=weight)
+    if streak_zone is not None:
+        weight *= streak_zone
     col, row = weight.sum(axis=0), weight.sum(axis=1)
     total = float(col.sum())
     if total <= 0:
@@ -202,7 +250,17 @@ def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0
         if total <= 0:
             return None
         cx, cy = float(col @ xs[0]) / total, float(row @ ys[:, 0]) / total
-    if settings.centroid == "linear":
+    unresolved = 0.0
+    refined = None
+    if settings.centroid == "linear" and background is not None and marker_level is not None:
+        bg = background[y0:y1, x0:x1]
+        bg = 255.0 - bg if settings.polarity == "dark" else bg
+        refined = _coverage_centroid(roi, bg, x0, y0, cx, cy, r, blur_px, direction, marker_level)
+    coverage = refined is not None
+    if coverage:
+        cx, cy, streak2, signal, width2, unresolved = refined
+        disagreement = 0.0  # the thresholded centroid sees the scene's stripes; the coverage needs no check
+    elif settings.centroid == "linear":
         refined = _linear_centroid(roi, x0, y0, cx, cy, r, blur_px, direction)
         if refined is None:
             return None
@@ -210,10 +268,18 @@ def measure_marker(image, x_guess, y_guess, settings: TrackerSettings, blur_px=0
         cx, cy, streak2, signal, width2 = refined
     else:
         inside = (xs - cx) ** 2 + (ys - cy) ** 2 <= mask_r2
-        signal = float(((roi - background) * inside).sum())
+        signal = float(((roi - background_level) * inside).sum())
         disagreement, streak2, width2 = 0.0, math.nan, math.nan
-    at_edge = x0 == 0 or y0 == 0 or x1 == w or y1 == h
-    return Measurement(cx, cy, signal, level, background, at_edge, disagreement, streak2, width2)
+    if bounds is None:
+        at_edge = x0 == 0 or y0 == 0 or x1 == w or y1 == h
+    else:  # the picture is known: the marker's mask and ring must stay inside it (not on a border)
+        ux, uy = (0.0, 0.0) if direction is None else direction
+        reach_x = r + 6.5 + 0.5 * blur_px * abs(ux)  # the ring's reach, longer along the streak
+        reach_y = r + 6.5 + 0.5 * blur_px * abs(uy)
+        at_edge = cx - reach_x < bx0 or cy - reach_y < by0 or cx + reach_x > bx1 - 1 or cy + reach_y > by1 - 1
+    return Measurement(
+        cx, cy, signal, level, background_level, at_edge, disagreement, streak2, width2, unresolved, coverage
+    )
 
 
 def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=2.5, iterations=2):
@@ -277,6 +343,94 @@ def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=
         return ox + ex, oy + ey, math.nan, total, 4.0 * across2
     streak2 = 12.0 * float((weight * (u * u)).sum()) / total - 12.0 * across2
     return ox + ex, oy + ey, streak2, total, 4.0 * across2
+
+
+def _coverage_centroid(roi, bg, x0, y0, cx, cy, radius, blur_px, direction, marker_level, margin_px=2.5, iterations=3):
+    """Centroid of the marker's coverage of the static scene, when the marker's surround is that scene.
+
+    Each pixel is a blend I = m M + (1 − m) B of the marker grey M and the scene B
+    behind it, so its coverage m = (I − B) / (M − B) does not depend on the scene
+    (a dark ball over a dark stripe covers the stripe as much as the wall). Where the
+    scene has nearly the marker's own grey (|M − B| below a third of the typical
+    contrast) m is not measurable; there the marker's point symmetry (a disk, or a
+    streak along the motion) fills it from the mirror pixel about the current
+    estimate, and what neither pixel of such a pair shows is returned as
+    ``unresolved`` (share of the marker's footprint): a biased measurement. The mask
+    is the capsule of :func:`_linear_centroid`. Returns ``(x, y, streak², Σ m, width²,
+    unresolved)`` like it (signal in pixels of coverage), or None when the surround
+    is not the scene (a body moves with the marker: use the ring background).
+    """
+    if direction is None:
+        ux, uy, half_len = 1.0, 0.0, 0.0
+    else:
+        ux, uy = direction
+        half_len = 0.5 * max(blur_px, 0.0)
+    r_mask = radius + margin_px
+    ring_in, ring_out = r_mask + 1.0, r_mask + 4.0
+    h, w = roi.shape
+    reach_x, reach_y = ring_out + 1.5 + half_len * abs(ux), ring_out + 1.5 + half_len * abs(uy)
+    i0, i1 = max(0, int(cy - y0 - reach_y)), min(h, int(cy - y0 + reach_y) + 2)
+    j0, j1 = max(0, int(cx - x0 - reach_x)), min(w, int(cx - x0 + reach_x) + 2)
+    if i1 - i0 < 3 or j1 - j0 < 3:
+        return None
+    sub, back = roi[i0:i1, j0:j1], bg[i0:i1, j0:j1]
+    if not np.isfinite(back).all():  # the scene behind is unknown here (the marker rested on it)
+        return None
+    xr = (np.arange(x0 + j0, x0 + j1) - cx).astype(np.float32)
+    yr = (np.arange(y0 + i0, y0 + i1) - cy).astype(np.float32)
+
+    def capsule(ex, ey):
+        u = (xr[None, :] - ex) * ux + (yr[:, None] - ey) * uy
+        v = (yr[:, None] - ey) * ux - (xr[None, :] - ex) * uy
+        excess = u - np.clip(u, -half_len, half_len)
+        return u, v, np.sqrt(v * v + excess * excess)
+
+    u, v, dist = capsule(0.0, 0.0)
+    ring = (dist > ring_in) & (dist <= ring_out)
+    if np.count_nonzero(ring) < 8:
+        return None
+    diff = sub - back
+    contrast = marker_level - back
+    typical = float(np.median(contrast[ring]))
+    if typical <= 0:
+        return None
+    # The surround must be the scene all round: the ring matches the background pixel by pixel
+    # (no body around the marker, whose grey could match the scene's here and there).
+    if float(np.percentile(np.abs(diff[ring]), 85)) > max(8.0, 0.1 * typical):
+        return None
+    measurable = np.abs(contrast) >= typical / 3.0
+    cover = np.where(measurable, diff / np.where(measurable, contrast, 1.0), 0.0).astype(np.float32)
+    ex = ey = 0.0
+    unresolved = 0.0
+    any_missing = not measurable.all()
+    for _ in range(iterations):
+        u, v, dist = capsule(ex, ey)
+        mask = np.clip(r_mask + 0.5 - dist, 0.0, 1.0)
+        filled = cover
+        if any_missing:
+            # mirror about the estimate: pixel (x, y) ↔ (2 ex − x, 2 ey − y), bilinear
+            map_x = (2 * ex - xr[None, :] + cx - (x0 + j0)).astype(np.float32) * np.ones_like(cover)
+            map_y = (2 * ey - yr[:, None] + cy - (y0 + i0)).astype(np.float32) * np.ones_like(cover)
+            mirror = cv2.remap(cover, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+            mirror_ok = cv2.remap(
+                measurable.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT
+            )
+            gap = ~measurable
+            filled = np.where(gap & (mirror_ok > 0.99), mirror, cover)
+            expected = np.clip(radius + 0.5 - dist, 0.0, 1.0)  # the marker's own footprint
+            lost = gap & (mirror_ok <= 0.99)
+            unresolved = float((expected * lost).sum() / max(expected.sum(), 1e-9))
+        weight = filled * mask
+        col, row = weight.sum(axis=0), weight.sum(axis=1)
+        total = float(col.sum())
+        if total <= 0:
+            return None
+        ex, ey = float(col @ xr) / total, float(row @ yr) / total
+    across2 = float((weight * v * v).sum()) / total
+    if direction is None:
+        return cx + ex, cy + ey, math.nan, total, 4.0 * across2, unresolved
+    streak2 = 12.0 * float((weight * (u * u)).sum()) / total - 12.0 * across2
+    return cx + ex, cy + ey, streak2, total, 4.0 * across2, unresolved
 
 
 def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:
@@ -384,14 +538,131 @@ def flag_jumps(x: np.ndarray, y: np.ndarray, usable: np.ndarray, settings: Track
     return jumps
 
 
-def track_video(path, settings: TrackerSettings, progress=None, progress_every: int = 200) -> pd.DataFrame:
+def resolve_settings(path, settings: TrackerSettings, progress=None):
+    """Settings with the marker found by detection where not given: ``(settings, detection or None)``.
+
+    Given values (polarity, marker_radius_px, start_px) win; a detected start is used only
+    when the polarity agrees with the detected one (else it may be another object's).
+    """
+    if not settings.needs_detection:
+        return settings, None
+    from pendulum.detection import detect_marker
+
+    started = time.perf_counter()
+    found = detect_marker(path)
+    polarity = found.polarity if settings.polarity == "auto" else settings.polarity
+    radius = found.marker_radius_px if settings.marker_radius_px is None else settings.marker_radius_px
+    start = settings.start_px
+    if start is None and polarity == found.polarity:
+        start = found.start_px
+    if progress:
+        progress(
+            f"{path}: detected a {found.polarity} marker, radius {found.marker_radius_px:.1f} px, "
+            f"start {found.start_px}, "
+            f"swinging about ({found.pivot_px[0]:.0f}, {found.pivot_px[1]:.0f}) px, confidence "
+            f"{found.confidence:.2f} ({time.perf_counter() - started:.1f} s)"
+        )
+    return replace(settings, polarity=polarity, marker_radius_px=float(radius), start_px=start), found
+
+
+def _marker_grey(image, x: float, y: float, radius: float, polarity: str) -> float:
+    """Median grey inside the marker's inner half (in the marker's polarity): its own grey M."""
+    half = max(1, int(0.5 * radius))
+    xi, yi = int(round(x)), int(round(y))
+    patch = image[max(0, yi - half) : yi + half + 1, max(0, xi - half) : xi + half + 1].astype(np.float32)
+    grey = float(np.median(patch))
+    return 255.0 - grey if polarity == "dark" else grey
+
+
+class _Arc:
+    """The marker's circle (centre, radius): from detection, refitted on the track as it grows."""
+
+    def __init__(self, detection, radius_px: float):
+        self.r = radius_px
+        self.circle = None if detection is None else (*detection.pivot_px, detection.arm_px)
+        self.angles = [math.inf, -math.inf]  # range of the marker's angle seen so far
+        self.points: list[tuple[float, float]] = []
+        self.next_fit = 60
+
+    def angle(self, x, y) -> float:
+        return math.atan2(x - self.circle[0], y - self.circle[1])
+
+    def add(self, x: float, y: float) -> None:
+        self.points.append((x, y))
+        if len(self.points) >= self.next_fit:
+            self.next_fit = int(len(self.points) * 1.5)
+            pts = np.array(self.points[:: max(1, len(self.points) // 400)])
+            a = np.column_stack([pts[:, 0], pts[:, 1], np.ones(len(pts))])
+            (p, q, c), *_ = np.linalg.lstsq(a, (pts**2).sum(axis=1), rcond=None)
+            cx, cy = p / 2, q / 2
+            arm = math.sqrt(max(c + cx * cx + cy * cy, 0.0))
+            resid = np.abs(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - arm)
+            span = np.ptp(np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)) * arm
+            if span >= 6 * self.r and float(np.median(resid)) <= 0.5 and arm >= 3 * self.r:
+                self.circle = (float(cx), float(cy), float(arm))
+        if self.circle is not None:
+            a = self.angle(x, y)
+            self.angles = [min(self.angles[0], a), max(self.angles[1], a)]
+
+    def near(self, x: float, y: float) -> bool:
+        """On the arc (within a few marker radii) and inside the swing seen (when seen)."""
+        if self.circle is None:
+            return True
+        cx, cy, arm = self.circle
+        if abs(math.hypot(x - cx, y - cy) - arm) > max(3 * self.r, 0.05 * arm):
+            return False
+        return True
+
+    def predict(self, x1, y1, x0, y0, gap: int):
+        """Position ``gap`` frames after (x1, y1) at the angular velocity from (x0, y0), on the arc,
+        kept inside the swing seen so far (a pendulum's swing does not grow)."""
+        cx, cy, arm = self.circle
+        a1, a0 = self.angle(x1, y1), self.angle(x0, y0)
+        a = a1 + (a1 - a0) * gap
+        if self.angles[0] <= self.angles[1]:
+            margin = 2 * self.r / arm
+            a = min(max(a, self.angles[0] - margin), self.angles[1] + margin)
+        return cx + arm * math.sin(a), cy + arm * math.cos(a)
+
+
+def _static_spot(image, background, c: Candidate, radius: float, reference_contrast: float | None) -> bool:
+    """True when the scene itself holds this spot (it is in the background image): not the marker."""
+    if background is None:
+        return False
+    half = max(1, int(radius * 0.7))
+    xi, yi = int(round(c.x)), int(round(c.y))
+    h, w = image.shape
+    box = np.s_[max(0, yi - half) : min(h, yi + half + 1), max(0, xi - half) : min(w, xi + half + 1)]
+    if image[box].size == 0:
+        return True
+    change = float(np.abs(image[box].astype(np.float32) - background[box]).mean())
+    floor = MIN_MARKER_CONTRAST if reference_contrast is None else 0.3 * reference_contrast
+    return change < floor
+
+
+def track_video(
+    path, settings: TrackerSettings, progress=None, progress_every: int = 200, detection=None
+) -> pd.DataFrame:
     """Track the marker through the whole video in one decode pass.
 
     Columns: ``frame``, ``time_s``, ``x_px``, ``y_px`` (NaN when lost),
     ``quality`` (marker signal relative to normal, 1 = perfect, 0 = lost),
     ``signal_ratio``, ``flag`` (one of :data:`FLAGS`). Frames the file holds
     damaged are ``lost``. ``attrs["video"]``: the decoder's report (failed
-    packets, damaged frames, an early end).
+    packets, damaged frames, an early end); ``attrs["detection"]``: what
+    :func:`pendulum.detection.detect_marker` found when the settings left the
+    marker's polarity or radius to it (``"auto"``/None), else None;
+    ``attrs["marker"]``: the polarity, radius and start used.
+
+    With detection, the static scene (its background image) and the letterbox
+    borders are known: the marker is measured as its coverage of the scene where
+    no body surrounds it, the window never reaches into the borders (touching
+    them is ``edge``), and a spot that the scene itself holds is never taken for
+    the marker. After lost frames the search window is predicted along the
+    marker's arc (from detection, refitted on the track) at the last angular
+    velocity, kept inside the swing seen so far and grows by at most
+    ``max_lost_step_radii`` radii per frame; re-acquisition takes only spots on
+    the arc.
 
     The marker is (re)acquired only where a spot scores at least
     ``min_acquire_score`` against a disk and stands out of its surround (on
@@ -401,12 +672,28 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
     reflection; ``start_px`` resolves it), or fewer than ``min_usable_fraction``
     of the frames usable (marker out of the frame or hidden most of the time).
     """
+    if detection is None:
+        settings, detection = resolve_settings(path, settings, progress)
+    elif settings.needs_detection:
+        settings = replace(
+            settings,
+            polarity=detection.polarity if settings.polarity == "auto" else settings.polarity,
+            marker_radius_px=settings.marker_radius_px or detection.marker_radius_px,
+            start_px=settings.start_px or detection.start_px,
+        )
+    background = None if detection is None else detection.background
+    # The marker is measured as coverage of the scene only when no body surrounds it (see detection).
+    scene_behind = background if detection is not None and detection.free_marker else None
+    bounds = None if detection is None else tuple(detection.active_box_px)
+    arc = _Arc(detection, settings.marker_radius_px)
     rows = []
     history: list[tuple[int, float, float]] = []  # (frame, x, y) of good frames
     previous = None
     marker_level = None
-    signal_ref = None
-    signals: list[float] = []
+    marker_grey = None  # median grey inside the marker (polarity space), for the coverage measurement
+    signal_refs: dict[bool, float] = {}  # per measurement kind (coverage or ring): the normal signal
+    signals: dict[bool, list[float]] = {False: [], True: []}
+    first_signals: list[tuple[int, bool, float]] = []  # (row, kind, signal) before the kind's reference
     width_ref = math.nan  # the marker's width² in the first frames: a wider spot is not the marker alone
     widths: list[float] = []
     lost_run = 0
@@ -417,8 +704,10 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
     video_report: dict = {}
     reference_contrast = None  # of the spot first taken for the marker
     distractors: list[tuple[float, float]] = []  # static marker-like spots seen at the first acquisition
-    keep_off = 1.5 * settings.marker_radius_px
-    intrudes = 2 * settings.marker_radius_px + 7.5  # the ring around the mask reaches r + 6.5 px
+    r = settings.marker_radius_px
+    keep_off = 1.5 * r
+    intrudes = 2 * r + 7.5  # the ring around the mask reaches r + 6.5 px
+    max_step = 0.0  # largest frame-to-frame step of the marker seen
     best_seen: Candidate | None = None  # best spot of any failed acquisition, for the error message
     for index, t, image in iter_luma(path, damaged=True, report=video_report):
         n_frames = index + 1
@@ -443,6 +732,12 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
                 for c in candidates
                 if _marker_like(c, settings, reference_contrast) and not _near_any(c.x, c.y, distractors, keep_off)
             ]
+            if reference_contrast is not None or not hinted:  # a moving marker on its arc, not the scene's spot
+                moving = [c for c in likely if arc.near(c.x, c.y) and not _static_spot(image, background, c, r, None)]
+                if reference_contrast is None and background is not None:
+                    # static marker-like spots of the scene: never the marker
+                    distractors += [(c.x, c.y) for c in likely if c not in moving]
+                likely = moving
             if not likely:
                 if candidates and (best_seen is None or candidates[0].score > best_seen.score):
                     best_seen = candidates[0]
@@ -461,7 +756,7 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
                 found = likely[0]
                 reference_contrast = found.contrast
                 # Other spots that the marker's threshold would also pick up: never taken for the marker.
-                distractors = [(c.x, c.y) for c in likely[1:] if c.contrast >= 0.5 * found.contrast]
+                distractors += [(c.x, c.y) for c in likely[1:] if c.contrast >= 0.5 * found.contrast]
             elif history:  # several candidates: the one nearest the last good position
                 found = min(likely, key=lambda c: math.hypot(c.x - history[-1][1], c.y - history[-1][2]))
             else:
@@ -475,10 +770,29 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             else:
                 vx = vy = 0.0
             gap = index - f1
-            guess = (x1 + vx * gap, y1 + vy * gap)
             step = math.hypot(vx, vy)
             direction = (vx / step, vy / step) if step > 0 else None
-            speed = step + 2.0 * (gap - 1) * settings.marker_radius_px
+            if gap == 1:
+                guess = (x1 + vx, y1 + vy)
+                speed = step
+                if len(history) >= 3 and history[-3][0] == f1 - 2 and step > 0:
+                    ux0, uy0 = x0 - history[-3][1], y0 - history[-3][2]
+                    # accelerating: the next step is longer
+                    speed += max(0.0, step - math.hypot(ux0, uy0))
+                    # on a curved path the streak at frame t lies along the tangent at t, turned by 1.5
+                    # frames' turn from the last step's chord (centred at t − 1.5)
+                    turn = (math.atan2(vy, vx) - math.atan2(uy0, ux0) + math.pi) % (2 * math.pi) - math.pi
+                    turn *= 1.5
+                    if abs(turn) < 0.5:
+                        c, s_ = math.cos(turn), math.sin(turn)
+                        direction = (direction[0] * c - direction[1] * s_, direction[0] * s_ + direction[1] * c)
+            else:  # after lost frames: along the arc when known, the window bounded
+                if arc.circle is not None and step > 0:
+                    guess = arc.predict(x1, y1, x1 - vx, y1 - vy, gap)
+                else:
+                    guess = (x1 + vx * gap, y1 + vy * gap)
+                cap = max(6.0 * r, 1.5 * max_step + 2.0 * r)
+                speed = min(step + settings.max_lost_step_radii * (gap - 1) * r, cap)
             if window is not None and window[0] == index - 1 and len(history) == 3 and history[0][0] == f1 - 2:
                 # The marker should have moved (constant-acceleration step ≥ 0.5 px), yet its window
                 # did not change: a repeated frame (re-encoded, so not bit-identical), whose content
@@ -487,8 +801,17 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
                 expected = math.hypot(2 * vx - (x0 - xm), 2 * vy - (y0 - ym))
                 if expected >= 0.5:
                     duplicate |= float(np.abs(image[window[1]].astype(np.float32) - window[2]).mean()) < 0.5
+        coverage_expected = scene_behind is not None and marker_grey is not None
         m = measure_marker(
-            image, guess[0], guess[1], settings, blur_px=speed, marker_level=marker_level, direction=direction
+            image,
+            guess[0],
+            guess[1],
+            settings,
+            blur_px=speed,
+            marker_level=marker_level,
+            direction=direction,
+            background=scene_behind if marker_grey is not None else None,
+            bounds=bounds,
         )
         if m is None or _near_any(m.x, m.y, distractors, keep_off):  # a known distractor is not the marker
             rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))
@@ -496,15 +819,22 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             continue
         if marker_level is None:
             marker_level = m.level
-        if signal_ref is None:
-            signals.append(m.signal)
-            widths.append(m.width2_px2)
+        if marker_grey is None and background is not None:
+            marker_grey = _marker_grey(image, m.x, m.y, r, settings.polarity)
+            marker_level = marker_grey
+        kind = m.mode_coverage
+        if kind not in signal_refs:
+            signals[kind].append(m.signal)
+            first_signals.append((len(rows), kind, m.signal))
+            if not math.isfinite(width_ref):
+                widths.append(m.width2_px2)
             ratio = 1.0
-            if len(signals) >= 5:
-                signal_ref = float(np.median(signals))
+            if len(signals[kind]) >= 5:
+                signal_refs[kind] = float(np.median(signals[kind]))
+            if len(widths) >= 5 and not math.isfinite(width_ref):
                 width_ref = float(np.median(widths))
         else:
-            ratio = m.signal / signal_ref
+            ratio = m.signal / signal_refs[kind]
         quality = float(np.clip(min(ratio, 1.0 / ratio) if ratio > 0 else 0.0, 0.0, 1.0))
         if ratio < 0.5:
             flag, x, y, quality = "lost", np.nan, np.nan, 0.0
@@ -514,9 +844,14 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             flag, x, y = "edge", m.x, m.y
         elif (
             ratio < settings.min_signal_ratio
-            or m.disagreement_px > settings.max_centroid_disagreement_px
+            # (a thresholded streak's centroid sits on its plateau: 2 % of the streak's excess length off)
+            or m.disagreement_px > settings.max_centroid_disagreement_px + 0.02 * max(speed - r, 0.0)
+            or m.unresolved > settings.max_unresolved
+            # a free marker not measurable against the scene (something else around it): biased
+            or (coverage_expected and not m.mode_coverage)
             or _near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
-            or m.width2_px2 > settings.max_width_ratio * width_ref
+            # a long streak's mask takes in more of the scene's noise across it: r²/100 per radius of streak
+            or m.width2_px2 > settings.max_width_ratio * width_ref + 0.01 * r * max(speed - r, 0.0)
         ):
             flag, x, y = "occluded", m.x, m.y
         elif ratio > settings.max_signal_ratio:
@@ -527,12 +862,18 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             lost_run += 1
         else:
             lost_run = 0
-            if flag in ("ok", "edge"):
+            # Flagged but measured frames still tell where the marker went (for the next prediction).
+            if flag in ("ok", "edge") or (flag in ("occluded", "glare") and 0.7 <= ratio <= 1.4):
+                if history and history[-1][0] == index - 1:
+                    max_step = max(max_step, math.hypot(x - history[-1][1], y - history[-1][2]))
                 history.append((index, x, y))
                 del history[:-3]
-                xi, yi, half = int(round(x)), int(round(y)), int(settings.marker_radius_px + 4)
-                box = np.s_[max(yi - half, 0) : yi + half + 1, max(xi - half, 0) : xi + half + 1]
-                window = (index, box, image[box].astype(np.float32))
+                if flag == "ok":
+                    arc.add(x, y)
+                if flag in ("ok", "edge"):
+                    xi, yi, half = int(round(x)), int(round(y)), int(r + 4)
+                    box = np.s_[max(yi - half, 0) : yi + half + 1, max(xi - half, 0) : xi + half + 1]
+                    window = (index, box, image[box].astype(np.float32))
         rows.append((index, t, x, y, quality, ratio, flag))
         streak2[index] = m.streak2_px2
         if progress and index % progress_every == 0 and index:
@@ -540,6 +881,12 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             progress(f"{path}: tracked frame {index} ({rate:.0f} frames/s)")
     table = pd.DataFrame(rows, columns=["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"])
     table.attrs["video"] = dict(video_report)
+    table.attrs["detection"] = None if detection is None else detection.summary()
+    table.attrs["marker"] = {
+        "polarity": settings.polarity,
+        "marker_radius_px": round(float(r), 3),
+        "start_px": None if settings.start_px is None else [round(float(v), 2) for v in settings.start_px],
+    }
     if reference_contrast is None:
         score = "no disk-like spot at all" if best_seen is None else f"the best spot scores {best_seen.score:.2f}"
         raise VideoError(
@@ -547,10 +894,10 @@ def track_video(path, settings: TrackerSettings, progress=None, progress_every: 
             f"{settings.min_acquire_score:g}); check tracking polarity ({settings.polarity}) and marker_radius_px "
             f"({settings.marker_radius_px:g}), or give start_px in the trial's sidecar"
         )
-    # The first frames set the reference signal; recompute their ratios against it.
-    if signal_ref is not None:
-        first = table.index[: len(signals)]
-        table.loc[first, "signal_ratio"] = np.array(signals) / signal_ref
+    # The first frames of each measurement kind set its reference signal; recompute their ratios against it.
+    for row, kind, signal in first_signals:
+        if kind in signal_refs:
+            table.loc[row, "signal_ratio"] = signal / signal_refs[kind]
     usable = (table.flag == "ok").to_numpy()
     jumps = flag_jumps(table.x_px.to_numpy(), table.y_px.to_numpy(), usable, settings)
     table.loc[jumps, "flag"] = "jump"

@@ -33,6 +33,8 @@ def work():
             "n_frames": int(len(track)),
             "flags": {k: int(v) for k, v in sorted(flags.items())},
             "exposure_fraction": track.attrs.get("exposure_fraction"),
+            "marker": track.attrs.get("marker"),  # polarity, radius and start used (given or detected)
+            "detection": track.attrs.get("detection"),  # what detection found (None: all given)
             "decoder": track.attrs.get("video", {}),
             "settings": settings.__dict__,
         },

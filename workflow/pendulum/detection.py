@@ -1,0 +1,589 @@
+"""Marker detection: the object that swings about one fixed point, found from the video alone.
+
+One sparse pass over the clip (every k-th decoded frame, ≤ ``max_samples`` spread over
+the whole clip, reduced to ≤ ~640 px wide):
+
+1. background B = the per-pixel temporal median of the samples (the static scene:
+   clutter, stripes, letterbox borders, reflections of fixed lamps);
+2. in every sample, the foreground F = I − B is searched for blobs of both signs with a
+   scale-normalised difference of Gaussians, DoG_σ = G_σ ∗ F − G_1.5σ ∗ F (a disk of
+   radius r responds most near σ ≈ r / 1.7), on a Gaussian pyramid;
+3. per sign, RANSAC finds the circle through blobs of different samples that holds most
+   samples: |‖p − c‖ − R| ≤ tol, blob sizes alike; its least-squares refit gives the pivot
+   c and arm R. An object qualifies when it moves (spans more than two radii of the arc)
+   back and forth (its angle about c reverses at least twice) on a path that is a circle
+   of bounded radius; a second object (a bubble, a float moving on a line, a border) or
+   another part of the same pendulum (a track about the same pivot) is told apart by that;
+4. the marker's radius is refined at full resolution from its width across the arc,
+   width² = 4 var_across = r² for a disk (blur along the arc does not change it), and its
+   centre in the first frame from the linear centroid.
+
+When no object qualifies, or two swing about different pivots with similar support,
+:class:`DetectionError` says what was found and which tracking value (``polarity``,
+``marker_radius_px``, ``start_px`` in the trial's sidecar) settles it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from pendulum.video import VideoError, iter_luma
+
+PYRAMID_SIGMAS = (1.0, 1.5, 2.25, 3.375)  # DoG σ at each pyramid level (× 2^level), ratio 1.5
+RADIUS_PER_SIGMA = 1.7  # disk radius ≈ 1.7 σ of the DoG scale where it responds most
+
+
+class DetectionError(VideoError):
+    """No single object swings about one fixed point clearly enough; the message says what was seen."""
+
+
+@dataclass(frozen=True)
+class Detection:
+    """What the sparse pass found: the swinging marker, its arc and the static background."""
+
+    polarity: str  # "bright" or "dark" against its surround
+    marker_radius_px: float
+    start_px: tuple[float, float] | None  # marker centre in frame 0 (None: not seen there)
+    pivot_px: tuple[float, float]  # centre of the marker's arc (rough)
+    arm_px: float  # radius of the arc
+    confidence: float  # 0–1: samples on the arc, motion, no rival
+    n_samples: int
+    n_on_arc: int
+    reversals: int
+    active_box_px: tuple[int, int, int, int]  # x0, y0, x1, y1 of the picture inside letterbox borders
+    rival: str | None = None  # the best other moving object, described, or None
+    free_marker: bool = False  # the scene itself surrounds the marker (a ball on a string), no body around it
+    background: np.ndarray | None = field(default=None, repr=False, compare=False)  # full-resolution median
+
+    def summary(self) -> dict:
+        """JSON-ready record of the detection (no image)."""
+        return {
+            "polarity": self.polarity,
+            "marker_radius_px": round(self.marker_radius_px, 2),
+            "start_px": None if self.start_px is None else [round(v, 2) for v in self.start_px],
+            "pivot_px": [round(v, 1) for v in self.pivot_px],
+            "arm_px": round(self.arm_px, 1),
+            "confidence": round(self.confidence, 3),
+            "n_samples": self.n_samples,
+            "n_on_arc": self.n_on_arc,
+            "reversals": self.reversals,
+            "active_box_px": list(self.active_box_px),
+            "rival": self.rival,
+            "free_marker": self.free_marker,
+        }
+
+
+@dataclass
+class _Blobs:
+    sample: np.ndarray  # index of the sample (0 = first)
+    sign: np.ndarray  # +1 brighter than the background, −1 darker
+    x: np.ndarray  # full-resolution pixels
+    y: np.ndarray
+    r: np.ndarray  # radius estimate, full-resolution pixels
+    s: np.ndarray  # DoG response (grey levels)
+
+
+def _sample_frames(path, max_samples: int, max_full: int, max_frames: int):
+    """Every k-th frame (k doubling as needed) of the first ``max_frames``, at reduced scale; fewer at full size."""
+    small, full = [], []  # (frame index, image)
+    stride, stride_full, scale = 1, 1, None
+    first = None
+    for index, _t, image in iter_luma(path):
+        if index >= max_frames:
+            break
+        if scale is None:
+            scale = max(1, int(round(max(image.shape) / 640)))
+            first = image.copy()
+        if index % stride == 0:
+            reduced = (
+                image
+                if scale == 1
+                else cv2.resize(image, (image.shape[1] // scale, image.shape[0] // scale), interpolation=cv2.INTER_AREA)
+            )
+            small.append((index, reduced.copy()))
+            if len(small) >= 2 * max_samples:
+                small, stride = small[::2], stride * 2
+        if index % stride_full == 0:
+            full.append((index, image.copy()))
+            if len(full) >= 2 * max_full:
+                full, stride_full = full[::2], stride_full * 2
+    if first is None:
+        raise VideoError(f"{path}: no frame could be decoded")
+    return small, full, scale, first
+
+
+def _dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
+    """Peaks of the scale-normalised DoG of ``fg`` (both signs): list of (sign, x, y, r, s), full-res units."""
+    found = []
+    level_img = fg
+    level = 0
+    while min(level_img.shape) >= 24 and level < 4:
+        blurred = [cv2.GaussianBlur(level_img, (0, 0), s) for s in PYRAMID_SIGMAS]
+        blurred.append(cv2.GaussianBlur(level_img, (0, 0), PYRAMID_SIGMAS[-1] * 1.5))
+        dogs = [cv2.subtract(blurred[i], blurred[i + 1]) for i in range(len(PYRAMID_SIGMAS))]
+        top, low = dogs[0], dogs[0]
+        for dog in dogs[1:]:
+            top, low = cv2.max(top, dog), cv2.min(low, dog)
+        kernel = np.ones((3, 3), np.uint8)
+        f = scale * (1 << level)
+        for sign in (1, -1):
+            best = top if sign > 0 else cv2.multiply(low, -1.0)
+            peaks = (best >= cv2.dilate(best, kernel)) & (best > threshold)
+            ys, xs = np.nonzero(peaks)
+            if ys.size > per_sign:
+                keep = np.argsort(best[ys, xs])[-per_sign:]
+                ys, xs = ys[keep], xs[keep]
+            for yy, xx in zip(ys, xs, strict=True):
+                which = int(np.argmax([sign * d[yy, xx] for d in dogs]))
+                sigma = PYRAMID_SIGMAS[which] * 1.22
+                found.append(
+                    (
+                        sign,
+                        (xx + 0.5) * f - 0.5,
+                        (yy + 0.5) * f - 0.5,
+                        RADIUS_PER_SIGMA * sigma * f,
+                        float(best[yy, xx]),
+                    )
+                )
+        level_img = cv2.pyrDown(level_img)
+        level += 1
+    # One blob per place: the strongest response suppresses weaker ones within its radius (any scale).
+    found.sort(key=lambda b: -b[4])
+    kept: list = []
+    for b in found:
+        if all(b[0] != k[0] or math.hypot(b[1] - k[1], b[2] - k[2]) > max(b[3], k[3]) for k in kept):
+            kept.append(b)
+    out = []
+    for sign in (1, -1):
+        out.extend([b for b in kept if b[0] == sign][:per_sign])
+    return out
+
+
+def _circle_through(p1, p2, p3):
+    (ax, ay), (bx, by), (cx, cy) = p1, p2, p3
+    d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
+    if abs(d) < 1e-9:
+        return None
+    a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
+    ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
+    uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
+    return ux, uy, math.hypot(ax - ux, ay - uy)
+
+
+def _fit_circle(x, y):
+    """Algebraic (Kåsa) least-squares circle: centre and radius."""
+    a = np.column_stack([x, y, np.ones_like(x)])
+    b = x * x + y * y
+    (p, q, c), *_ = np.linalg.lstsq(a, b, rcond=None)
+    cx, cy = p / 2, q / 2
+    return cx, cy, math.sqrt(max(c + cx * cx + cy * cy, 0.0))
+
+
+@dataclass
+class _Track:
+    sign: int
+    cx: float
+    cy: float
+    arm: float
+    members: np.ndarray  # blob indices, one per sample
+    radius: float  # median blob radius
+    strength: float  # median response
+    reversals: int
+    span_px: float  # arc length covered
+    curved: bool  # a circle fits clearly better than a straight line
+
+    @property
+    def support(self) -> float:
+        return len(self.members) * self.strength
+
+    def describe(self, n_samples: int) -> str:
+        kind = "bright" if self.sign > 0 else "dark"
+        return (
+            f"a {kind} spot (radius ≈ {self.radius:.0f} px) on an arc about ({self.cx:.0f}, {self.cy:.0f}) px "
+            f"(arm {self.arm:.0f} px) in {len(self.members)} of {n_samples} sampled frames"
+        )
+
+
+def _inliers(blobs: _Blobs, cand: np.ndarray, cx, cy, arm, radius, tol):
+    d = np.abs(np.hypot(blobs.x[cand] - cx, blobs.y[cand] - cy) - arm)
+    ok = (d <= tol) & (blobs.r[cand] <= 2.2 * radius) & (blobs.r[cand] >= radius / 2.2)
+    idx = cand[ok]
+    # one blob per sample: the one nearest the circle
+    order = np.lexsort((d[ok], blobs.sample[idx]))
+    idx = idx[order]
+    first = np.ones(idx.size, bool)
+    first[1:] = blobs.sample[idx][1:] != blobs.sample[idx][:-1]
+    return idx[first]
+
+
+def _reversals(angles: np.ndarray, noise: float) -> int:
+    """Direction changes of a sequence, ignoring steps below ``noise``."""
+    count, direction, anchor = 0, 0, angles[0] if angles.size else 0.0
+    for a in angles[1:]:
+        step = a - anchor
+        if abs(step) <= noise:
+            continue
+        d = 1 if step > 0 else -1
+        if direction and d != direction:
+            count += 1
+        direction, anchor = d, a
+    return count
+
+
+def _find_tracks(blobs: _Blobs, n_samples: int, shape, scale: int, rng, exclude=None, iterations: int = 1500):
+    """Best arc track per sign (RANSAC), then refit; tracks that move back and forth only."""
+    h, w = shape
+    max_arm = 2.0 * math.hypot(h, w)
+    tracks = []
+    for sign in (1, -1):
+        cand = np.flatnonzero((blobs.sign == sign) & (np.ones(blobs.sign.size, bool) if exclude is None else ~exclude))
+        if cand.size < 6 or np.unique(blobs.sample[cand]).size < 6:
+            continue
+        weights = blobs.s[cand] / blobs.s[cand].sum()
+        best = None
+        for _ in range(iterations):
+            pick = rng.choice(cand, size=3, replace=False, p=weights)
+            if np.unique(blobs.sample[pick]).size < 3:
+                continue
+            rs = sorted(blobs.r[pick])
+            radius = float(rs[1])
+            if rs[2] > 2.2 * rs[0]:
+                continue
+            pts = list(zip(blobs.x[pick], blobs.y[pick], strict=True))
+            if min(math.dist(pts[i], pts[j]) for i, j in ((0, 1), (0, 2), (1, 2))) < 1.5 * radius:
+                continue
+            circle = _circle_through(*pts)
+            if circle is None or not 3 * radius <= circle[2] <= max_arm:
+                continue
+            tol = max(1.5 * scale, 0.35 * radius)
+            idx = _inliers(blobs, cand, circle[0], circle[1], circle[2], radius, tol)
+            score = blobs.s[idx].sum()
+            if best is None or score > best[0]:
+                best = (score, circle, radius, tol)
+        if best is None:
+            continue
+        _, (cx, cy, arm), radius, tol = best
+        idx = _inliers(blobs, cand, cx, cy, arm, radius, tol)
+        for _ in range(2):  # refit on the inliers
+            if idx.size < 5:
+                break
+            cx, cy, arm = _fit_circle(blobs.x[idx], blobs.y[idx])
+            radius = float(np.median(blobs.r[idx]))
+            idx = _inliers(blobs, cand, cx, cy, arm, radius, tol)
+        if idx.size < 5 or not arm <= max_arm:
+            continue
+        order = np.argsort(blobs.sample[idx])
+        idx = idx[order]
+        x, y = blobs.x[idx], blobs.y[idx]
+        angles = np.unwrap(np.arctan2(x - cx, y - cy))
+        span = float(angles.max() - angles.min()) * arm
+        # a straight line through the same points: residual RMS against the circle's
+        centred = np.column_stack([x - x.mean(), y - y.mean()])
+        line_rms = float(np.linalg.svd(centred, compute_uv=False)[-1] / math.sqrt(len(x)))
+        circle_rms = float(np.sqrt(np.mean((np.hypot(x - cx, y - cy) - arm) ** 2)))
+        curved = line_rms > 2.0 * circle_rms + 0.5 * scale
+        noise = max(0.5 * radius, 1.0 * scale) / arm
+        tracks.append(
+            _Track(
+                sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), _reversals(angles, noise), span, curved
+            )
+        )
+    return tracks
+
+
+def _active_box(background: np.ndarray, scale: int) -> tuple[int, int, int, int]:
+    """The picture inside uniform borders (letterbox/pillarbox): edge rows/columns of one flat grey."""
+    b = background.astype(np.float32)
+
+    def border(lines: np.ndarray) -> int:
+        """How many lines from the start are flat (std < 2) and of the first line's grey (± 3)."""
+        n = 0
+        level = float(lines[0].mean())
+        while n < lines.shape[0] // 3 and lines[n].std() < 2.0 and abs(float(lines[n].mean()) - level) < 3.0:
+            n += 1
+        return n
+
+    h, w = b.shape
+    top, bottom = border(b), border(b[::-1])
+    left, right = border(b.T), border(b.T[::-1])
+    return left * scale, top * scale, (w - right) * scale, (h - bottom) * scale
+
+
+def _refine(image: np.ndarray, x: float, y: float, sign: int, radius: float, tangent):
+    """Radius from width² across the motion and centre from the linear centroid (full resolution)."""
+    from pendulum.tracking import _linear_centroid
+
+    h, w = image.shape
+    r = radius
+    for _ in range(4):
+        half = int(math.ceil(2.5 * r + 10))
+        xi, yi = int(round(x)), int(round(y))
+        x0, x1, y0, y1 = max(0, xi - half), min(w, xi + half + 1), max(0, yi - half), min(h, yi + half + 1)
+        roi = image[y0:y1, x0:x1].astype(np.float32)
+        if sign < 0:
+            roi = 255.0 - roi
+        res = _linear_centroid(roi, x0, y0, x, y, r, 0.0, tangent)
+        if res is None or not math.isfinite(res[4]) or res[4] <= 0:
+            return None
+        x, y = res[0], res[1]
+        r_new = float(np.clip(math.sqrt(res[4]), 0.7 * r, 1.4 * r))
+        if abs(r_new - r) < 0.02 * r:
+            r = r_new
+            break
+        r = r_new
+    return x, y, r
+
+
+def detect_marker(path, max_samples: int = 120, max_full: int = 24, max_frames: int = 1800, seed: int = 0) -> Detection:
+    """Find the swinging marker in the video at ``path`` (see the module docstring).
+
+    Only the first ``max_frames`` frames are read (30 s at 60 fps: a long clip's swing is there).
+
+    Raises :class:`DetectionError` when nothing, or more than one thing, swings about a
+    fixed point; the message names what was found and the sidecar value that settles it.
+    """
+    small, full, scale, first = _sample_frames(path, max_samples, max_full, max_frames)
+    n = len(small)
+    if n < 12:
+        raise DetectionError(
+            f"{path}: only {n} frames: too short to find the swinging marker; give tracking polarity, "
+            "marker_radius_px and start_px in the trial's sidecar"
+        )
+    stack = np.stack([img for _, img in small])
+    background = np.median(stack, axis=0).astype(np.float32)
+    some = stack[:: max(1, n // 10), ::4, ::4].astype(np.float32) - background[None, ::4, ::4]
+    noise = 1.4826 * float(np.median(np.abs(some)))
+    threshold = max(2.0, 1.5 * noise)
+    rows = []
+    for k in range(n):
+        for sign, x, y, r, s in _dog_blobs(stack[k].astype(np.float32) - background, scale, threshold, per_sign=8):
+            rows.append((k, sign, x, y, r, s))
+    where = f"{path}: "
+    hint = (
+        "give tracking polarity, marker_radius_px and start_px (the marker's centre in the first frame) "
+        "in the trial's sidecar"
+    )
+    if not rows:
+        raise DetectionError(f"{where}nothing moves in {n} sampled frames; {hint}")
+    a = np.array(rows, float)
+    blobs = _Blobs(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2], a[:, 3], a[:, 4], a[:, 5])
+    rng = np.random.default_rng(seed)
+    h, w = first.shape
+    tracks = _find_tracks(blobs, n, (h, w), scale, rng)
+    # a second round without the first tracks' blobs: other objects
+    used = np.zeros(blobs.sign.size, bool)
+    for t in tracks:
+        used[t.members] = True
+    tracks += _find_tracks(blobs, n, (h, w), scale, rng, exclude=used)
+    for t in tracks:  # rank by the spot's own contrast in the frame (a disk on its surround), not the DoG's
+        t.strength = _local_contrast(stack, blobs, t, scale)
+    min_members = max(6, int(0.25 * n))
+    swinging = [t for t in tracks if t.reversals >= 2 and t.span_px >= 2 * t.radius and len(t.members) >= min_members]
+    if not swinging:
+        seen = max(tracks, key=lambda t: t.support, default=None)
+        what = (
+            "no moving spot follows a circle"
+            if seen is None
+            else (
+                f"the best is {seen.describe(n)}, which "
+                + ("does not move back and forth" if seen.reversals < 2 else "hardly moves")
+            )
+        )
+        raise DetectionError(f"{where}no object swings back and forth about a fixed point ({what}); {hint}")
+    swinging.sort(key=lambda t: -t.support)
+    best = swinging[0]
+    # Tracks about the same pivot, or rigidly attached to the best one, are parts of the same
+    # pendulum (marker, body, rod): not rivals.
+    rivals = [
+        t
+        for t in swinging[1:]
+        if math.hypot(t.cx - best.cx, t.cy - best.cy) > max(3 * best.radius, 0.08 * best.arm)
+        and not _attached(blobs, t, best)
+    ]
+    # A clearly curved arc beats a path that a straight line fits as well (an object moving on a line).
+    if rivals and best.curved:
+        rivals = [t for t in rivals if t.curved]
+    rival = rivals[0] if rivals else None
+    if rival is not None and rival.support >= 0.5 * best.support:
+        raise DetectionError(
+            f"{where}two objects swing: {best.describe(n)}, and {rival.describe(n)}; give the marker's start_px "
+            "(its centre in the first frame) and polarity in the trial's sidecar"
+        )
+    # Full-resolution refinement: radius from samples on the arc, start in frame 0.
+    positions = {small[int(blobs.sample[i])][0]: (blobs.x[i], blobs.y[i]) for i in best.members}
+    bg_full = _marker_free_background(full, positions, best.radius)
+    # Judged where the scene is best known: in the outer half of the swing (a body moving with the
+    # marker covers the middle of the swing in most frames, and so is part of the median there).
+    angles = {f: math.atan2(x - best.cx, y - best.cy) for f, (x, y) in positions.items()}
+    middle = float(np.median(list(angles.values())))
+    reach = max(abs(a - middle) for a in angles.values())
+    outer = {f: xy for f, xy in positions.items() if abs(angles[f] - middle) >= 0.5 * reach}
+    diff = full[len(full) // 2][1][::2, ::2] - bg_full[::2, ::2]
+    noise_full = 1.4826 * float(np.nanmedian(np.abs(diff - np.nanmedian(diff))))
+    free = _surround_is_scene(full, outer, bg_full, best.radius, max(5.0, 2.5 * noise_full))
+
+    def scene_removed(image):
+        """For a free marker: the image less the scene (a striped wall does not bend the moments)."""
+        if not free:
+            return image
+        out = image.astype(np.float32) - bg_full + 128.0
+        return np.where(np.isfinite(out), out, image).astype(np.float32)
+
+    on_arc = {int(blobs.sample[i]): i for i in best.members}
+    small_index = {k: frame for k, (frame, _) in enumerate(small)}
+    radii = []
+    for frame, image in full:
+        k = next((k for k, f in small_index.items() if f == frame), None)
+        if k is None or k not in on_arc:
+            continue
+        i = on_arc[k]
+        tangent = _tangent(blobs.x[i], blobs.y[i], best)
+        res = _refine(scene_removed(image), blobs.x[i], blobs.y[i], best.sign, best.radius, tangent)
+        if res is not None:
+            radii.append(res[2])
+    radius = float(np.median(radii)) if radii else best.radius
+    start = None
+    if 0 in on_arc:
+        i = on_arc[0]
+        tangent = _tangent(blobs.x[i], blobs.y[i], best)
+        res = _refine(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
+        if res is not None:
+            start = (float(res[0]), float(res[1]))
+        if not radii and res is not None:
+            radius = res[2]
+    coverage = len(best.members) / n
+    rival_share = 0.0 if rival is None else rival.support / best.support
+    confidence = float(min(1.0, coverage / 0.6) * min(1.0, best.reversals / 4) * (1.0 - rival_share))
+    return Detection(
+        polarity="bright" if best.sign > 0 else "dark",
+        marker_radius_px=radius,
+        start_px=start,
+        pivot_px=(float(best.cx), float(best.cy)),
+        arm_px=float(best.arm),
+        confidence=confidence,
+        n_samples=n,
+        n_on_arc=len(best.members),
+        reversals=best.reversals,
+        active_box_px=_active_box(background, scale),
+        rival=None if rival is None else rival.describe(n),
+        background=bg_full,
+        free_marker=free,
+    )
+
+
+def _local_contrast(stack: np.ndarray, blobs: _Blobs, track: _Track, scale: int) -> float:
+    """Median contrast of a track's spots against their own surround in the frame, in its polarity.
+
+    Mean grey within 0.7 r of the centre minus the mean over the ring 1.3–2 r (reduced frames):
+    a marker dot scores its full contrast; a corner or edge of a body scores a fraction.
+    """
+    values = []
+    _, h, w = stack.shape
+    for i in track.members:
+        img = stack[int(blobs.sample[i])]
+        x, y, r = blobs.x[i] / scale, blobs.y[i] / scale, max(1.0, blobs.r[i] / scale)
+        half = int(math.ceil(2 * r)) + 1
+        xi, yi = int(round(x)), int(round(y))
+        if xi - half < 0 or yi - half < 0 or xi + half >= w or yi + half >= h:
+            continue
+        patch = img[yi - half : yi + half + 1, xi - half : xi + half + 1].astype(np.float32)
+        yy, xx = np.mgrid[-half : half + 1, -half : half + 1]
+        d = np.hypot(xx + xi - x, yy + yi - y)
+        inner, ring = d <= 0.7 * r, (d >= 1.3 * r) & (d <= 2 * r)
+        if inner.any() and ring.any():
+            values.append(track.sign * (float(patch[inner].mean()) - float(patch[ring].mean())))
+    return max(float(np.median(values)), 0.0) if values else 0.0
+
+
+def _attached(blobs: _Blobs, other: _Track, track: _Track) -> bool:
+    """True when ``other`` keeps its place in the frame that turns with ``track`` (a part of the same body).
+
+    Each of its blobs, rotated about the track's pivot by minus the track's angle in the same
+    sample, lands within a few marker radii of the same point.
+    """
+    angle = {int(blobs.sample[i]): math.atan2(blobs.x[i] - track.cx, blobs.y[i] - track.cy) for i in track.members}
+    pts = []
+    for i in other.members:
+        a = angle.get(int(blobs.sample[i]))
+        if a is None:
+            continue
+        dx, dy = blobs.x[i] - track.cx, blobs.y[i] - track.cy
+        c, s = math.cos(a), math.sin(a)
+        pts.append((dx * c - dy * s, dx * s + dy * c))  # rotate by −a (angle measured from +y towards +x)
+    if len(pts) < 5:
+        return False
+    spread = np.median(np.hypot(*(np.array(pts) - np.median(pts, axis=0)).T))
+    return bool(spread <= max(3 * track.radius, 0.05 * track.arm))
+
+
+def _tangent(x, y, track: _Track):
+    rx, ry = x - track.cx, y - track.cy
+    norm = math.hypot(rx, ry) or 1.0
+    return (-ry / norm, rx / norm)
+
+
+def _marker_free_background(frames, positions: dict, radius: float) -> np.ndarray:
+    """Per-pixel median over ``frames`` [(index, image)] leaving out the marker's neighbourhood in each.
+
+    ``positions``: frame index → marker centre (full resolution). Pixels within 2.5 r + 4 px
+    of the marker in a frame do not count for that frame; a pixel covered in every frame (a
+    marker at rest there throughout) is NaN: the scene behind it is unknown.
+    """
+    stack = np.stack([img for _, img in frames]).astype(np.float32)
+    h, w = stack.shape[1:]
+    reach = 2.5 * radius + 4.0
+    near = np.zeros((h, w), np.uint8)
+    disks = []
+    for k, (index, _) in enumerate(frames):
+        if index in positions:
+            x, y = positions[index]
+            disks.append((k, x, y))
+            cv2.circle(near, (int(round(x)), int(round(y))), int(math.ceil(reach)) + 1, 1, -1)
+    background = np.median(stack, axis=0)
+    ys, xs = np.nonzero(near)
+    if ys.size:
+        values = stack[:, ys, xs]
+        seen = {k for k, _, _ in disks}
+        for k in range(len(frames)):
+            if k not in seen:  # marker not found in this frame (e.g. at rest, in the median): not used here
+                values[k] = np.nan
+        for k, x, y in disks:
+            values[k, np.hypot(xs - x, ys - y) <= reach] = np.nan
+        with np.errstate(all="ignore"):
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                background[ys, xs] = np.nanmedian(values, axis=0)
+    return background.astype(np.float32)
+
+
+def _surround_is_scene(frames, positions: dict, background: np.ndarray, radius: float, tolerance: float) -> bool:
+    """True when, in most frames, the ring just outside the marker shows the static scene (no body).
+
+    Ring: r + 3.5 to r + 6.5 px around the marker; it matches when 85 % of its pixels are
+    within ``tolerance`` grey levels (the noise's) of the background.
+    """
+    votes = []
+    for index, image in frames:
+        if index not in positions:
+            continue
+        x, y = positions[index]
+        half = int(math.ceil(radius + 8))
+        xi, yi = int(round(x)), int(round(y))
+        h, w = image.shape
+        if xi - half < 0 or yi - half < 0 or xi + half >= w or yi + half >= h:
+            continue
+        box = np.s_[yi - half : yi + half + 1, xi - half : xi + half + 1]
+        yy, xx = np.mgrid[box]
+        d = np.hypot(xx - x, yy - y)
+        ring = (d > radius + 3.5) & (d <= radius + 6.5)
+        img, bg = image[box].astype(np.float32), background[box]
+        if not np.isfinite(bg[ring]).all():
+            continue
+        votes.append(float(np.percentile(np.abs(img[ring] - bg[ring]), 85)) <= tolerance)
+    return len(votes) >= 5 and float(np.mean(votes)) >= 0.6
