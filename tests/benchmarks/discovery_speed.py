@@ -33,12 +33,9 @@ from pendulum.records import FitSettings, load_record  # noqa: E402
 from pendulum.trials import RIG_KEYS  # noqa: E402
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--project", type=Path, default=ROOT)
-    parser.add_argument("--rule", action="store_true", help="also time the Snakemake rule")
-    args = parser.parse_args(argv)
-    project = args.project.resolve()
+def measure(project: Path) -> dict:
+    """Wall time (s) of what the `discovery` rule computes for paper_rig in a built ``project``."""
+    project = Path(project).resolve()
     config = yaml.safe_load((project / "config.yaml").read_text())
     rig = config["rigs"]["paper_rig"]
     discovery = {"baseline": "quadratic", "candidates": None, "alpha": 0.01, **(config.get("discovery") or {})}
@@ -69,10 +66,26 @@ def main(argv=None) -> int:
     )
     document = run.run()
     run.tables(document)
-    seconds = time.perf_counter() - started
-    fitted = len(run.fitted_models)
-    print(f"discovery on the demo set ({len(names)} trials, {fitted} models fitted): {seconds:.1f} s (target 60 s)")
-    print(f"  {document['verdict']}")
+    return {
+        "seconds": time.perf_counter() - started,
+        "n_trials": len(names),
+        "models_fitted": len(run.fitted_models),
+        "verdict": document["verdict"],
+    }
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--project", type=Path, default=ROOT)
+    parser.add_argument("--rule", action="store_true", help="also time the Snakemake rule")
+    args = parser.parse_args(argv)
+    project = args.project.resolve()
+    figures = measure(project)
+    print(
+        f"discovery on the demo set ({figures['n_trials']} trials, {figures['models_fitted']} models fitted): "
+        f"{figures['seconds']:.1f} s (target 60 s)"
+    )
+    print(f"  {figures['verdict']}")
     if args.rule:
         started = time.perf_counter()
         subprocess.run(

@@ -41,35 +41,62 @@ def timed(fn, repeats=3):
     return best, result
 
 
-def main():
+def measure(angles_dir: Path | None = None, repeats: int = 3) -> dict:
+    """Best-of-``repeats`` wall time (s) of one per-trial fit (demo_p20) and one joint fit of each variant.
+
+    ``angles_dir``: a built project's ``results/angles`` (default the repository's, when built);
+    records missing there are model-generated. Also the friction variant on a 20 s, 60 fps record.
+    """
+    angles_dir = ROOT / "results" / "angles" if angles_dir is None else Path(angles_dir)
     settings = FitSettings()
     model = PendulumModel(Rig(**RIG), VARIANTS["friction"])
-    records, tables = [], []
+    records, sources = [], set()
     for name, release in RELEASES.items():
-        path = ROOT / "results" / "angles" / f"{name}.csv"
+        path = angles_dir / f"{name}.csv"
         if path.is_file():
             table, source = pd.read_csv(path), "demo video"
         else:
             table = synthetic_angle_table(model, TRUTH, release, rng=np.random.default_rng(1))
             source = "model-generated"
         records.append(load_record(table, name, RIG, settings))
-        tables.append(table)
-    print(f"demo records ({source}): {[r.n_samples for r in records]} samples")
+        sources.add(source)
+    out = {"source": " and ".join(sorted(sources)), "samples": [r.n_samples for r in records]}
+    out["per_trial_s"], out["joint_s"] = {}, {}
     for variant, terms in VARIANTS.items():
-        seconds, _ = timed(lambda terms=terms: fit_trials([records[1]], terms, settings))
-        joint, _ = timed(lambda terms=terms: fit_trials(records, terms, settings), repeats=1)
-        print(f"{variant:>10}: per-trial fit (demo_p20) {seconds:6.3f} s   joint fit of 5 trials {joint:6.3f} s")
+        out["per_trial_s"][variant], _ = timed(lambda terms=terms: fit_trials([records[1]], terms, settings), repeats)
+        out["joint_s"][variant], _ = timed(lambda terms=terms: fit_trials(records, terms, settings), repeats=1)
     long = synthetic_angle_table(model, TRUTH, 20, fps=60, duration_s=20, rng=np.random.default_rng(2))
     record = load_record(long, "p20_60fps", RIG, settings)
-    seconds, fit = timed(lambda: fit_trials([record], VARIANTS["friction"], settings))
+    out["long_record_s"], fit = timed(lambda: fit_trials([record], VARIANTS["friction"], settings), repeats)
+    out["long_record_samples"] = record.n_samples
+    out["long_record_evaluations"] = fit["optimiser"]["evaluations"]
+    return out
+
+
+def main():
+    figures = measure()
+    print(f"demo records ({figures['source']}): {figures['samples']} samples")
+    for variant in VARIANTS:
+        print(
+            f"{variant:>10}: per-trial fit (demo_p20) {figures['per_trial_s'][variant]:6.3f} s   "
+            f"joint fit of 5 trials {figures['joint_s'][variant]:6.3f} s"
+        )
     print(
-        f"friction per-trial fit, 20 s at 60 fps ({record.n_samples} samples): {seconds:.3f} s "
-        f"({fit['optimiser']['evaluations']} evaluations); target < 2 s"
+        f"friction per-trial fit, 20 s at 60 fps ({figures['long_record_samples']} samples): "
+        f"{figures['long_record_s']:.3f} s ({figures['long_record_evaluations']} evaluations); target < 2 s"
     )
     # as the workflow fits: rig tolerances stated, so every rig value is refitted for the error budget
-    stated = [
-        load_record(r_table, r.trial, RIG, settings, tolerances={}) for r, r_table in zip(records, tables, strict=True)
-    ]
+    settings = FitSettings()
+    model = PendulumModel(Rig(**RIG), VARIANTS["friction"])
+    tables = []
+    for name, release in RELEASES.items():
+        path = ROOT / "results" / "angles" / f"{name}.csv"
+        tables.append(
+            pd.read_csv(path)
+            if path.is_file()
+            else synthetic_angle_table(model, TRUTH, release, rng=np.random.default_rng(1))
+        )
+    stated = [load_record(t, name, RIG, settings, tolerances={}) for name, t in zip(RELEASES, tables, strict=True)]
     for variant in ("quadratic", "friction"):
         terms = VARIANTS[variant]
         seconds, fit = timed(lambda terms=terms: fit_trials([stated[1]], terms, settings), repeats=1)

@@ -8,6 +8,7 @@ plus the tracking error against the truth.
 """
 
 import argparse
+import inspect
 import sys
 import tempfile
 import time
@@ -34,22 +35,20 @@ def decode_only(path):
 
 
 def pipeline(path, settings):
-    frame_timeline(path)
-    contact_sheet(path)
+    """What the frames, tracks and angles jobs do with one video, one after the other."""
+    _, timeline = frame_timeline(path)
+    if "timeline" in inspect.signature(contact_sheet).parameters:  # as the frames job calls it
+        contact_sheet(path, timeline=timeline)
+    else:
+        contact_sheet(path)
     track = track_video(path, settings)
     geometry = estimate_rig_geometry({"bench": track}, vertical_deg=0.0)
     angles_from_track(track, pivot_px=geometry["pivot_px"], vertical_deg=0.0, length_m=0.76, source="bench")
     return len(track), track
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=10.0)
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument(
-        "--crf", type=int, default=17, help="x264 quality; 17 gives ~21 Mb/s on this noisy scene, as a phone records"
-    )
-    args = parser.parse_args()
+def bench_spec(seconds: float = 10.0, crf: int = 17):
+    """The benchmark clip: the demo's 20° trial filmed at 1920×1080, 60 fps (x264 ``crf``)."""
     base = {s.name: s for s in load_specs(ROOT / "data/synthetic/demo.yaml")}["demo_p20"]
     camera = replace(
         base.camera,
@@ -60,9 +59,20 @@ def main():
         marker_arm_px=840.0,
         marker_radius_px=12.0,
         exposure_subsamples=4,
-        crf=args.crf,
+        crf=crf,
     )
-    spec = replace(base, name="bench_1080p60", duration_s=args.seconds, camera=camera)
+    return replace(base, name="bench_1080p60", duration_s=seconds, camera=camera)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument(
+        "--crf", type=int, default=17, help="x264 quality; 17 gives ~21 Mb/s on this noisy scene, as a phone records"
+    )
+    args = parser.parse_args()
+    spec = bench_spec(args.seconds, args.crf)
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         video = generate_trial(spec, Path(tmp), Path(tmp), progress=None)

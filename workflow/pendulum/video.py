@@ -8,6 +8,9 @@ tracker gets the Y (luma) plane of every frame without colour conversion.
 from __future__ import annotations
 
 import math
+import os
+import queue
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +35,12 @@ class VideoInfo:
     n_packets: int
     stated_frames: int | None = None  # frame count the container's index states (None: not stated)
     warnings: tuple[str, ...] = ()  # e.g. a truncated file: readable up to where it ends
+    discarded_packets: int = 0  # packets before the first shown frame (a trimmed clip's edit list)
+    frame_interval_s: float | None = None  # median interval between shown frames
+    variable_frame_rate: bool = False
+    rotation_deg: float = 0.0  # display rotation the file states (frames are used as stored)
+    pixel_format: str = ""
+    bit_depth: int = 8
 
 
 ISO_BOXES = (b"ftyp", b"moov", b"mdat", b"free", b"skip", b"wide", b"pnot")  # first box of an MP4/MOV file
@@ -75,6 +84,21 @@ def unreadable_reason(path: Path) -> str:
     return f"{path}: not a video file (no known video container format); remove it or convert it to MP4"
 
 
+# Decoder threads: the workflow's script set-up (workflow/scripts/_setup.py) puts the rule's
+# `threads` into PENDULUM_DECODER_THREADS, so a job decodes with exactly what it asked the
+# scheduler for; unset (library use), FFmpeg picks its own count.
+DECODER_THREADS: int | None = int(os.environ.get("PENDULUM_DECODER_THREADS", "0")) or None
+DECODE_AHEAD_FRAMES = 4  # frames decoded ahead of the consumer (memory: this many frames, not the video)
+
+
+def set_decoder_threads(threads: int | None) -> None:
+    """Threads every later :func:`iter_luma` call gives the decoder (None: FFmpeg's own choice)."""
+    global DECODER_THREADS
+    if threads is not None and int(threads) < 1:
+        raise ValueError(f"decoder threads must be at least 1, not {threads}")
+    DECODER_THREADS = None if threads is None else int(threads)
+
+
 def _open(path: Path):
     import av
 
@@ -91,13 +115,50 @@ def _open(path: Path):
     return container
 
 
+IRREGULAR_INTERVAL = 0.1  # an interval more than this fraction of the median off a whole multiple of it
+VARIABLE_RATE_FRACTION = 0.02  # more irregular intervals than this (and ≥ 3): a variable frame rate
+
+
+def _first_decoded_frame(packet, state: dict) -> None:
+    """Feed ``packet`` to the decoder until it yields its first frame; keep that frame in ``state``."""
+    if state.get("frame") is not None:
+        return
+    try:
+        for frame in packet.decode():
+            if frame.pts is not None:
+                state["frame"] = frame
+                return
+    except Exception as exc:  # damaged or undecodable data: try the next packet
+        state["error"] = str(exc)
+
+
+def _frame_facts(frame) -> dict:
+    """Pixel format, bit depth and display rotation of a decoded frame."""
+    if frame is None:
+        return {"pixel_format": "", "bit_depth": 8, "rotation_deg": 0.0}
+    fmt = frame.format
+    bits = max((int(c.bits) for c in fmt.components), default=8)
+    rotation = float(getattr(frame, "rotation", 0) or 0)
+    return {"pixel_format": fmt.name, "bit_depth": bits, "rotation_deg": rotation}
+
+
 def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
-    """Per-frame presentation times from the container (demux only, no decoding).
+    """Per-frame presentation times of the frames the decoder yields (demux; only the first frame decoded).
+
+    A trimmed clip's container holds packets before its first shown frame (its edit list starts
+    later; FFmpeg marks them *discard* and the decoder drops their frames): they are no frames
+    here (``VideoInfo.discarded_packets``), nor are packets before the first frame the decoder
+    yields. Time 0 is that first shown frame, as in :func:`iter_luma`.
 
     Columns: ``frame``, ``pts``, ``time_s``, ``interval_s``, ``dropped_before``
-    (frames missing before this one: the interval is ≥ 1.5 nominal intervals),
-    ``duplicate_time`` (same timestamp as the previous frame), ``keyframe``,
-    ``packet_bytes``.
+    (frames missing before this one: the interval is ≥ 1.5 frame intervals; constant frame
+    rate only), ``duplicate_time`` (same timestamp as the previous frame), ``irregular_interval``
+    (more than 10 % off a whole number of frame intervals), ``keyframe``, ``packet_bytes``. The
+    frame interval is the median interval (a warning when none of the container's stated rates,
+    average or base, is within 1 % of it). More than 2 % irregular intervals (and at least 3) is a
+    *variable frame rate*: every frame keeps its timestamp and no frames are called dropped.
+    The first decoded frame gives the pixel format, bit depth and display rotation (reported;
+    frames are used as stored).
     """
     container = _open(path)
     try:
@@ -105,60 +166,209 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         rate = stream.average_rate or stream.guessed_rate
         if not rate:
             raise VideoError(f"{path}: the video stream states no frame rate")
-        nominal_fps = float(rate)
+        stated_fps = float(rate)
+        stated_rates = [float(r) for r in (rate, stream.base_rate, stream.guessed_rate) if r]
         tb = stream.time_base
-        rows = []
+        rows, discarded = [], 0
         warnings = []
+        first: dict = {}
         try:
             for packet in container.demux(stream):
                 if packet.size == 0 or packet.pts is None:
                     continue
-                rows.append((packet.pts, bool(packet.is_keyframe), packet.size))
+                if packet.is_discard:
+                    discarded += 1
+                else:
+                    rows.append((packet.pts, bool(packet.is_keyframe), packet.size))
+                _first_decoded_frame(packet, first)
         except Exception:  # damaged container: readable up to here, like a truncated file
             warnings.append(f"{path}: the container is damaged after frame {len(rows)}; the rest is unreadable")
         if not rows:
             raise VideoError(f"{path}: the video stream holds no readable frames; copy the file again")
-        stated = int(stream.frames) or None
-        if stated and len(rows) < stated and not warnings:
-            warnings.append(
-                f"{path}: truncated: only {len(rows)} of the {stated} frames its index lists are in the file; "
-                "the rest of the recording is missing"
+        codec = stream.codec_context.name
+        if first.get("frame") is None:
+            advice = "copy the file again" if codec == "h264" else "copy the file again or convert it to H.264 MP4"
+            raise VideoError(
+                f"{path}: no frame of its {codec} video stream could be decoded ({first.get('error', 'no output')}); "
+                f"{advice}"
             )
-        info = VideoInfo(
-            str(path),
-            int(stream.codec_context.width),
-            int(stream.codec_context.height),
-            nominal_fps,
-            stream.codec_context.name,
-            len(rows),
-            stated,
-            tuple(warnings),
-        )
+        facts = _frame_facts(first["frame"])
+        stated = int(stream.frames) or None
+        if stated and len(rows) + discarded < stated and not warnings:
+            warnings.append(
+                f"{path}: truncated: only {len(rows) + discarded} of the {stated} frames its index lists are in the "
+                "file; the rest of the recording is missing"
+            )
+        width, height = int(stream.codec_context.width), int(stream.codec_context.height)
     finally:
         container.close()
     table = pd.DataFrame(rows, columns=["pts", "keyframe", "packet_bytes"]).sort_values("pts", kind="stable")
+    shown_from = first["frame"].pts
+    before = int((table.pts < shown_from).sum())
+    table = table[table.pts >= shown_from]
+    discarded += before
+    if discarded:
+        warnings.append(
+            f"{path}: trimmed clip: {discarded} packet(s) before the first shown frame (an edit list) are not frames "
+            "the decoder yields; the timeline starts at the first shown frame"
+        )
     table.insert(0, "frame", np.arange(len(table)))
-    start = table.pts.iloc[0]
-    table.insert(2, "time_s", (table.pts - start).to_numpy(dtype=float) * float(tb))
+    table.insert(2, "time_s", (table.pts - shown_from).to_numpy(dtype=float) * float(tb))
     interval = np.diff(table.time_s.to_numpy(), prepend=np.nan)
-    nominal = 1.0 / nominal_fps
+    positive = interval[np.isfinite(interval) & (interval > 0)]
+    frame_interval = float(np.median(positive)) if positive.size else 1.0 / stated_fps
+    with np.errstate(invalid="ignore", divide="ignore"):
+        multiple = interval / frame_interval
+        irregular = np.isfinite(multiple) & (multiple > 0) & (np.abs(multiple - np.rint(multiple)) > IRREGULAR_INTERVAL)
+        irregular |= np.isfinite(multiple) & (multiple > 0) & (np.rint(multiple) == 0)
+    n_irregular = int(irregular.sum())
+    variable = n_irregular >= 3 and n_irregular > VARIABLE_RATE_FRACTION * max(1, positive.size)
+    if variable:
+        dropped = np.zeros(len(table), int)
+        warnings.append(
+            f"{path}: variable frame rate: frame intervals {positive.min() * 1e3:.1f}–{positive.max() * 1e3:.1f} ms "
+            f"(median {frame_interval * 1e3:.1f} ms, {n_irregular} irregular); every frame keeps its own timestamp "
+            "and no frames are counted as dropped"
+        )
+    else:
+        with np.errstate(invalid="ignore"):
+            dropped = np.where(interval >= 1.5 * frame_interval, np.rint(interval / frame_interval) - 1, 0)
+        dropped = np.nan_to_num(dropped).astype(int)
+        if positive.size and all(abs(frame_interval * r - 1) > 0.01 for r in stated_rates):
+            warnings.append(
+                f"{path}: the container states {stated_fps:.3f} fps but the frames come every "
+                f"{frame_interval * 1e3:.2f} ms ({1 / frame_interval:.3f} fps); the timestamps are used"
+            )
+    if facts["rotation_deg"]:
+        warnings.append(
+            f"{path}: the file asks players to rotate the picture by {facts['rotation_deg']:g}°; its frames are used "
+            f"as stored ({width}×{height}): tracks, pivot_px and vertical_deg are in stored pixel coordinates (give "
+            "pivot_px/vertical_deg as measured in the stored frames, not in the rotated picture a player shows)"
+        )
     table.insert(3, "interval_s", interval)
-    with np.errstate(invalid="ignore"):
-        dropped = np.where(interval >= 1.5 * nominal, np.rint(interval / nominal) - 1, 0)
-    table.insert(4, "dropped_before", np.nan_to_num(dropped).astype(int))
+    table.insert(4, "dropped_before", dropped)
     table.insert(5, "duplicate_time", np.nan_to_num(interval, nan=1.0) <= 0)
+    table.insert(6, "irregular_interval", irregular)
+    info = VideoInfo(
+        str(path),
+        width,
+        height,
+        stated_fps,
+        codec,
+        len(table),
+        stated,
+        tuple(warnings),
+        discarded_packets=discarded,
+        frame_interval_s=frame_interval,
+        variable_frame_rate=bool(variable),
+        rotation_deg=facts["rotation_deg"],
+        pixel_format=facts["pixel_format"],
+        bit_depth=facts["bit_depth"],
+    )
     return info, table.reset_index(drop=True)
 
 
 def luma(frame) -> np.ndarray:
-    """The Y plane of a decoded frame as a (height, width) uint8 view (no colour conversion)."""
+    """The Y plane of a decoded frame as a (height, width) uint8 view (no colour conversion).
+
+    A 9–16-bit plane (10-bit HEVC, ``yuv420p10le``: 16-bit words) is reduced to its top 8 bits (a copy).
+    """
     plane = frame.planes[0]
+    bits = int(frame.format.components[0].bits)
+    if bits > 8:
+        dtype = ">u2" if frame.format.name.endswith("be") else "<u2"
+        rows = np.frombuffer(plane, dtype).reshape(frame.height, plane.line_size // 2)
+        return (rows[:, : frame.width] >> (bits - 8)).astype(np.uint8)
     rows = np.frombuffer(plane, np.uint8).reshape(frame.height, plane.line_size)
     return rows[:, : frame.width]
 
 
+def _decoder_threads(threads: int | None) -> int | None:
+    threads = DECODER_THREADS if threads is None else threads
+    if threads is not None and int(threads) < 1:
+        raise ValueError(f"decoder threads must be at least 1, not {threads}")
+    return None if threads is None else int(threads)
+
+
+def _decoded_frames(path, container, stream, counts: dict, stop: threading.Event) -> Iterator:
+    """``(frame, damaged)`` in presentation order; failed packets counted and skipped (see :func:`iter_luma`)."""
+    broken = False  # a packet failed: frames are unreliable until the next key frame
+    packets = container.demux(stream)
+    n_frames = 0
+    while not stop.is_set():
+        try:
+            packet = next(packets)
+        except StopIteration:
+            break
+        except Exception:
+            counts["stopped_early"] = f"{path}: the container is damaged after frame {n_frames}; the rest is unreadable"
+            break
+        try:
+            frames = packet.decode()
+        except Exception:
+            counts["failed_packets"] += 1
+            broken = True
+            continue
+        for frame in frames:
+            if frame.pts is None:
+                continue
+            corrupt = getattr(frame, "is_corrupt", False)
+            if frame.key_frame and not corrupt:
+                broken = False
+            n_frames += 1
+            yield frame, broken or corrupt
+
+
+def _decode_ahead(frames: Iterator, stop: threading.Event, ahead: int) -> Iterator:
+    """The items of ``frames``, produced by a background thread up to ``ahead`` items in advance.
+
+    PyAV releases the GIL while FFmpeg demuxes and decodes, so decoding the next frames
+    overlaps with the consumer's work on this one. The consumer must set ``stop`` and
+    exhaust or drop this generator (its ``finally`` joins the thread) before the
+    container is closed.
+    """
+    done = object()
+    items: queue.Queue = queue.Queue(maxsize=ahead)
+
+    def put(item) -> bool:
+        while not stop.is_set():
+            try:
+                items.put(item, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def produce():
+        try:
+            for item in frames:
+                if not put(item):
+                    return
+            put(done)
+        except BaseException as exc:  # handed to the consumer, raised there
+            put(exc)
+
+    worker = threading.Thread(target=produce, name="pendulum-decoder", daemon=True)
+    worker.start()
+    try:
+        while True:
+            item = items.get()
+            if item is done:
+                return
+            if isinstance(item, BaseException):
+                raise item
+            yield item
+    finally:
+        stop.set()
+        worker.join()
+
+
 def iter_luma(
-    path: Path, keyframes_only: bool = False, damaged: bool = False, report: dict | None = None
+    path: Path,
+    keyframes_only: bool = False,
+    damaged: bool = False,
+    report: dict | None = None,
+    threads: int | None = None,
 ) -> Iterator[tuple[int, float, np.ndarray | None]]:
     """Decode the video once, yielding ``(frame_index, time_s, Y)`` in presentation order.
 
@@ -169,70 +379,101 @@ def iter_luma(
     ``damaged=True`` yielded with ``Y = None``. A container that breaks off
     (truncated file) ends the pass there. ``report``, if given, receives
     ``failed_packets``, ``damaged_frames`` and ``stopped_early`` (a sentence or None).
+
+    ``threads``: the decoder's thread count (default :data:`DECODER_THREADS`, set from
+    the rule's ``threads`` in a workflow job; None: FFmpeg's own choice). Decoding runs
+    in a background thread at most :data:`DECODE_AHEAD_FRAMES` frames ahead of the
+    consumer, so memory stays a few frames whatever the video's length. ``Y`` is a view
+    of the decoded frame, valid as long as the caller holds it (copy it to keep it).
     """
+    threads = _decoder_threads(threads)
     container = _open(path)
     counts = {"failed_packets": 0, "damaged_frames": 0, "stopped_early": None}
+    stop = threading.Event()
+    decoded = None
     try:
         stream = container.streams.video[0]
-        stream.thread_type = "AUTO"
+        stream.thread_type = "AUTO"  # frame and slice threads
+        if threads is not None:
+            stream.codec_context.thread_count = threads
         if keyframes_only:
             stream.codec_context.skip_frame = "NONKEY"
         tb = float(stream.time_base)
         start = None
         planar = None
         index = 0
-        broken = False  # a packet failed: frames are unreliable until the next key frame
-        packets = container.demux(stream)
-        while True:
-            try:
-                packet = next(packets)
-            except StopIteration:
-                break
-            except Exception:
-                counts["stopped_early"] = (
-                    f"{path}: the container is damaged after frame {index}; the rest is unreadable"
-                )
-                break
-            try:
-                frames = packet.decode()
-            except Exception:
-                counts["failed_packets"] += 1
-                broken = True
+        decoded = _decode_ahead(_decoded_frames(path, container, stream, counts, stop), stop, DECODE_AHEAD_FRAMES)
+        for frame, is_damaged in decoded:
+            if start is None:
+                start = frame.pts
+                fmt = frame.format.name
+                planar = fmt in ("gray", "gray8") or fmt.startswith(("yuv", "yuvj", "nv12"))
+            if is_damaged:
+                counts["damaged_frames"] += 1
+                if damaged:
+                    yield index, (frame.pts - start) * tb, None
+                    index += 1
                 continue
-            for frame in frames:
-                if frame.pts is None:
-                    continue
-                if start is None:
-                    start = frame.pts
-                    fmt = frame.format.name
-                    planar = fmt in ("gray", "gray8") or fmt.startswith(("yuv", "yuvj", "nv12"))
-                if frame.key_frame and not getattr(frame, "is_corrupt", False):
-                    broken = False
-                if broken or getattr(frame, "is_corrupt", False):
-                    counts["damaged_frames"] += 1
-                    if damaged:
-                        yield index, (frame.pts - start) * tb, None
-                        index += 1
-                    continue
-                y = luma(frame) if planar else frame.to_ndarray(format="gray")
-                yield index, (frame.pts - start) * tb, y
-                index += 1
+            y = luma(frame) if planar else frame.to_ndarray(format="gray")
+            yield index, (frame.pts - start) * tb, y
+            index += 1
         if index == 0 or index == counts["damaged_frames"]:
             raise VideoError(f"{path}: no frame could be decoded (damaged video data); copy the file again")
     finally:
+        stop.set()
+        if decoded is not None:
+            decoded.close()  # joins the decoding thread before the container goes
         container.close()
         if report is not None:
             report.update(counts)
 
 
-def contact_sheet(path: Path, n_tiles: int = 12, tile_width_px: int = 320) -> np.ndarray:
-    """A grid of evenly spaced key frames (decoding key frames only), labelled with their time."""
+def _keyframe_lumas(path: Path, wanted_pts: set, origin_pts: int) -> list[tuple[float, np.ndarray]]:
+    """``(time_s, Y copy)`` of the key frames whose pts is in ``wanted_pts`` (decoding key frames only)."""
+    container = _open(path)
+    found = []
+    try:
+        stream = container.streams.video[0]
+        stream.codec_context.skip_frame = "NONKEY"
+        tb = float(stream.time_base)
+        for packet in container.demux(stream):
+            try:
+                frames = packet.decode()
+            except Exception:  # damaged data: that tile is left out
+                continue
+            for frame in frames:
+                if frame.pts in wanted_pts:
+                    fmt = frame.format.name
+                    planar = fmt in ("gray", "gray8") or fmt.startswith(("yuv", "yuvj", "nv12"))
+                    y = luma(frame) if planar else frame.to_ndarray(format="gray")
+                    found.append(((frame.pts - origin_pts) * tb, np.array(y, np.uint8)))
+    except Exception:  # a container that breaks off: the tiles found so far
+        pass
+    finally:
+        container.close()
+    return found
+
+
+def contact_sheet(path: Path, n_tiles: int = 12, tile_width_px: int = 320, timeline=None) -> np.ndarray:
+    """A grid of evenly spaced tiles labelled with their time: the first shown frame, then key frames.
+
+    ``timeline`` (from :func:`frame_timeline`; computed when None) says which frames are shown and
+    where the key frames are; only the first frame and the picked key frames are kept in memory.
+    """
     import cv2
 
-    frames = [(t, y.copy()) for _, t, y in iter_luma(path, keyframes_only=True)]
-    if len(frames) > n_tiles:
-        pick = np.linspace(0, len(frames) - 1, n_tiles).round().astype(int)
-        frames = [frames[i] for i in pick]
+    if timeline is None:
+        _, timeline = frame_timeline(path)
+    decoded = iter_luma(path)
+    try:
+        _, t0, y0 = next(decoded)
+        first = (t0, np.array(y0, np.uint8))  # the first shown frame, key frame or not
+    finally:
+        decoded.close()
+    keys = timeline[timeline.keyframe & (timeline.frame > 0)]
+    pick = np.linspace(0, len(keys), min(n_tiles, len(keys) + 1)).round().astype(int)[1:] - 1
+    wanted = {int(p) for p in keys.pts.iloc[np.unique(pick)]} if len(keys) else set()
+    frames = [first, *_keyframe_lumas(path, wanted, int(timeline.pts.iloc[0]))]
     h, w = frames[0][1].shape
     tile_h = int(round(tile_width_px * h / w))
     cols = min(4, len(frames))

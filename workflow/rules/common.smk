@@ -1,4 +1,5 @@
 import ast
+import functools
 import json
 import os
 import platform
@@ -289,6 +290,7 @@ LIBRARY_DIR = Path(workflow.basedir) / "workflow" / "pendulum"
 SCRIPTS_DIR = Path(workflow.basedir) / "workflow" / "scripts"
 
 
+@functools.lru_cache(maxsize=None)  # each file parsed once per Snakemake run
 def _library_imports(path):
     """Names of the `pendulum` modules a Python file imports (absolute or relative)."""
     names = set()
@@ -307,7 +309,7 @@ def _library_imports(path):
                 for a in node.names
                 if a.name.startswith("pendulum.")
             }
-    return {n for n in names if (LIBRARY_DIR / f"{n}.py").is_file()}
+    return frozenset(n for n in names if (LIBRARY_DIR / f"{n}.py").is_file())
 
 
 def script_code(script):
@@ -316,7 +318,7 @@ def script_code(script):
     Declared as the rule's `code` input, so that editing the science of a stage
     reruns that stage (and what depends on it), not the others.
     """
-    seen, todo = set(), _library_imports(SCRIPTS_DIR / script)
+    seen, todo = set(), set(_library_imports(SCRIPTS_DIR / script))
     while todo:
         name = todo.pop()
         if name not in seen:

@@ -37,6 +37,7 @@ rule discovery:
         "logs/discovery/{group}.log",
     wildcard_constraints:
         group=r"[A-Za-z0-9_.+-]+",
+    priority: 3  # the longest job: started as soon as the baseline's fits are in
     threads: 1
     resources:
         mem_mb=2000,

@@ -8,6 +8,7 @@ rule fit_trial:
         fit="results/fits/{variant}/{trial}.json",
     log:
         "logs/fits/{variant}/{trial}.log",
+    priority: 1  # before the curves: the joint fits and discovery (the long tail) start sooner
     threads: 1
     resources:
         mem_mb=1000,
@@ -58,6 +59,7 @@ rule fit_joint:
         joint="results/fits/{variant}/joint/{rig}.json",
     log:
         "logs/fits/{variant}/joint/{rig}.log",
+    priority: 2
     threads: 1
     resources:
         mem_mb=2000,

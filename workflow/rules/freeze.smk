@@ -41,6 +41,7 @@ rule freeze:
     threads: 1
     resources:
         mem_mb=500,
+        runtime=30,
     params:
         request=FREEZE_REQUEST,
         config=config_as_used(config),

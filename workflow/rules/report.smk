@@ -12,6 +12,7 @@ rule report:
     threads: 1
     resources:
         mem_mb=800,
+        runtime=30,
     params:
         files=report_files(),
         trials=report_trials(),

@@ -8,9 +8,9 @@ rule tracks:
         summary="results/tracks/{trial}.json",
     log:
         "logs/tracks/{trial}.log",
-    threads: 1
+    threads: 2  # the decoder's threads (video.iter_luma); tracking overlaps in the job's main thread
     resources:
-        mem_mb=1000,
+        mem_mb=2000,  # marker detection holds ~50 sampled frames: ~0.6 GB at 720p, ~1 GB at 1080p
         runtime=60,
     params:
         tracking=tracking_settings,

@@ -15,6 +15,7 @@ TIMELINE_COLUMNS = [
     "interval_s",
     "dropped_before",
     "duplicate_time",
+    "irregular_interval",
     "keyframe",
     "packet_bytes",
 ]
@@ -31,10 +32,18 @@ def work():
         "nominal_fps": info.nominal_fps,
         "n_frames": int(len(timeline)),
         "duration_s": float(timeline.time_s.iloc[-1]),
+        "mean_fps": float((len(timeline) - 1) / timeline.time_s.iloc[-1]) if len(timeline) > 1 else None,
+        "frame_interval_s": info.frame_interval_s,
+        "variable_frame_rate": info.variable_frame_rate,
+        "irregular_intervals": int(timeline.irregular_interval.sum()),
         "dropped_frames": int(timeline.dropped_before.sum()),
         "duplicate_timestamps": int(timeline.duplicate_time.sum()),
         "keyframes": int(timeline.keyframe.sum()),
         "stated_frames": info.stated_frames,
+        "discarded_packets": info.discarded_packets,
+        "rotation_deg": info.rotation_deg,
+        "pixel_format": info.pixel_format,
+        "bit_depth": info.bit_depth,
         "warnings": list(info.warnings),
     }
     log.info("%s: %s", video, summary)
@@ -47,7 +56,7 @@ def work():
             summary["dropped_frames"],
             summary["duplicate_timestamps"],
         )
-    sheet = contact_sheet(video, n_tiles=sm.params.tiles)
+    sheet = contact_sheet(video, n_tiles=sm.params.tiles, timeline=timeline)
     write_csv(timeline, sm.output.timeline)
     write_png(sheet, sm.output.contact_sheet)
     write_json(summary, sm.output.summary)

@@ -1,0 +1,26 @@
+"""What the workflow's rules declare (threads, resources, script), read from workflow/rules/*.smk."""
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def rule_declarations() -> dict[str, dict]:
+    """Rule → threads, mem_mb, runtime and script, read from workflow/rules/*.smk."""
+    rules = {}
+    for smk in sorted((ROOT / "workflow" / "rules").glob("*.smk")):
+        for block in re.split(r"^rule ", smk.read_text(), flags=re.M)[1:]:
+            name = block.split(":", 1)[0].strip()
+            body = re.split(r"^\S", block.split("\n", 1)[1], flags=re.M)[0]
+            found = {}
+            for key, pattern in (
+                ("threads", r"^\s+threads:\s*(\d+)"),
+                ("mem_mb", r"^\s+mem_mb=(\d+)"),
+                ("runtime", r"^\s+runtime=(\d+)"),
+                ("script", r"^\s+\"\.\./scripts/(\w+)\.py\""),
+            ):
+                match = re.search(pattern, body, re.M)
+                found[key] = (match.group(1) if key == "script" else int(match.group(1))) if match else None
+            rules[name] = found
+    return rules

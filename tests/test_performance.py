@@ -1,0 +1,150 @@
+"""Thread budgets and the pipelined decoder (issue 13): what a job asks the scheduler for is what it uses.
+
+Speed itself is measured by tests/benchmarks/record.py, not here.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pendulum import video
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTS = ROOT / "workflow" / "scripts"
+FPS = 25
+LEVELS = [40 + 12 * k for k in range(16)]  # each frame one flat grey level
+
+
+@pytest.fixture(scope="module")
+def graded_clip(tmp_path_factory):
+    """16 frames of 96×64 H.264 at 25 fps, frame k flat at grey LEVELS[k] (known content and order)."""
+    import av
+
+    path = tmp_path_factory.mktemp("clip") / "graded.mp4"
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("libx264", rate=FPS)
+        stream.width, stream.height, stream.pix_fmt = 96, 64, "yuv420p"
+        stream.options = {"crf": "10", "bframes": "2", "g": "8"}
+        for level in LEVELS:
+            rgb = np.full((64, 96, 3), level, np.uint8)
+            for packet in stream.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    return path
+
+
+def _luma_level(rgb_level: int) -> float:
+    """BT.601 limited-range luma of a grey RGB level (what libswscale writes): 16 + 219·v/255."""
+    return 16 + 219 * rgb_level / 255
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_decoder_uses_exactly_the_threads_asked_for(graded_clip, monkeypatch, threads):
+    opened = []
+    real_open = video._open
+
+    def spy(path):
+        container = real_open(path)
+        opened.append(container)
+        return container
+
+    monkeypatch.setattr(video, "_open", spy)
+    frames = video.iter_luma(graded_clip, threads=threads)
+    next(frames)
+    assert opened[0].streams.video[0].codec_context.thread_count == threads
+    frames.close()
+    # the module-level setting (what a workflow job's _setup gives) is the default
+    monkeypatch.setattr(video, "DECODER_THREADS", threads + 1)
+    frames = video.iter_luma(graded_clip)
+    next(frames)
+    assert opened[1].streams.video[0].codec_context.thread_count == threads + 1
+    frames.close()
+
+
+def test_pipelined_decode_gives_every_frame_in_order_with_its_time(graded_clip):
+    """Decoding ahead in a thread changes nothing: 16 frames, times k/25 s, each at its own grey level."""
+    for threads in (1, 2):
+        got = [(index, t, float(y.mean())) for index, t, y in video.iter_luma(graded_clip, threads=threads)]
+        assert [g[0] for g in got] == list(range(len(LEVELS)))
+        assert np.allclose([g[1] for g in got], np.arange(len(LEVELS)) / FPS, atol=1e-9)
+        assert np.allclose([g[2] for g in got], [_luma_level(v) for v in LEVELS], atol=1.5)
+
+
+def test_a_consumer_that_stops_early_leaves_no_decoder_thread(graded_clip):
+    frames = video.iter_luma(graded_clip, threads=2)
+    first = [next(frames)[2].copy() for _ in range(3)]
+    frames.close()  # as `break` out of a for loop does
+    assert not [t for t in threading.enumerate() if t.name == "pendulum-decoder"]
+    assert [round(f.mean()) for f in first] == [round(_luma_level(v)) for v in LEVELS[:3]]
+
+
+def test_decode_ahead_holds_a_few_frames_not_the_video(graded_clip, monkeypatch):
+    """A stalled consumer: the decoder thread stops DECODE_AHEAD_FRAMES (+ the one in hand) ahead."""
+    monkeypatch.setattr(video, "DECODE_AHEAD_FRAMES", 2)
+    decoded = []
+    real = video._decoded_frames
+
+    def counting(*args):
+        for item in real(*args):
+            decoded.append(item)
+            yield item
+
+    monkeypatch.setattr(video, "_decoded_frames", counting)
+    frames = video.iter_luma(graded_clip, threads=1)
+    next(frames)
+    for _ in range(100):  # let the decoder run ahead as far as it may
+        threading.Event().wait(0.01)
+    assert 2 <= len(decoded) <= 1 + 2 + 1  # in hand, queued, and one waiting to be queued
+    frames.close()
+
+
+def _run_setup(threads):
+    """Import workflow/scripts/_setup.py as a Snakemake script does (``snakemake`` in __main__)."""
+    code = (
+        "import sys, types, json, os\n"
+        f"if {threads!r} is not None:\n"
+        f"    sys.modules['__main__'].snakemake = types.SimpleNamespace(threads={threads!r})\n"
+        f"sys.path.insert(0, {str(SCRIPTS)!r})\n"
+        "import _setup\n"
+        "numpy_before = 'numpy' in sys.modules\n"
+        "from pendulum import video\n"
+        "keys = ['OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS', 'PENDULUM_DECODER_THREADS']\n"
+        "print(json.dumps({'env': {k: os.environ.get(k) for k in keys}, 'numpy_before': numpy_before,"
+        " 'decoder': video.DECODER_THREADS}))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_THREADS")}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    return json.loads(proc.stdout)
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_setup_ties_blas_and_decoder_threads_to_the_rule(threads):
+    result = _run_setup(threads)
+    assert result["env"] == dict.fromkeys(result["env"], str(threads))
+    assert result["numpy_before"] is False  # set before any BLAS library loads
+    assert result["decoder"] == threads
+
+
+def test_setup_outside_snakemake_leaves_threads_alone():
+    result = _run_setup(None)
+    assert result["env"] == dict.fromkeys(result["env"])
+    assert result["decoder"] is None
+
+
+def test_every_rule_declares_threads_memory_and_runtime():
+    sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
+    from workflow_rules import rule_declarations
+
+    rules = rule_declarations()
+    assert {"frames", "tracks", "angles", "fit_trial", "fit_joint", "report"} <= set(rules)
+    missing = {name: d for name, d in rules.items() if name != "all" and None in (d["threads"], d["mem_mb"])}
+    missing |= {name: d for name, d in rules.items() if name != "all" and d["runtime"] is None}
+    assert not missing
+    assert rules["tracks"]["threads"] == 2  # the decoder's threads; tracking overlaps in the main thread

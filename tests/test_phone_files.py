@@ -1,0 +1,177 @@
+"""Phone and action-camera files (issue 12, item 5): the frames stage's timeline is the frames the
+decoder yields.
+
+A trimmed clip (an edit list over packets before the first shown frame, rendered by
+``synthetic.Faults.trimmed_lead_frames``), a variable frame rate, display-rotation metadata and
+10-bit HEVC, each against what PyAV's decoder yields and what was written.
+"""
+
+import json
+import logging
+import runpy
+from dataclasses import replace
+from fractions import Fraction
+from types import SimpleNamespace
+
+import av
+import cv2
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from pendulum import synthetic as syn
+from pendulum.video import VideoError, contact_sheet, frame_timeline, iter_luma
+
+RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
+TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
+EFFECTS = ["quadratic_drag", "linear_damping", "coulomb_friction"]
+
+
+def small_spec(name, **faults):
+    camera = syn.Camera(
+        width_px=320, height_px=240, fps=25.0, pivot_px=(160.3, 30.6), marker_arm_px=150.0, marker_radius_px=6.0
+    )
+    spec = syn.TrialSpec(name, 30.0, RIG, TRUTH, EFFECTS, seed=4, hold_s=0.3, duration_s=3.0, camera=camera)
+    return replace(spec, faults=syn.Faults(**faults))
+
+
+def run_frames_stage(video, out, monkeypatch):
+    """workflow/scripts/frames.py as Snakemake runs it (its ``snakemake`` object stood in for)."""
+    monkeypatch.syspath_prepend(str(ROOT / "workflow" / "scripts"))
+    files = {name: str(out / name) for name in ("timeline.csv", "summary.json", "contact_sheet.png")}
+    sm = SimpleNamespace(
+        input=SimpleNamespace(video=str(video)),
+        output=SimpleNamespace(
+            timeline=files["timeline.csv"], summary=files["summary.json"], contact_sheet=files["contact_sheet.png"]
+        ),
+        log=[str(out / "frames.log")],
+        params=SimpleNamespace(tiles=6),
+        threads=1,
+    )
+    runpy.run_path(str(ROOT / "workflow" / "scripts" / "frames.py"), init_globals={"snakemake": sm})
+    logging.getLogger("frames").handlers.clear()
+    return json.loads((out / "summary.json").read_text()), (out / "frames.log").read_text()
+
+
+@pytest.mark.slow
+def test_trimmed_clip_timeline_is_the_decoded_frames(tmp_path, monkeypatch):
+    """The issue's case: the container's packets before the first shown frame are not frames."""
+    lead = 13  # the clip is cut 13 frames into a GOP: the key frame it needs is discarded
+    spec = small_spec("trimmed", trimmed_lead_frames=lead)
+    video = syn.generate_trial(spec, tmp_path, tmp_path, progress=None)
+    decoded = [(t, y.copy()) for _, t, y in iter_luma(video)]
+    info, timeline = frame_timeline(video)
+    assert len(timeline) == len(decoded) == 75 and info.discarded_packets == lead
+    assert np.allclose(timeline.time_s, [t for t, _ in decoded], atol=1e-9)
+    assert timeline.dropped_before.sum() == 0 and not timeline.duplicate_time.any()
+    assert not timeline.irregular_interval.any() and not info.variable_frame_rate
+    assert any("trimmed clip: 13 packet(s)" in w for w in info.warnings)
+    summary, log = run_frames_stage(video, tmp_path, monkeypatch)
+    assert summary["n_frames"] == 75 and summary["duration_s"] == pytest.approx(74 / 25, abs=1e-9)
+    assert summary["mean_fps"] == pytest.approx(25.0, abs=1e-6) and summary["nominal_fps"] == 25.0
+    assert summary["dropped_frames"] == 0 and summary["duplicate_timestamps"] == 0
+    assert summary["discarded_packets"] == lead and "dropped frame" not in log
+    # the contact sheet's first tile is the first shown frame (not the discarded key frame), labelled 0.00 s
+    sheet = cv2.imread(str(tmp_path / "contact_sheet.png"), cv2.IMREAD_GRAYSCALE)
+    tile_h = round(320 * 240 / 320)
+    below_label = slice(30, tile_h)
+    expected = cv2.resize(decoded[0][1], (320, tile_h), interpolation=cv2.INTER_AREA)
+    assert np.array_equal(sheet[below_label, :320], expected[below_label])
+    with av.open(str(video)) as container:
+        hidden = [p for p in container.demux(video=0) if p.size and p.is_discard]
+    assert len(hidden) == lead and hidden[0].is_keyframe
+
+
+def write_frames(path, frames, times_s=None, rate=30, codec="libx264", pix_fmt="yuv420p", rotation=None):
+    with av.open(str(path), mode="w", format="mp4") as container:
+        stream = container.add_stream(codec, rate=rate)
+        stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], pix_fmt
+        stream.codec_context.time_base = Fraction(1, 90000)
+        if codec == "libx265":
+            stream.options = {
+                "crf": "20",
+                "preset": "veryfast",
+                "x265-params": "log-level=error:pools=1:frame-threads=1",
+            }
+        else:
+            stream.options = {"crf": "20", "preset": "veryfast", "threads": "1"}
+        if rotation is not None:
+            stream.set_display_rotation(rotation)
+        for i, image in enumerate(frames):
+            frame = av.VideoFrame.from_ndarray(image, format="gray").reformat(format=pix_fmt)
+            t = i / rate if times_s is None else times_s[i]
+            frame.pts, frame.time_base = int(round(t * 90000)), Fraction(1, 90000)
+            for packet in stream.encode(frame):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+
+
+def limited_range(grey):
+    """The Y value a full-range grey level becomes in a (limited-range) yuv420p video: 16 + 219·v/255."""
+    return 16 + 219 * np.asarray(grey, float) / 255
+
+
+def moving_square(n, h=96, w=128):
+    frames = []
+    for i in range(n):
+        image = np.full((h, w), 60, np.uint8)
+        image[20:40, 10 + i : 30 + i] = 200
+        frames.append(image)
+    return frames
+
+
+def test_variable_frame_rate_keeps_timestamps_and_is_no_dropped_frame_spam(tmp_path):
+    """A phone's VFR clip: intervals between 1/60 and 1/24 s. One warning, no dropped frames, times kept."""
+    intervals = np.random.default_rng(3).uniform(1 / 60, 1 / 24, 59)
+    times = np.concatenate([[0.0], np.cumsum(intervals)])
+    write_frames(tmp_path / "vfr.mp4", moving_square(60), times)
+    info, timeline = frame_timeline(tmp_path / "vfr.mp4")
+    assert info.variable_frame_rate and timeline.dropped_before.sum() == 0
+    assert np.allclose(timeline.time_s, times, atol=2e-5)
+    assert [w for w in info.warnings if "variable frame rate" in w] == list(info.warnings[:1])  # one sentence
+    # a constant-rate clip with two dropped frames stays constant-rate and counts them
+    keep = np.ones(60, bool)
+    keep[[20, 41]] = False
+    write_frames(
+        tmp_path / "cfr.mp4", [f for f, k in zip(moving_square(60), keep, strict=True) if k], np.arange(60)[keep] / 30
+    )
+    info, timeline = frame_timeline(tmp_path / "cfr.mp4")
+    assert not info.variable_frame_rate and timeline.dropped_before.sum() == 2
+    assert info.frame_interval_s == pytest.approx(1 / 30, abs=1e-5) and not info.warnings
+
+
+def test_rotation_metadata_is_reported_and_frames_used_as_stored(tmp_path):
+    frames = moving_square(10)
+    write_frames(tmp_path / "portrait.mp4", frames, rotation=90)
+    info, _ = frame_timeline(tmp_path / "portrait.mp4")
+    assert abs(info.rotation_deg) == 90 and (info.width_px, info.height_px) == (128, 96)
+    assert any("used as stored (128×96)" in w and "pivot_px" in w for w in info.warnings)
+    _, _, first = next(iter(iter_luma(tmp_path / "portrait.mp4")))
+    assert first.shape == (96, 128) and np.abs(first[20:40, 12:28] - limited_range(200)).max() < 3
+
+
+def test_ten_bit_hevc_gives_eight_bit_luma(tmp_path):
+    """10-bit planes are 16-bit words: luma is their top 8 bits, the same picture as the 8-bit source."""
+    frames = moving_square(12)
+    write_frames(tmp_path / "hevc10.mp4", frames, codec="libx265", pix_fmt="yuv420p10le")
+    info, timeline = frame_timeline(tmp_path / "hevc10.mp4")
+    assert (info.codec, info.pixel_format, info.bit_depth, len(timeline)) == ("hevc", "yuv420p10le", 10, 12)
+    decoded = [y.copy() for _, _, y in iter_luma(tmp_path / "hevc10.mp4")]
+    assert len(decoded) == 12 and decoded[0].dtype == np.uint8 and decoded[0].shape == (96, 128)
+    for source, y in zip(frames, decoded, strict=True):
+        assert np.abs(y - limited_range(source)).mean() < 1  # 10 → 8 bits: the same picture
+    sheet = contact_sheet(tmp_path / "hevc10.mp4", n_tiles=4, tile_width_px=128, timeline=timeline)
+    assert sheet.dtype == np.uint8 and sheet.shape[0] == 96
+
+
+def test_undecodable_video_data_fails_at_the_frames_stage_naming_the_file(tmp_path):
+    """The container reads, its video data does not decode (random bytes over the whole 'mdat' payload)."""
+    write_frames(tmp_path / "noise.mp4", moving_square(30))
+    data = bytearray((tmp_path / "noise.mp4").read_bytes())
+    at = data.find(b"mdat")
+    size = int.from_bytes(data[at - 4 : at], "big")
+    data[at + 4 : at - 4 + size] = np.random.default_rng(0).integers(0, 256, size - 8, dtype=np.uint8).tobytes()
+    (tmp_path / "noise.mp4").write_bytes(bytes(data))
+    with pytest.raises(VideoError, match=r"noise\.mp4: no frame of its h264 video stream could be decoded .*copy"):
+        frame_timeline(tmp_path / "noise.mp4")
