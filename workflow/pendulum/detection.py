@@ -338,7 +338,7 @@ def _refine(image: np.ndarray, x: float, y: float, sign: int, radius: float, tan
     return x, y, r
 
 
-def detect_marker(path, max_samples: int = 120, max_full: int = 24, max_frames: int = 1800, seed: int = 0) -> Detection:
+def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: int = 1800, seed: int = 0) -> Detection:
     """Find the swinging marker in the video at ``path`` (see the module docstring).
 
     Only the first ``max_frames`` frames are read (30 s at 60 fps: a long clip's swing is there).
