@@ -8,7 +8,7 @@ rule tracks:
         summary="results/tracks/{trial}.json",
     log:
         "logs/tracks/{trial}.log",
-    threads: 2  # the decoder's threads (video.iter_luma); tracking overlaps in the job's main thread
+    threads: 1  # the decoder's threads (video.iter_luma); `--set-threads tracks=2` for long 1080p clips
     resources:
         mem_mb=2000,  # marker detection holds ~50 sampled frames: ~0.6 GB at 720p, ~1 GB at 1080p
         runtime=60,
