@@ -282,6 +282,30 @@ def measure_marker(
     )
 
 
+def _capsule_window(shape, x0, y0, cx, cy, radius, blur_px, direction, margin_px):
+    """The capsule mask about (cx, cy) and the part of an ROI (``shape``, starting at image pixel (x0, y0)) it reaches.
+
+    The capsule: radius r_m = ``radius`` + ``margin_px`` about a segment of half-length
+    ``blur_px``/2 along the unit ``direction`` (none: a disk); its ring r_m + 1 < d ≤ r_m + 4.
+    Returns ``(ux, uy, half_len, r_mask, ring_in, ring_out, i0, i1, j0, j1)``, rows i0:i1 and
+    columns j0:j1 of the ROI, or None when fewer than 3 rows or columns are left.
+    """
+    if direction is None:
+        ux, uy, half_len = 1.0, 0.0, 0.0
+    else:
+        ux, uy = direction
+        half_len = 0.5 * max(blur_px, 0.0)
+    r_mask = radius + margin_px
+    ring_in, ring_out = r_mask + 1.0, r_mask + 4.0
+    h, w = shape
+    reach_x, reach_y = ring_out + 1.5 + half_len * abs(ux), ring_out + 1.5 + half_len * abs(uy)
+    i0, i1 = max(0, int(cy - y0 - reach_y)), min(h, int(cy - y0 + reach_y) + 2)
+    j0, j1 = max(0, int(cx - x0 - reach_x)), min(w, int(cx - x0 + reach_x) + 2)
+    if i1 - i0 < 3 or j1 - j0 < 3:
+        return None
+    return ux, uy, half_len, r_mask, ring_in, ring_out, i0, i1, j0, j1
+
+
 def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=2.5, iterations=2):
     """Centroid of (I − b) in a soft-edged mask around the (blurred) marker, b from a ring just outside.
 
@@ -298,20 +322,10 @@ def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=
     does not change; width² = 4 var_across (r² for a disk, unchanged by blur along the motion:
     a larger spot in the mask, e.g. an occluder, widens it). None when nothing stands out.
     """
-    if direction is None:
-        ux, uy, half_len = 1.0, 0.0, 0.0
-    else:
-        ux, uy = direction
-        half_len = 0.5 * max(blur_px, 0.0)
-    r_mask = radius + margin_px
-    ring_in, ring_out = r_mask + 1.0, r_mask + 4.0
-    # Only the window that the capsule and its ring can reach.
-    h, w = roi.shape
-    reach_x, reach_y = ring_out + 1.5 + half_len * abs(ux), ring_out + 1.5 + half_len * abs(uy)
-    i0, i1 = max(0, int(cy - y0 - reach_y)), min(h, int(cy - y0 + reach_y) + 2)
-    j0, j1 = max(0, int(cx - x0 - reach_x)), min(w, int(cx - x0 + reach_x) + 2)
-    if i1 - i0 < 3 or j1 - j0 < 3:
+    window = _capsule_window(roi.shape, x0, y0, cx, cy, radius, blur_px, direction, margin_px)
+    if window is None:
         return None
+    ux, uy, half_len, r_mask, ring_in, ring_out, i0, i1, j0, j1 = window
     sub = roi[i0:i1, j0:j1]
     # Coordinates relative to the starting estimate (small numbers: float32 is exact enough).
     ox, oy = cx, cy
@@ -360,19 +374,10 @@ def _coverage_centroid(roi, bg, x0, y0, cx, cy, radius, blur_px, direction, mark
     unresolved)`` like it (signal in pixels of coverage), or None when the surround
     is not the scene (a body moves with the marker: use the ring background).
     """
-    if direction is None:
-        ux, uy, half_len = 1.0, 0.0, 0.0
-    else:
-        ux, uy = direction
-        half_len = 0.5 * max(blur_px, 0.0)
-    r_mask = radius + margin_px
-    ring_in, ring_out = r_mask + 1.0, r_mask + 4.0
-    h, w = roi.shape
-    reach_x, reach_y = ring_out + 1.5 + half_len * abs(ux), ring_out + 1.5 + half_len * abs(uy)
-    i0, i1 = max(0, int(cy - y0 - reach_y)), min(h, int(cy - y0 + reach_y) + 2)
-    j0, j1 = max(0, int(cx - x0 - reach_x)), min(w, int(cx - x0 + reach_x) + 2)
-    if i1 - i0 < 3 or j1 - j0 < 3:
+    window = _capsule_window(roi.shape, x0, y0, cx, cy, radius, blur_px, direction, margin_px)
+    if window is None:
         return None
+    ux, uy, half_len, r_mask, ring_in, ring_out, i0, i1, j0, j1 = window
     sub, back = roi[i0:i1, j0:j1], bg[i0:i1, j0:j1]
     if not np.isfinite(back).all():  # the scene behind is unknown here (the marker rested on it)
         return None
