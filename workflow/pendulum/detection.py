@@ -411,7 +411,8 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     if rival is not None and rival.support >= 0.5 * best.support:
         raise DetectionError(
             f"{where}two objects swing: {best.describe(n)}, and {rival.describe(n)}; give the marker's start_px "
-            "(its centre in the first frame) and polarity in the trial's sidecar"
+            "(its centre in the first frame), polarity and marker_radius_px in the trial's sidecar (with all three "
+            "given, no detection runs)"
         )
     # Full-resolution refinement: radius from samples on the arc, start in frame 0.
     positions = {small[int(blobs.sample[i])][0]: (blobs.x[i], blobs.y[i]) for i in best.members}

@@ -67,13 +67,11 @@ class TrackerSettings:
     max_width_ratio: float = 1.15  # spot wider across the motion than this × normal (width²): "occluded"
     min_acquire_score: float = 0.75  # disk-template correlation a spot needs to be taken for the marker
     min_usable_fraction: float = 0.3  # fewer "ok" frames than this: the video cannot give a record
-    centroid: str = "linear"
+    centroid: str = "linear"  # "linear": Σ (I − b) x in a soft streak mask; "threshold": Σ max(I − T, 0) x
     # Shutter-open time / frame interval, for the exposure-centre correction; None: measured
     # from the streaks (needs ≥ 10 frames moving more than half a marker radius, else 0.5),
     # 0: no correction.
-    exposure_fraction: float | None = (
-        None  # "linear": Σ (I − b) x in a soft streak mask; "threshold": Σ max(I − T, 0) x
-    )
+    exposure_fraction: float | None = None
 
     max_unresolved: float = 0.03  # share of the marker over scene of its own grey, unmeasurable: "occluded"
     max_lost_step_radii: float = 2.0  # search window growth per lost frame, in marker radii (bounded, see below)
@@ -85,12 +83,12 @@ class TrackerSettings:
             raise ValueError(f"centroid must be 'linear' or 'threshold', got {self.centroid!r}")
         if self.marker_radius_px is not None and not self.marker_radius_px > 0:
             raise ValueError("marker_radius_px must be positive")
+        if not 0 < self.min_acquire_score < 1:
+            raise ValueError("min_acquire_score must be between 0 and 1")
 
     @property
     def needs_detection(self) -> bool:
         return self.polarity == "auto" or self.marker_radius_px is None
-        if not 0 < self.min_acquire_score < 1:
-            raise ValueError("min_acquire_score must be between 0 and 1")
 
 
 def _disk_template(radius: float) -> np.ndarray:
