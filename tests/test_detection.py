@@ -14,6 +14,7 @@ import pytest
 from pendulum.detection import DetectionError, detect_marker
 from pendulum.synthetic import _draw_disk, write_video
 from pendulum.tracking import TrackerSettings, track_video
+from pendulum.video import VideoError
 
 W, H, FPS = 480, 270, 30.0
 LETTERBOX_PX = 18
@@ -100,6 +101,18 @@ def test_no_hints_track_stays_on_the_swinging_disk(two_movers):
     assert err[ok].max() <= 0.5
     assert track.attrs["detection"]["polarity"] == "dark"
     assert track.attrs["marker"]["polarity"] == "dark"
+
+
+def test_a_wrong_given_polarity_is_named_with_what_detection_found(two_movers):
+    """Polarity given as bright (a sidecar), radius left to detection: the dark ball is never acquired, and the
+    error says that detection sees a dark marker, so the given polarity looks wrong."""
+    path, truth = two_movers
+    with pytest.raises(VideoError) as failure:
+        track_video(path, TrackerSettings(polarity="bright", marker_radius_px=None))
+    message = str(failure.value)
+    assert "no marker found in any of its" in message and "check tracking polarity (bright)" in message
+    assert "detection finds a dark marker (radius ≈ 8.0 px) at (" in message
+    assert "the polarity given (bright, in config tracking or the trial's sidecar) looks wrong" in message
 
 
 def test_two_swinging_objects_give_a_clear_error(tmp_path):

@@ -892,10 +892,19 @@ def track_video(
     }
     if reference_contrast is None:
         score = "no disk-like spot at all" if best_seen is None else f"the best spot scores {best_seen.score:.2f}"
+        seen = ""
+        if detection is not None and detection.polarity != settings.polarity:
+            start = detection.start_px
+            where = "" if start is None else f" at ({start[0]:.0f}, {start[1]:.0f}) px"
+            seen = (
+                f"; detection finds a {detection.polarity} marker (radius ≈ {detection.marker_radius_px:.1f} px)"
+                f"{where}: the polarity given ({settings.polarity}, in config tracking or the trial's sidecar) "
+                "looks wrong"
+            )
         raise VideoError(
             f"{path}: no marker found in any of its {n_frames} frames ({score}; a marker needs "
             f"{settings.min_acquire_score:g}); check tracking polarity ({settings.polarity}) and marker_radius_px "
-            f"({settings.marker_radius_px:g}), or give start_px in the trial's sidecar"
+            f"({settings.marker_radius_px:.3g}), or give start_px in the trial's sidecar{seen}"
         )
     # The first frames of each measurement kind set its reference signal; recompute their ratios against it.
     for row, kind, signal in first_signals:
