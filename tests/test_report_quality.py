@@ -259,3 +259,13 @@ def test_the_consistency_figure_leaves_out_fits_on_unreliable_records_and_says_w
     assert "Not plotted: the fits of t10 (unreliable records, Table 3)." in html
     (tmp_path / "clean").mkdir()
     assert "Not plotted" not in _report(tmp_path / "clean", garbage=False).consistency_figure()
+
+
+def test_the_tracking_table_says_whether_the_marker_was_detected_or_given():
+    from pendulum.report_checks import marker_text
+
+    given = {"marker": {"polarity": "bright", "marker_radius_px": 12.0, "start_px": None}, "detection": None}
+    found = {"marker": {"polarity": "dark", "marker_radius_px": 6.03261}, "detection": {"polarity": "dark"}}
+    assert marker_text(given) == "bright, r 12.0 px, given"
+    assert marker_text(found) == "dark, r 6.0 px, detected"
+    assert marker_text({"status": "ok", "flags": {"ok": 660}}) == "—"  # a track from before the field existed

@@ -23,6 +23,17 @@ NOTES_STYLE = "max-width:22em;min-width:14em"  # one note a line, wider than Tab
 _NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
 
 
+def marker_text(tracks: dict) -> str:
+    """The marker the tracker followed (tracks JSON ``marker``): polarity and radius, and whether detection found
+    them (``detection`` present: config and sidecar left polarity or radius to it) or they were given."""
+    marker = tracks.get("marker") or {}
+    if not marker:
+        return "—"
+    radius = marker.get("marker_radius_px")
+    size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
+    return f"{marker.get('polarity', '?')}{size}, " + ("detected" if tracks.get("detection") else "given")
+
+
 def frame_notes(frames: dict) -> list[str]:
     """What is notable about a video's frames (the frames stage's summary.json), as short notes; [] if clean.
 
@@ -182,6 +193,7 @@ class CheckSections(ReportData):
                         "num" + (" fail" if frames.get("duplicate_timestamps") else ""),
                     ),
                 ]
+            marker_cell = td(esc(marker_text(tracks)) if kind == "video" and is_ok(tracks) else "—", "na")
             if kind != "video":
                 flag_cell = td("—", "na")
             elif is_ok(tracks):
@@ -208,7 +220,7 @@ class CheckSections(ReportData):
             rows.append(
                 [td(esc(trial)), td(self.angle_label(trial), "num")]
                 + frame_cells
-                + [flag_cell]
+                + [marker_cell, flag_cell]
                 + angle_cells
                 + [fitted, f'<td class="warncell notes" style="{NOTES_STYLE}">' + "<br>".join(notes) + "</td>"]
             )
@@ -223,6 +235,7 @@ class CheckSections(ReportData):
             "fps",
             "dropped",
             "duplicate time stamps",
+            "marker",
             "tracker flags by kind",
             "angle samples",
             "flagged",
@@ -232,7 +245,9 @@ class CheckSections(ReportData):
         ]
         caption = self.table_caption(
             "Tracking quality per trial: frames in the video (from the container: dropped frames and duplicate time "
-            "stamps), the tracker's flags by kind (flagged frames are never interpolated), the angle samples from "
+            "stamps), the marker followed (polarity and radius; “detected” when config and sidecar left them to the "
+            "marker detection, “given” otherwise), the tracker's flags by kind (flagged frames are never "
+            "interpolated), the angle samples from "
             "release to rest and how many of them are flagged, the angle record's noise, and the samples the "
             "recommended variant's fit used (after the release transient and outliers). fps: mean rate of the "
             "frames the decoder yields (“variable”: a variable-frame-rate file, every frame keeps its own time "
