@@ -304,6 +304,31 @@ def _capsule_window(shape, x0, y0, cx, cy, radius, blur_px, direction, margin_px
     return ux, uy, half_len, r_mask, ring_in, ring_out, i0, i1, j0, j1
 
 
+def _capsule_coordinates(xr, yr, ex, ey, ux, uy, half_len):
+    """About the estimate (ex, ey): u along the motion (ux, uy), v across it, and the distance
+    d = √(v² + (u − clip(u, ±half_len))²) from the capsule's centre segment."""
+    u = (xr[None, :] - ex) * ux + (yr[:, None] - ey) * uy
+    v = (yr[:, None] - ey) * ux - (xr[None, :] - ex) * uy
+    excess = u - np.clip(u, -half_len, half_len)
+    return u, v, np.sqrt(v * v + excess * excess)
+
+
+def _weighted_centre(weight, xr, yr):
+    """(x̄, ȳ, Σw) = (Σ w x / Σ w, Σ w y / Σ w, Σ w) on the grid xr × yr; None when Σ w ≤ 0."""
+    col, row = weight.sum(axis=0), weight.sum(axis=1)
+    total = float(col.sum())
+    if total <= 0:
+        return None
+    return float(col @ xr) / total, float(row @ yr) / total, total
+
+
+def _spread(weight, u, v, total, directed: bool):
+    """(streak², width²) of the weights: 12 (var_u − var_v) (NaN without a direction) and 4 var_v."""
+    across2 = float((weight * v * v).sum()) / total
+    streak2 = 12.0 * float((weight * (u * u)).sum()) / total - 12.0 * across2 if directed else math.nan
+    return streak2, 4.0 * across2
+
+
 def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=2.5, iterations=2):
     """Centroid of (I − b) in a soft-edged mask around the (blurred) marker, b from a ring just outside.
 
@@ -332,10 +357,7 @@ def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=
     ex = ey = 0.0  # current estimate relative to (ox, oy)
     background = None
     for _ in range(iterations):
-        u = (xr[None, :] - ex) * ux + (yr[:, None] - ey) * uy  # along the motion
-        v = (yr[:, None] - ey) * ux - (xr[None, :] - ex) * uy  # across it
-        excess = u - np.clip(u, -half_len, half_len)
-        dist = np.sqrt(v * v + excess * excess)
+        u, v, dist = _capsule_coordinates(xr, yr, ex, ey, ux, uy, half_len)
         if background is None:
             ring = (dist > ring_in) & (dist <= ring_out)
             if np.count_nonzero(ring) < 8:
@@ -344,17 +366,13 @@ def _linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=
         mask = np.clip(r_mask + 0.5 - dist, 0.0, 1.0, out=dist)
         weight = sub - background
         weight *= mask
-        col, row = weight.sum(axis=0), weight.sum(axis=1)
-        total = float(col.sum())
-        if total <= 0:
+        centre = _weighted_centre(weight, xr, yr)
+        if centre is None:
             return None
-        ex, ey = float(col @ xr) / total, float(row @ yr) / total
+        ex, ey, total = centre
     # Moments about the last mask centre, within a small fraction of a pixel of the result.
-    across2 = float((weight * v * v).sum()) / total
-    if direction is None:
-        return ox + ex, oy + ey, math.nan, total, 4.0 * across2
-    streak2 = 12.0 * float((weight * (u * u)).sum()) / total - 12.0 * across2
-    return ox + ex, oy + ey, streak2, total, 4.0 * across2
+    streak2, width2 = _spread(weight, u, v, total, direction is not None)
+    return ox + ex, oy + ey, streak2, total, width2
 
 
 def _coverage_centroid(roi, bg, x0, y0, cx, cy, radius, blur_px, direction, marker_level, margin_px=2.5, iterations=3):
@@ -382,13 +400,7 @@ def _coverage_centroid(roi, bg, x0, y0, cx, cy, radius, blur_px, direction, mark
     xr = (np.arange(x0 + j0, x0 + j1) - cx).astype(np.float32)
     yr = (np.arange(y0 + i0, y0 + i1) - cy).astype(np.float32)
 
-    def capsule(ex, ey):
-        u = (xr[None, :] - ex) * ux + (yr[:, None] - ey) * uy
-        v = (yr[:, None] - ey) * ux - (xr[None, :] - ex) * uy
-        excess = u - np.clip(u, -half_len, half_len)
-        return u, v, np.sqrt(v * v + excess * excess)
-
-    u, v, dist = capsule(0.0, 0.0)
+    u, v, dist = _capsule_coordinates(xr, yr, 0.0, 0.0, ux, uy, half_len)
     ring = (dist > ring_in) & (dist <= ring_out)
     if np.count_nonzero(ring) < 8:
         return None
@@ -407,7 +419,7 @@ def _coverage_centroid(roi, bg, x0, y0, cx, cy, radius, blur_px, direction, mark
     unresolved = 0.0
     any_missing = not measurable.all()
     for _ in range(iterations):
-        u, v, dist = capsule(ex, ey)
+        u, v, dist = _capsule_coordinates(xr, yr, ex, ey, ux, uy, half_len)
         mask = np.clip(r_mask + 0.5 - dist, 0.0, 1.0)
         filled = cover
         if any_missing:
@@ -424,16 +436,12 @@ def _coverage_centroid(roi, bg, x0, y0, cx, cy, radius, blur_px, direction, mark
             lost = gap & (mirror_ok <= 0.99)
             unresolved = float((expected * lost).sum() / max(expected.sum(), 1e-9))
         weight = filled * mask
-        col, row = weight.sum(axis=0), weight.sum(axis=1)
-        total = float(col.sum())
-        if total <= 0:
+        centre = _weighted_centre(weight, xr, yr)
+        if centre is None:
             return None
-        ex, ey = float(col @ xr) / total, float(row @ yr) / total
-    across2 = float((weight * v * v).sum()) / total
-    if direction is None:
-        return cx + ex, cy + ey, math.nan, total, 4.0 * across2, unresolved
-    streak2 = 12.0 * float((weight * (u * u)).sum()) / total - 12.0 * across2
-    return cx + ex, cy + ey, streak2, total, 4.0 * across2, unresolved
+        ex, ey, total = centre
+    streak2, width2 = _spread(weight, u, v, total, direction is not None)
+    return cx + ex, cy + ey, streak2, total, width2, unresolved
 
 
 def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:
