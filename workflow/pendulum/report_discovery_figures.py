@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.effects import TERMS
-from pendulum.report_figures import MPL_STYLE, figure_png, log_ticks, new_figure
+from pendulum.report_figures import EXTINCTION_LABELS, MPL_STYLE, figure_png, log_axes, new_figure
 from pendulum.report_format import MARKERS, PALETTE, esc, figure_html, fmt
 
 TRIAL_COLOURS = tuple(c for c in PALETTE if c != "#F0E442")  # yellow lines vanish on white
@@ -102,12 +102,7 @@ def extinction_figure(document: dict, extinction: pd.DataFrame) -> bytes | None:
                     label=model_label(document, model) if j == 0 else None,
                     **style,
                 )
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        log_ticks(ax.xaxis)
-        log_ticks(ax.yaxis)
-        ax.set_xlabel("amplitude A at the half cycle's start (°)")
-        ax.set_ylabel("amplitude loss per half cycle ΔA (°)")
+        log_axes(ax, *EXTINCTION_LABELS)
         ax.legend(frameon=False, fontsize=7, loc="lower right")
         return figure_png(fig)
 

@@ -34,6 +34,19 @@ def log_ticks(axis) -> None:
     axis.set_minor_formatter(NullFormatter())
 
 
+EXTINCTION_LABELS = ("amplitude A at the half cycle's start (°)", "amplitude loss per half cycle ΔA (°)")
+
+
+def log_axes(ax, xlabel: str, ylabel: str) -> None:
+    """Both axes logarithmic with :func:`log_ticks`, and labelled."""
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    log_ticks(ax.xaxis)
+    log_ticks(ax.yaxis)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+
+
 def new_figure(width_in: float, height_in: float):
     """A figure outside pyplot (no global state, nothing shown twice in the notebook)."""
     from matplotlib.figure import Figure
@@ -293,12 +306,7 @@ class FigureSections(ReportData):
                             label=f"{v} prediction" if first else None,
                         )
                         first = False
-                ax.set_xscale("log")
-                ax.set_yscale("log")
-                log_ticks(ax.xaxis)
-                log_ticks(ax.yaxis)
-                ax.set_xlabel("amplitude A at the half cycle's start (°)")
-                ax.set_ylabel("amplitude loss per half cycle ΔA (°)")
+                log_axes(ax, *EXTINCTION_LABELS)
                 ax.set_title("extinction curve", loc="left")
                 ax.legend(frameon=False, fontsize=7)
                 joint = self.joint.get((variant, rig), {})
@@ -309,12 +317,7 @@ class FigureSections(ReportData):
                 truth = {true_value(self.truth.get(t), "drag_coefficient") for t in trials if t in self.truth} - {None}
                 if len(truth) == 1:
                     bx.axhline(truth.pop(), color="black", ls="--", lw=1, label="truth")
-                bx.set_xscale("log")
-                bx.set_yscale("log")
-                log_ticks(bx.xaxis)
-                log_ticks(bx.yaxis)
-                bx.set_xlabel("Keulegan–Carpenter number of the half cycle")
-                bx.set_ylabel("local $C_d$ (all loss charged to drag)")
+                log_axes(bx, "Keulegan–Carpenter number of the half cycle", "local $C_d$ (all loss charged to drag)")
                 bx.set_title("local drag coefficient", loc="left")
                 bx.legend(frameon=False, fontsize=7)
                 png = figure_png(fig)
