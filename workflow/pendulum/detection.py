@@ -276,23 +276,30 @@ def _find_tracks(blobs: _Blobs, n_samples: int, shape, scale: int, rng, exclude=
             idx = _inliers(blobs, cand, cx, cy, arm, radius, tol)
         if idx.size < 5 or not arm <= max_arm:
             continue
-        order = np.argsort(blobs.sample[idx])
-        idx = idx[order]
-        x, y = blobs.x[idx], blobs.y[idx]
-        angles = np.unwrap(np.arctan2(x - cx, y - cy))
-        span = float(angles.max() - angles.min()) * arm
-        # a straight line through the same points: residual RMS against the circle's
-        centred = np.column_stack([x - x.mean(), y - y.mean()])
-        line_rms = float(np.linalg.svd(centred, compute_uv=False)[-1] / math.sqrt(len(x)))
-        circle_rms = float(np.sqrt(np.mean((np.hypot(x - cx, y - cy) - arm) ** 2)))
-        curved = line_rms > 2.0 * circle_rms + 0.5 * scale
-        noise = max(0.5 * radius, 1.0 * scale) / arm
-        tracks.append(
-            _Track(
-                sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), _reversals(angles, noise), span, curved
-            )
-        )
+        tracks.append(_track(blobs, idx, sign, (cx, cy, arm), scale, radius))
     return tracks
+
+
+def _track(blobs: _Blobs, idx: np.ndarray, sign: int, circle, scale: int, radius: float | None = None) -> _Track:
+    """The track of blobs ``idx`` on ``circle`` (cx, cy, arm): its span, reversals and whether it is curved.
+
+    ``radius``: the spot's radius (default: the median blob radius).
+    """
+    cx, cy, arm = circle
+    idx = idx[np.argsort(blobs.sample[idx])]
+    radius = float(np.median(blobs.r[idx])) if radius is None else radius
+    x, y = blobs.x[idx], blobs.y[idx]
+    angles = np.unwrap(np.arctan2(x - cx, y - cy))
+    span = float(angles.max() - angles.min()) * arm
+    # a straight line through the same points: residual RMS against the circle's
+    centred = np.column_stack([x - x.mean(), y - y.mean()])
+    line_rms = float(np.linalg.svd(centred, compute_uv=False)[-1] / math.sqrt(len(x)))
+    circle_rms = float(np.sqrt(np.mean((np.hypot(x - cx, y - cy) - arm) ** 2)))
+    curved = line_rms > 2.0 * circle_rms + 0.5 * scale
+    noise = max(0.5 * radius, 1.0 * scale) / arm
+    return _Track(
+        sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), _reversals(angles, noise), span, curved
+    )
 
 
 def _active_box(background: np.ndarray, scale: int) -> tuple[int, int, int, int]:
@@ -382,7 +389,11 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     for t in tracks:  # rank by the spot's own contrast in the frame (a disk on its surround), not the DoG's
         t.strength = _local_contrast(stack, blobs, t, scale)
     min_members = max(6, int(0.25 * n))
-    swinging = [t for t in tracks if t.reversals >= 2 and t.span_px >= 2 * t.radius and len(t.members) >= min_members]
+
+    def swings(t: _Track) -> bool:
+        return t.reversals >= 2 and t.span_px >= 2 * t.radius and len(t.members) >= min_members
+
+    swinging = [t for t in tracks if swings(t)]
     if not swinging:
         seen = max(tracks, key=lambda t: t.support, default=None)
         what = (
@@ -396,14 +407,29 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
         raise DetectionError(f"{where}no object swings back and forth about a fixed point ({what}); {hint}")
     swinging.sort(key=lambda t: -t.support)
     best = swinging[0]
-    # Tracks about the same pivot, or rigidly attached to the best one, are parts of the same
-    # pendulum (marker, body, rod): not rivals.
-    rivals = [
-        t
-        for t in swinging[1:]
-        if math.hypot(t.cx - best.cx, t.cy - best.cy) > max(3 * best.radius, 0.08 * best.arm)
-        and not _attached(blobs, t, best)
-    ]
+
+    def same_pendulum(t: _Track) -> bool:
+        """About the same pivot, or rigidly attached to the best track: a part of the same pendulum."""
+        return math.hypot(t.cx - best.cx, t.cy - best.cy) <= max(3 * best.radius, 0.08 * best.arm) or _attached(
+            blobs, t, best
+        )
+
+    rivals = []
+    for t in swinging[1:]:
+        if same_pendulum(t):
+            continue
+        # Blobs of the pendulum's own body can share an arc with another object's: judged without them.
+        own = _attached_members(blobs, t, best, scale)
+        if own.any():
+            rest = t.members[~own]
+            if rest.size < 5:
+                continue
+            t = _track(blobs, rest, t.sign, _fit_circle(blobs.x[rest], blobs.y[rest]), scale)
+            t.strength = _local_contrast(stack, blobs, t, scale)
+            if not swings(t) or same_pendulum(t):
+                continue
+        rivals.append(t)
+    rivals.sort(key=lambda t: -t.support)
     # A clearly curved arc beats a path that a straight line fits as well (an object moving on a line).
     if rivals and best.curved:
         rivals = [t for t in rivals if t.curved]
@@ -500,25 +526,64 @@ def _local_contrast(stack: np.ndarray, blobs: _Blobs, track: _Track, scale: int)
     return max(float(np.median(values)), 0.0) if values else 0.0
 
 
-def _attached(blobs: _Blobs, other: _Track, track: _Track) -> bool:
-    """True when ``other`` keeps its place in the frame that turns with ``track`` (a part of the same body).
+def _body_frame(blobs: _Blobs, other: _Track, track: _Track) -> tuple[np.ndarray, np.ndarray]:
+    """Where ``other``'s blobs sit in the frame turning with ``track``: (member positions, points).
 
-    Each of its blobs, rotated about the track's pivot by minus the track's angle in the same
-    sample, lands within a few marker radii of the same point.
+    Each blob is rotated about the track's pivot by minus the track's angle in the same sample
+    (members in samples without a track blob are left out).
     """
     angle = {int(blobs.sample[i]): math.atan2(blobs.x[i] - track.cx, blobs.y[i] - track.cy) for i in track.members}
-    pts = []
-    for i in other.members:
+    rows, pts = [], []
+    for k, i in enumerate(other.members):
         a = angle.get(int(blobs.sample[i]))
         if a is None:
             continue
         dx, dy = blobs.x[i] - track.cx, blobs.y[i] - track.cy
         c, s = math.cos(a), math.sin(a)
+        rows.append(k)
         pts.append((dx * c - dy * s, dx * s + dy * c))  # rotate by −a (angle measured from +y towards +x)
+    return np.array(rows, int), np.array(pts, float).reshape(-1, 2)
+
+
+def _attached(blobs: _Blobs, other: _Track, track: _Track) -> bool:
+    """True when ``other`` keeps its place in the frame that turns with ``track`` (a part of the same body):
+    its blobs' places there (:func:`_body_frame`) lie within a few marker radii of one point."""
+    _, pts = _body_frame(blobs, other, track)
     if len(pts) < 5:
         return False
-    spread = np.median(np.hypot(*(np.array(pts) - np.median(pts, axis=0)).T))
+    spread = np.median(np.hypot(*(pts - np.median(pts, axis=0)).T))
     return bool(spread <= max(3 * track.radius, 0.05 * track.arm))
+
+
+def _distances(points: np.ndarray) -> np.ndarray:
+    """All pairwise Euclidean distances of (n, 2) points: an (n, n) array."""
+    return np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+
+
+def _attached_members(blobs: _Blobs, other: _Track, track: _Track, scale: int) -> np.ndarray:
+    """Which blobs of ``other`` are rigid parts of ``track``'s pendulum (bool per member).
+
+    Blobs that keep one place in the frame turning with the pendulum (:func:`_body_frame`;
+    at least five within tol = max(0.6 r, 0.02 arm, 1.5 px × sample scale)) while their image
+    positions move apart by more than 4 tol are parts of it. A second object that only passes
+    one place now and then (at rest, or at one phase of the swing) does not.
+    """
+    attached = np.zeros(len(other.members), bool)
+    rows_left, body_left = _body_frame(blobs, other, track)
+    tol = max(0.6 * other.radius, 0.02 * track.arm, 1.5 * scale)
+    while rows_left.size >= 5:
+        near = _distances(body_left) <= tol
+        centre = int(np.argmax(near.sum(axis=1)))
+        cluster = near[centre]
+        if cluster.sum() < 5:
+            break
+        members = other.members[rows_left[cluster]]
+        image = np.column_stack([blobs.x[members], blobs.y[members]])
+        moved = _distances(image).max()
+        if moved > 4 * tol:
+            attached[rows_left[cluster]] = True
+        rows_left, body_left = rows_left[~cluster], body_left[~cluster]
+    return attached
 
 
 def _tangent(x, y, track: _Track):
