@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 
 from conftest import DEMO_SPEC, ROOT
 from paper_rig import PAPER_RIG
+from pendulum.centroids import measure_marker
 from pendulum.effects import TERMS, effects_for, history_equivalent, lower_bound
 from pendulum.fitting import fit_trials
 from pendulum.physics import PendulumModel, Rig, simulate
@@ -27,7 +28,7 @@ from pendulum.synthetic import (
     true_angle_rad,
     truth_record,
 )
-from pendulum.tracking import TrackerSettings, measure_marker
+from pendulum.tracking import TrackerSettings
 
 RIG = Rig(**PAPER_RIG)
 # Paper rig by hand (tests/test_physics_reference.py): K = (m g − ρ g V) L = 7.679268 N·m,

@@ -7,11 +7,11 @@ import pandas as pd
 import pytest
 
 from conftest import DEMO_RAW, DEMO_TRUTH, demo_trials
+from pendulum.centroids import measure_marker
 from pendulum.synthetic import Camera, TrialSpec, _draw_disk, generate_trial, release_time_s
 from pendulum.tracking import (
     TrackerSettings,
     exposure_centre_correction,
-    measure_marker,
     track_video,
 )
 from truth import track_errors

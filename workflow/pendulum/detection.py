@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from pendulum.centroids import linear_centroid
 from pendulum.video import VideoError, iter_luma
 
 PYRAMID_SIGMAS = (1.0, 1.5, 2.25, 3.375)  # DoG σ at each pyramid level (× 2^level), ratio 1.5
@@ -322,8 +323,6 @@ def _active_box(background: np.ndarray, scale: int) -> tuple[int, int, int, int]
 
 def _refine(image: np.ndarray, x: float, y: float, sign: int, radius: float, tangent):
     """Radius from width² across the motion and centre from the linear centroid (full resolution)."""
-    from pendulum.tracking import _linear_centroid
-
     h, w = image.shape
     r = radius
     for _ in range(4):
@@ -333,7 +332,7 @@ def _refine(image: np.ndarray, x: float, y: float, sign: int, radius: float, tan
         roi = image[y0:y1, x0:x1].astype(np.float32)
         if sign < 0:
             roi = 255.0 - roi
-        res = _linear_centroid(roi, x0, y0, x, y, r, 0.0, tangent)
+        res = linear_centroid(roi, x0, y0, x, y, r, 0.0, tangent)
         if res is None or not math.isfinite(res[4]) or res[4] <= 0:
             return None
         x, y = res[0], res[1]
