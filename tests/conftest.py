@@ -26,7 +26,8 @@ def hard_videos(tmp_path_factory):
     """Short synthetic videos the demo lacks: a dark marker on a bright scene, 5 % occluded frames."""
     from dataclasses import replace
 
-    from pendulum.synthetic import Occlusions, generate_trial, load_specs
+    from pendulum.synthetic import generate_trial, load_specs
+    from pendulum.synthetic_scene import Occlusions
 
     out = tmp_path_factory.mktemp("hard_videos")
     base = {s.name: s for s in load_specs(DEMO_SPEC)}["demo_p20"]

@@ -23,7 +23,9 @@ from pendulum.fitting import fit_trials
 from pendulum.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
 from pendulum.physics import PendulumModel, Rig, small_angle_period_s
 from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import Camera, Occlusions, TrialSpec, render_trial, write_video
+from pendulum.synthetic import Camera, TrialSpec, render_trial, write_video
+from pendulum.synthetic_records import synthetic_angle_table
+from pendulum.synthetic_scene import Occlusions, _draw_disk
 from pendulum.tracking import TrackerSettings, track_video
 from pendulum.trials import ConfigError, discover_trials, trial_settings, validate_config
 from pendulum.video import VideoError, frame_timeline, iter_luma
@@ -88,7 +90,7 @@ def with_disk(value, cx, cy, radius=6.0):
 
     def post(i, frame):
         image = frame.astype(np.float32)
-        syn._draw_disk(image, cx, cy, radius, value)
+        _draw_disk(image, cx, cy, radius, value)
         return np.clip(np.rint(image), 0, 255).astype(np.uint8)
 
     return post
@@ -579,7 +581,7 @@ def test_a_one_and_a_half_period_record_fits_with_warnings_naming_what_it_cannot
     seeds, friction) comes out not identifiable, and the warnings say which parameter and why."""
     model = PendulumModel(Rig.from_mapping(PAPER), tuple(EFFECTS))
     period = small_angle_period_s(model, PAPER_TRUTH)
-    table = syn.synthetic_angle_table(
+    table = synthetic_angle_table(
         model, PAPER_TRUTH, 20.0, duration_s=1.5 * period, rng=np.random.default_rng(0), white_deg=0.05
     )
     fit = fit_trials([load_record(table, "short", PAPER, FitSettings())], EFFECTS)
@@ -593,7 +595,7 @@ def test_a_one_and_a_half_period_record_fits_with_warnings_naming_what_it_cannot
 
 def test_less_than_one_period_is_refused_before_fitting():
     model = PendulumModel(Rig.from_mapping(PAPER), tuple(EFFECTS))
-    table = syn.synthetic_angle_table(model, PAPER_TRUTH, 20.0, duration_s=3.5, rng=np.random.default_rng(0))
+    table = synthetic_angle_table(model, PAPER_TRUTH, 20.0, duration_s=3.5, rng=np.random.default_rng(0))
     with pytest.raises(InputError, match=r"trial brief: record too short to fit: 3.2\d s .* 1 swing extremum"):
         load_record(table, "brief", PAPER, FitSettings())
 
@@ -601,7 +603,7 @@ def test_less_than_one_period_is_refused_before_fitting():
 def test_a_record_that_ends_before_the_release_transient_is_refused_naming_its_time_span():
     """Every sample before release_skip_s (0.2 s of record, or times in minutes): was an IndexError."""
     model = PendulumModel(Rig.from_mapping(PAPER), tuple(EFFECTS))
-    table = syn.synthetic_angle_table(model, PAPER_TRUTH, 20.0, duration_s=0.2)
+    table = synthetic_angle_table(model, PAPER_TRUTH, 20.0, duration_s=0.2)
     assert table.time_s.max() < FitSettings().release_skip_s
     with pytest.raises(
         InputError,

@@ -11,7 +11,7 @@ from paper_rig import PAPER_RIG
 from pendulum.fitting import fit_trials
 from pendulum.groupfit import fit_body
 from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import hidden_effect_table
+from pendulum.synthetic_records import hidden_effect_table
 
 SHORT_RIG = {**PAPER_RIG, "length_m": 0.40}
 BODY = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576}

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from pendulum.detection import DetectionError, detect_marker
-from pendulum.synthetic import _draw_disk, write_video
+from pendulum.synthetic import write_video
+from pendulum.synthetic_scene import _draw_disk
 from pendulum.tracking import TrackerSettings, track_video
 from pendulum.video import VideoError
 

@@ -19,7 +19,7 @@ from pendulum.discovery import Discovery
 from pendulum.findings import plus_minus, separating_experiments
 from pendulum.geometry import angles_from_tracker_csv
 from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import hidden_effect_table
+from pendulum.synthetic_records import hidden_effect_table
 from workflow_run import copy_project, run
 
 CANDIDATES = ["linear_damping", "coulomb_friction", "quadratic_drag", "history_force", "restoring_correction"]

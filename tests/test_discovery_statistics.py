@@ -1,7 +1,7 @@
 """Discovery on angle tables with hidden effects (the workflow never sees the truth), and its error rates.
 
 Every case is a group of two 20 s records at 30 fps with the demo's tracking-like noise
-(pendulum.synthetic.hidden_effect_table), released at 20° and −10°: on the paper's rig,
+(pendulum.synthetic_records.hidden_effect_table), released at 20° and −10°: on the paper's rig,
 or, for "two lengths", one on the paper's rig (L = 0.76 m) and one on a 0.40 m arm
 declared as the same body. The baseline is the paper's quadratic-drag model; the true
 physics adds what the case hides. Magnitudes are the demo's (τ_f = 0.02 N·m, c = 0.15
@@ -65,7 +65,8 @@ CANDIDATES = ("linear_damping", "coulomb_friction", "quadratic_drag", "history_f
 def case_records(name: str, seed: int):
     """The records of one realisation of a case, and their rigs' names."""
     from pendulum.records import FitSettings, load_record
-    from pendulum.synthetic import PeriodicTorque, hidden_effect_table
+    from pendulum.synthetic import PeriodicTorque
+    from pendulum.synthetic_records import hidden_effect_table
 
     truth, rigs, extra = CASES[name]
     options = dict(extra)

@@ -20,14 +20,13 @@ from pendulum.synthetic import (
     Disturbances,
     PeriodicTorque,
     TrialSpec,
-    hidden_effect_table,
     load_specs,
     release_time_s,
     render_trial,
-    synthetic_angle_table,
     true_angle_rad,
     truth_record,
 )
+from pendulum.synthetic_records import hidden_effect_table, synthetic_angle_table
 from pendulum.tracking import TrackerSettings
 
 RIG = Rig(**PAPER_RIG)

@@ -14,7 +14,7 @@ from pendulum.io import write_json
 from pendulum.physics import PendulumModel, Rig
 from pendulum.records import FitSettings, characteristic_length_m, load_record
 from pendulum.summary import cycle_table, fit_document, fitted_curve, summary_table
-from pendulum.synthetic import synthetic_angle_table
+from pendulum.synthetic_records import synthetic_angle_table
 
 RIG_VALUES = {**PAPER_RIG, "characteristic_length_m": None, "kinematic_viscosity_m2_s": 1.0e-6}
 RIG = Rig.from_mapping(RIG_VALUES)

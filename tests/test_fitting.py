@@ -16,7 +16,7 @@ from pendulum.fitting import fit_trials
 from pendulum.io import write_json
 from pendulum.physics import PendulumModel, Rig
 from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import synthetic_angle_table
+from pendulum.synthetic_records import synthetic_angle_table
 from pendulum.uncertainty import consistency_test
 
 SETTINGS = FitSettings()

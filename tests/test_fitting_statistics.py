@@ -33,7 +33,7 @@ from pendulum.fitting import fit_joint, fit_trials
 from pendulum.io import write_json
 from pendulum.physics import PendulumModel, Rig
 from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import synthetic_angle_table
+from pendulum.synthetic_records import synthetic_angle_table
 
 ALPHA = 1e-3  # probability that a test fails although its claim is true
 SETTINGS = FitSettings()

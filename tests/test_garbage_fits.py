@@ -19,7 +19,7 @@ from pendulum.physics import PendulumModel, Rig, simulate
 from pendulum.record_checks import MAX_REST_OFFSET_DEG
 from pendulum.records import FitSettings, load_record
 from pendulum.summary import fit_document, summary_table
-from pendulum.synthetic import angle_noise_rad, synthetic_angle_table
+from pendulum.synthetic_records import angle_noise_rad, synthetic_angle_table
 
 RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
 TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}

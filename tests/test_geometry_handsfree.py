@@ -15,7 +15,7 @@ from pendulum.fitting import fit_trials
 from pendulum.geometry import estimate_rig_geometry, fit_circle, pooled_pivot
 from pendulum.physics import PendulumModel, Rig, SimulationDiverged, simulate
 from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import synthetic_angle_table
+from pendulum.synthetic_records import synthetic_angle_table
 from pendulum.trials import ConfigError, Trial, add_sidecar_rigs, needs_rig_geometry, pooled_trials, trial_settings
 
 PAPER_RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}

@@ -18,7 +18,7 @@ from pendulum.effects import history_equivalent
 from pendulum.fitting import fit_trials
 from pendulum.physics import HISTORY_KERNEL, PendulumModel, Rig, history_integral, simulate
 from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import synthetic_angle_table
+from pendulum.synthetic_records import synthetic_angle_table
 
 RIG = Rig(**PAPER_RIG)
 # Paper rig by hand (tests/test_physics_reference.py): K = 7.679268 N·m, I = m L² + m_a L² = 3.482928 kg·m²

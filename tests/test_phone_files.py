@@ -2,7 +2,7 @@
 decoder yields.
 
 A trimmed clip (an edit list over packets before the first shown frame, rendered by
-``synthetic.Faults.trimmed_lead_frames``), a variable frame rate, display-rotation metadata and
+``synthetic_scene.Faults.trimmed_lead_frames``), a variable frame rate, display-rotation metadata and
 10-bit HEVC, each against what PyAV's decoder yields and what was written.
 """
 
@@ -20,6 +20,7 @@ import pytest
 
 from conftest import ROOT
 from pendulum import synthetic as syn
+from pendulum.synthetic_scene import Faults
 from pendulum.video import VideoError, contact_sheet, frame_timeline, iter_luma
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
@@ -32,7 +33,7 @@ def small_spec(name, **faults):
         width_px=320, height_px=240, fps=25.0, pivot_px=(160.3, 30.6), marker_arm_px=150.0, marker_radius_px=6.0
     )
     spec = syn.TrialSpec(name, 30.0, RIG, TRUTH, EFFECTS, seed=4, hold_s=0.3, duration_s=3.0, camera=camera)
-    return replace(spec, faults=syn.Faults(**faults))
+    return replace(spec, faults=Faults(**faults))
 
 
 def run_frames_stage(video, out, monkeypatch):

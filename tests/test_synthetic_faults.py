@@ -18,7 +18,8 @@ import pytest
 import yaml
 
 from pendulum import synthetic as syn
-from pendulum.synthetic import Bob, Camera, Faults, Letterbox, SecondObject, Stripes, TrialSpec, render_trial
+from pendulum.synthetic import Camera, TrialSpec, render_trial
+from pendulum.synthetic_scene import Bob, Faults, Letterbox, SecondObject, Stripes, stripe_coverage
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
@@ -87,7 +88,7 @@ def test_stripes_are_bands_of_the_given_grey_with_hard_edges():
     assert np.abs(frame[rows][:, in_band].mean() - 30.0) < 0.5  # noise σ 3 over ~2000 pixels
     assert not changed[rows][:, ~in_band].any()  # hard edges: nothing outside the bands changes
     assert list(np.flatnonzero(in_band)[:13]) == [*range(5, 17), 45]
-    assert syn.stripe_coverage((2, 20), replace(stripes, offset_px=5.0))[0, 4:7].tolist() == [0.0, 0.5, 1.0]
+    assert stripe_coverage((2, 20), replace(stripes, offset_px=5.0))[0, 4:7].tolist() == [0.0, 0.5, 1.0]
 
 
 def test_letterbox_pixels_are_exactly_black_and_the_truth_counts_the_hidden_marker():

@@ -8,7 +8,8 @@ import pytest
 
 from conftest import DEMO_RAW, DEMO_TRUTH, demo_trials
 from pendulum.centroids import measure_marker
-from pendulum.synthetic import Camera, TrialSpec, _draw_disk, generate_trial, release_time_s
+from pendulum.synthetic import Camera, TrialSpec, generate_trial, release_time_s
+from pendulum.synthetic_scene import _draw_disk
 from pendulum.tracking import (
     TrackerSettings,
     exposure_centre_correction,

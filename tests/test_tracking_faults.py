@@ -1,7 +1,7 @@
 """Acceptance: rendered trials with real-world faults, tracked with no marker hints.
 
 Both polarities, marker radii 5 and 20 px, background stripes, a second moving disk of
-the marker's own size and grey, and letterbox/pillarbox borders (synthetic.Faults). The
+the marker's own size and grey, and letterbox/pillarbox borders (synthetic_scene.Faults). The
 tracker is given nothing (polarity auto, radius null): detection must find the marker;
 angles computed as the workflow does (pivot pooled from the track, then
 ``angles_from_track``) must be within 0.05° RMS of the truth with ≥ 95 % of the frames

@@ -11,7 +11,7 @@ from pendulum.fitting import _added_mass_lower_kg, fit_trials
 from pendulum.geometry import image_angle_rad
 from pendulum.physics import PendulumModel, Rig
 from pendulum.records import FitSettings, load_record, rig_tolerances
-from pendulum.synthetic import synthetic_angle_table
+from pendulum.synthetic_records import synthetic_angle_table
 from pendulum.uncertainty import consistency_test, interval95
 
 RIG = PAPER_RIG

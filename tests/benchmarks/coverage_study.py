@@ -409,7 +409,7 @@ def noise_diagnostics(task: dict) -> dict:
     from pendulum.fitting import fit_trials
     from pendulum.geometry import angles_from_track
     from pendulum.records import FitSettings, load_record
-    from pendulum.synthetic import angle_noise_rad
+    from pendulum.synthetic_records import angle_noise_rad
 
     settings = FitSettings()
     workdir = Path(task["workdir"])
