@@ -65,7 +65,6 @@ def test_adding_a_video_runs_only_that_trial_and_the_aggregates(demo_project):
         ("tracks", "extra_m05"),
         ("angles", "extra_m05"),
         ("fit_trial", "extra_m05"),
-        ("fit_curve", "extra_m05"),
     }, "the rig's geometry is kept: no other trial's angles or fits rerun"
     assert jobs[("fit_trial", "extra_m05")] == len(VARIANTS)
     assert jobs[("fit_joint", "paper_rig")] == len(VARIANTS)
@@ -91,9 +90,9 @@ def test_editing_one_variant_refits_only_that_variant(tmp_path, demo_project):
     jobs = planned_wildcards(out)
     assert {w["variant"] for _, w in jobs if "variant" in w} == {"linear"}
     rules = Counter(rule for rule, _ in jobs)
-    assert rules["fit_trial"] == rules["fit_curve"] == len(demo_trials())
+    assert rules["fit_trial"] == len(demo_trials())
     assert rules["fit_joint"] == 1
-    assert set(rules) <= {"fit_trial", "fit_curve"} | AGGREGATES
+    assert set(rules) <= {"fit_trial"} | AGGREGATES
 
 
 def test_editing_a_sidecar_rig_value_refits_that_trial_without_retracking(demo_project):
@@ -104,7 +103,7 @@ def test_editing_a_sidecar_rig_value_refits_that_trial_without_retracking(demo_p
     finally:
         sidecar.unlink()
     per_trial = {(rule, name) for rule, name in jobs if rule not in AGGREGATES}
-    assert per_trial == {("fit_trial", "demo_p05"), ("fit_curve", "demo_p05")}
+    assert per_trial == {("fit_trial", "demo_p05")}
 
 
 @pytest.mark.parametrize(

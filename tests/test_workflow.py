@@ -117,7 +117,7 @@ def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
     # a trial of a second rig refits only that rig's joint fits, never paper_rig's
     joints = {(w["variant"], w["rig"]) for rule, w in planned_wildcards(dry_run) if rule == "fit_joint"}
     assert joints == {(v, "air_wooden") for v in ("quadratic", "linear", "friction")}
-    fitted = {w["trial"] for rule, w in planned_wildcards(dry_run) if rule in ("fit_trial", "fit_curve")}
+    fitted = {w["trial"] for rule, w in planned_wildcards(dry_run) if rule == "fit_trial"}
     assert fitted == {"wooden_bob"}
     run(["-c2"], work)
     assert (work / "results/angles/wooden_bob.csv").read_text().count("\n") == 918

@@ -1,14 +1,16 @@
 rule fit_trial:
-    """One model variant fitted to one trial: coefficients, 95 % intervals, diagnostics."""
+    """One model variant fitted to one trial: coefficients, 95 % intervals, diagnostics; its fitted curve and half cycles."""
     input:
         angles="results/angles/{trial}.csv",
         angle_info="results/angles/{trial}.json",
         code=script_code("fit_trial.py"),
     output:
         fit="results/fits/{variant}/{trial}.json",
+        curve="results/fits/{variant}/{trial}.curve.csv",
+        cycles="results/fits/{variant}/{trial}.cycles.csv",
     log:
         "logs/fits/{variant}/{trial}.log",
-    priority: 1  # before the curves: the joint fits and discovery (the long tail) start sooner
+    priority: 1  # before more videos' frames and tracks: the joint fits and discovery (the long tail) start sooner
     threads: 1
     resources:
         mem_mb=1000,
@@ -20,28 +22,6 @@ rule fit_trial:
         fitting=config["fitting"],
     script:
         "../scripts/fit_trial.py"
-
-
-rule fit_curve:
-    """One trial's fitted curve (every sample, with residual and flag) and half-cycle table under one variant."""
-    input:
-        angles="results/angles/{trial}.csv",
-        fit="results/fits/{variant}/{trial}.json",
-        code=script_code("fit_curve.py"),
-    output:
-        curve="results/fits/{variant}/{trial}.curve.csv",
-        cycles="results/fits/{variant}/{trial}.cycles.csv",
-    log:
-        "logs/fits/{variant}/{trial}.curve.log",
-    threads: 1
-    resources:
-        mem_mb=500,
-        runtime=5,
-    params:
-        terms=variant_terms,
-        rig=fit_rig,
-    script:
-        "../scripts/fit_curve.py"
 
 
 rule fit_joint:
