@@ -36,6 +36,8 @@ from pendulum.video import VideoError, iter_luma
 
 PYRAMID_SIGMAS = (1.0, 1.5, 2.25, 3.375)  # DoG σ at each pyramid level (× 2^level), ratio 1.5
 RADIUS_PER_SIGMA = 1.7  # disk radius ≈ 1.7 σ of the DoG scale where it responds most
+MIN_SWING_BALANCE = 0.35  # moves one way over the other: a swing ~1 (0.53–1 seen), creep-and-jump-back ≤ 0.25
+BACKGROUND_QUANTILE = 0.1  # scene behind a bright spot: the 10 % quantile of the samples (a dark one: 90 %)
 
 
 class DetectionError(VideoError):
@@ -196,6 +198,7 @@ class _Track:
     reversals: int
     span_px: float  # arc length covered
     curved: bool  # a circle fits clearly better than a straight line
+    balance: float  # moves one way over moves the other (≤ 1): ~1 for a swing, small for creep-and-jump-back
 
     @property
     def support(self) -> float:
@@ -221,18 +224,25 @@ def _inliers(blobs: _Blobs, cand: np.ndarray, cx, cy, arm, radius, tol):
     return idx[first]
 
 
-def _reversals(angles: np.ndarray, noise: float) -> int:
-    """Direction changes of a sequence, ignoring steps below ``noise``."""
+def _moves(angles: np.ndarray, noise: float) -> tuple[int, float]:
+    """Direction changes of a sequence (steps below ``noise`` ignored), and how evenly it moves both ways.
+
+    Each move is a change of at least ``noise`` from the last anchor; the balance is
+    min(n_up, n_down) / max(n_up, n_down) over the moves: about 1 for a swing (out and back alike),
+    small for a path that creeps one way and jumps back (a rising bubble that starts again).
+    """
     count, direction, anchor = 0, 0, angles[0] if angles.size else 0.0
+    ups = downs = 0
     for a in angles[1:]:
         step = a - anchor
         if abs(step) <= noise:
             continue
         d = 1 if step > 0 else -1
+        ups, downs = ups + (d > 0), downs + (d < 0)
         if direction and d != direction:
             count += 1
         direction, anchor = d, a
-    return count
+    return count, (min(ups, downs) / max(ups, downs) if max(ups, downs) else 0.0)
 
 
 def _find_tracks(blobs: _Blobs, n_samples: int, shape, scale: int, rng, exclude=None, iterations: int = 1500):
@@ -298,9 +308,17 @@ def _track(blobs: _Blobs, idx: np.ndarray, sign: int, circle, scale: int, radius
     circle_rms = float(np.sqrt(np.mean((np.hypot(x - cx, y - cy) - arm) ** 2)))
     curved = line_rms > 2.0 * circle_rms + 0.5 * scale
     noise = max(0.5 * radius, 1.0 * scale) / arm
-    return _Track(
-        sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), _reversals(angles, noise), span, curved
-    )
+    reversals, balance = _moves(angles, noise)
+    return _Track(sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), reversals, span, curved, balance)
+
+
+def _quantile_backgrounds(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel BACKGROUND_QUANTILE and 1 − BACKGROUND_QUANTILE of the (n, h, w) samples (float32)."""
+    n = stack.shape[0]
+    k_low = int(BACKGROUND_QUANTILE * (n - 1))
+    k_high = n - 1 - k_low
+    ordered = np.partition(stack, sorted({k_low, k_high}), axis=0)
+    return ordered[k_low].astype(np.float32), ordered[k_high].astype(np.float32)
 
 
 def _active_box(background: np.ndarray, scale: int) -> tuple[int, int, int, int]:
@@ -364,10 +382,18 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     some = stack[:: max(1, n // 10), ::4, ::4].astype(np.float32) - background[None, ::4, ::4]
     noise = 1.4826 * float(np.median(np.abs(some)))
     threshold = max(2.0, 1.5 * noise)
+    # A bright spot is sought against the scene without it: per pixel a low quantile over the samples
+    # (a dark spot: a high one). A marker that swings little, or comes to rest, covers its pixels in
+    # most samples: the median would hold it and hide it; the quantiles do while it is elsewhere in at
+    # least BACKGROUND_QUANTILE of them.
+    low, high = _quantile_backgrounds(stack)
     rows = []
     for k in range(n):
-        for sign, x, y, r, s in _dog_blobs(stack[k].astype(np.float32) - background, scale, threshold, per_sign=8):
-            rows.append((k, sign, x, y, r, s))
+        frame = stack[k].astype(np.float32)
+        for reference, wanted in ((low, 1), (high, -1)):
+            for sign, x, y, r, s in _dog_blobs(frame - reference, scale, threshold, per_sign=8):
+                if sign == wanted:
+                    rows.append((k, sign, x, y, r, s))
     where = f"{path}: "
     hint = (
         "give tracking polarity, marker_radius_px and start_px (the marker's centre in the first frame) "
@@ -390,7 +416,12 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     min_members = max(6, int(0.25 * n))
 
     def swings(t: _Track) -> bool:
-        return t.reversals >= 2 and t.span_px >= 2 * t.radius and len(t.members) >= min_members
+        return (
+            t.reversals >= 2
+            and t.balance >= MIN_SWING_BALANCE
+            and t.span_px >= 2 * t.radius
+            and len(t.members) >= min_members
+        )
 
     swinging = [t for t in tracks if swings(t)]
     if not swinging:
@@ -400,7 +431,11 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
             if seen is None
             else (
                 f"the best is {seen.describe(n)}, which "
-                + ("does not move back and forth" if seen.reversals < 2 else "hardly moves")
+                + (
+                    "does not move back and forth"
+                    if seen.reversals < 2 or seen.balance < MIN_SWING_BALANCE
+                    else "hardly moves"
+                )
             )
         )
         raise DetectionError(f"{where}no object swings back and forth about a fixed point ({what}); {hint}")
@@ -564,12 +599,21 @@ def _attached_members(blobs: _Blobs, other: _Track, track: _Track, scale: int) -
 
     Blobs that keep one place in the frame turning with the pendulum (:func:`_body_frame`;
     at least five within tol = max(0.6 r, 0.02 arm, 1.5 px × sample scale)) while their image
-    positions move apart by more than 4 tol are parts of it. A second object that only passes
-    one place now and then (at rest, or at one phase of the swing) does not.
+    positions move apart by more than 4 tol are parts of it, and so are blobs on the pendulum's
+    axis (|x| ≤ tol from the pivot to 3 r beyond the marker: the rod's or body's outline against
+    the scene). A second object that only passes one place now and then (at rest, or at one phase
+    of the swing) does not.
     """
     attached = np.zeros(len(other.members), bool)
     rows_left, body_left = _body_frame(blobs, other, track)
     tol = max(0.6 * other.radius, 0.02 * track.arm, 1.5 * scale)
+    if rows_left.size:
+        # on the line from the pivot through the marker (the rod, the body's axis): features of the
+        # pendulum's own outline, e.g. where the rod crosses a background stripe
+        x, y = body_left[:, 0], body_left[:, 1]
+        on_axis = (np.abs(x) <= tol) & (y >= -tol) & (y <= track.arm + 3 * track.radius)
+        attached[rows_left[on_axis]] = True
+        rows_left, body_left = rows_left[~on_axis], body_left[~on_axis]
     while rows_left.size >= 5:
         near = _distances(body_left) <= tol
         centre = int(np.argmax(near.sum(axis=1)))
