@@ -3,17 +3,23 @@
 One sparse pass over the clip (every k-th decoded frame, ≤ ``max_samples`` spread over
 the whole clip, reduced to ≤ ~640 px wide):
 
-1. background B = the per-pixel temporal median of the samples (the static scene:
-   clutter, stripes, letterbox borders, reflections of fixed lamps);
-2. in every sample, the foreground F = I − B is searched for blobs of both signs with a
-   scale-normalised difference of Gaussians, DoG_σ = G_σ ∗ F − G_1.5σ ∗ F (a disk of
-   radius r responds most near σ ≈ r / 1.7), on a Gaussian pyramid;
+1. the static scene (clutter, stripes, letterbox borders, reflections of fixed lamps) per
+   pixel: B_bright = the 10 % quantile of the samples, behind a spot brighter than it, and
+   B_dark = the 90 % quantile, behind a darker one (a marker that swings little or comes to
+   rest covers its pixels in most samples: a median would hold it; the quantiles do only if
+   it is there in more than 90 % of them);
+2. in every sample, the foreground F = I − B is searched for blobs (bright ones in I − B_bright,
+   dark ones in I − B_dark) with a scale-normalised difference of Gaussians,
+   DoG_σ = G_σ ∗ F − G_1.5σ ∗ F (a disk of radius r responds most near σ ≈ r / 1.7), on a
+   Gaussian pyramid;
 3. per sign, RANSAC finds the circle through blobs of different samples that holds most
    samples: |‖p − c‖ − R| ≤ tol, blob sizes alike; its least-squares refit gives the pivot
    c and arm R. An object qualifies when it moves (spans more than two radii of the arc)
-   back and forth (its angle about c reverses at least twice) on a path that is a circle
-   of bounded radius; a second object (a bubble, a float moving on a line, a border) or
-   another part of the same pendulum (a track about the same pivot) is told apart by that;
+   back and forth (its angle about c reverses at least twice, with about as many moves one
+   way as the other: a bubble that rises and starts again does not) on a path that is a
+   circle of bounded radius; a second object (a bubble, a float moving on a line, a border)
+   or another part of the same pendulum (a track about the same pivot, or blobs that keep
+   their place in the frame turning with the marker) is told apart by that;
 4. the marker's radius is refined at full resolution from its width across the arc,
    width² = 4 var_across = r² for a disk (blur along the arc does not change it), and its
    centre in the first frame from the linear centroid.
