@@ -20,6 +20,7 @@ calibration document of a camera setup are in :mod:`pendulum.view`.
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import cv2
@@ -35,6 +36,22 @@ RATIONAL_MARGIN = 0.05  # the rational model (8 coefficients) must beat the fish
 
 class CalibrationError(ValueError):
     """A calibration clip that cannot give a camera model; the message names the file and the problem."""
+
+
+@contextmanager
+def single_threaded_opencv():
+    """OpenCV on one thread for the block (or function, as a decorator).
+
+    Its parallel loops (corner refinement, calibrateCamera's Jacobian sums) add in an order that
+    varies between runs, so a calibration changes in its last digits from run to run; on one
+    thread the results are byte-identical.
+    """
+    previous = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(previous)
 
 
 def board_points_m(pattern: tuple[int, int], square_size_m: float) -> np.ndarray:

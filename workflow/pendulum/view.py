@@ -21,7 +21,15 @@ import math
 import cv2
 import numpy as np
 
-from pendulum.calibration import MAX_VIEWS, CalibrationError, Lens, board_points_m, calibrate_lens, detect_views
+from pendulum.calibration import (
+    MAX_VIEWS,
+    CalibrationError,
+    Lens,
+    board_points_m,
+    calibrate_lens,
+    detect_views,
+    single_threaded_opencv,
+)
 
 # The view: a plane-to-image homography and the plane frame.
 
@@ -199,6 +207,7 @@ def path_tilt(x, y) -> dict | None:
     }
 
 
+@single_threaded_opencv()
 def calibrate_camera_setup(
     setup: str,
     pattern: tuple[int, int],
