@@ -17,6 +17,9 @@ In a region of interest (ROI) around the predicted position:
    not move it. Where B ≈ M the mirror pixel about the estimate fills in; what
    neither shows is returned as ``unresolved`` (a biased measurement).
 
+The checks of :func:`capsule_check` (is the linear centroid the marker's alone?) stay inside the
+capsule too: a thresholded centroid there, and the linear one in a tighter mask.
+
 From the weights' second moments: streak² = 12 (var_along − var_across), the
 squared length of the exposure streak, and width² = 4 var_across = r² for a disk
 (blur along the motion does not change it; an occluder in the mask widens it).
@@ -44,11 +47,14 @@ class Measurement:
     level: float  # marker brightness the threshold was set from
     background: float
     at_edge: bool
-    disagreement_px: float = 0.0  # |linear − thresholded centroid|: large when something intrudes
+    # |linear − thresholded centroid| in the linear one's capsule (or its last re-centring step): large when
+    # something intrudes on the marker (see capsule_check)
+    disagreement_px: float = 0.0
     streak2_px2: float = math.nan  # squared length of the exposure streak (linear centroid only)
     width2_px2: float = math.nan  # 4 × the signal's variance across the motion: ≈ r² for a disk (linear only)
     unresolved: float = 0.0  # share of the marker over scene of its own grey, not measured (coverage only)
     mode_coverage: bool = False  # measured as coverage of the scene (else against the ring's median)
+    margin_shift_px: float = 0.0  # |linear centroid − the same in a mask 1.5 px tighter|: something in the margin
 
 
 def measure_marker(
@@ -70,8 +76,12 @@ def measure_marker(
     :func:`pendulum.detection.detect_marker` gives it); where the marker's
     surround is that scene (no body around the marker), the marker is measured as
     its coverage of the scene (:func:`_coverage_centroid`), so a striped or
-    uneven scene behind it does not move the centroid. Returns None when no pixel
-    stands out from the local background.
+    uneven scene behind it does not move the centroid. Otherwise the linear
+    centroid (ring background) starts from the coarse thresholded one and is
+    iterated until re-centring its mask moves it less than 0.02 px (at most 3 more
+    rounds: a coarse start pulled off the marker by something else in the ROI),
+    then checked by :func:`capsule_check`. Returns None when no pixel stands out
+    from the local background.
     """
     r = settings.marker_radius_px
     half = int(math.ceil(2.0 * r + 0.5 * blur_px + 4))
@@ -119,6 +129,7 @@ def measure_marker(
             return None
         cx, cy = float(col @ xs[0]) / total, float(row @ ys[:, 0]) / total
     unresolved = 0.0
+    margin_shift = 0.0
     refined = None
     if settings.centroid == "linear" and background is not None and marker_level is not None:
         bg = background[y0:y1, x0:x1]
@@ -132,7 +143,18 @@ def measure_marker(
         refined = linear_centroid(roi, x0, y0, cx, cy, r, blur_px, direction)
         if refined is None:
             return None
-        disagreement = math.hypot(refined[0] - cx, refined[1] - cy)
+        check = capsule_check(roi, x0, y0, refined[0], refined[1], r, blur_px, direction, level)
+        for _ in range(3):  # a coarse start pulled off the marker (by something in the ROI): iterate on
+            if check is None or check[0] <= 0.02:
+                break
+            again = linear_centroid(roi, x0, y0, refined[0], refined[1], r, blur_px, direction)
+            if again is None:
+                break
+            refined = again
+            check = capsule_check(roi, x0, y0, refined[0], refined[1], r, blur_px, direction, level)
+        if check is None:
+            return None
+        disagreement, margin_shift = check[1], check[2]
         cx, cy, streak2, signal, width2 = refined
     else:
         inside = (xs - cx) ** 2 + (ys - cy) ** 2 <= mask_r2
@@ -145,9 +167,8 @@ def measure_marker(
         reach_x = r + 6.5 + 0.5 * blur_px * abs(ux)  # the ring's reach, longer along the streak
         reach_y = r + 6.5 + 0.5 * blur_px * abs(uy)
         at_edge = cx - reach_x < bx0 or cy - reach_y < by0 or cx + reach_x > bx1 - 1 or cy + reach_y > by1 - 1
-    return Measurement(
-        cx, cy, signal, level, background_level, at_edge, disagreement, streak2, width2, unresolved, coverage
-    )
+    measured = (cx, cy, signal, level, background_level, at_edge, disagreement, streak2, width2, unresolved)
+    return Measurement(*measured, mode_coverage=coverage, margin_shift_px=margin_shift)
 
 
 def _capsule_window(shape, x0, y0, cx, cy, radius, blur_px, direction, margin_px):
@@ -243,6 +264,46 @@ def linear_centroid(roi, x0, y0, cx, cy, radius, blur_px, direction, margin_px=2
     # Moments about the last mask centre, within a small fraction of a pixel of the result.
     streak2, width2 = _spread(weight, u, v, total, direction is not None)
     return ox + ex, oy + ey, streak2, total, width2
+
+
+def capsule_check(roi, x0, y0, x, y, radius, blur_px, direction, level, margin_px=2.5, tight_margin_px=1.0):
+    """Is the linear centroid (x, y) the marker's alone? ``(residual_px, disagreement_px, margin_shift_px)``.
+
+    All in the linear centroid's own window (:func:`_capsule_window` about (x, y), ring median b′), so
+    that nothing beyond it (a second object, a stripe past the body) counts. ``residual_px``: distance
+    of the centroid x̂ = Σ w x / Σ w, w = (I − b′) m, recomputed about (x, y) from (x, y) (not 0: the
+    iteration had not converged); ``disagreement_px``: the larger of it and the distance of the
+    thresholded centroid, w = max(I − T, 0) m with T = b′ + ½ (``level`` − b′) (an occluder of a grey
+    between the marker's and the surround's weighs differently in the two); ``margin_shift_px``: the
+    shift of the linear centroid when its mask shrinks to r + ``tight_margin_px``: something in the
+    margin r … r + ``margin_px`` beyond the marker's edge (there the thresholded centroid, for an
+    object of the marker's grey, agrees with the linear one). None: no window (too few ring pixels,
+    nothing stands out).
+    """
+    window = _capsule_window(roi.shape, x0, y0, x, y, radius, blur_px, direction, margin_px)
+    if window is None:
+        return None
+    ux, uy, half_len, r_mask, ring_in, ring_out, i0, i1, j0, j1 = window
+    sub = roi[i0:i1, j0:j1]
+    xr = (np.arange(x0 + j0, x0 + j1) - x).astype(np.float32)
+    yr = (np.arange(y0 + i0, y0 + i1) - y).astype(np.float32)
+    _, _, dist = _capsule_coordinates(xr, yr, 0.0, 0.0, ux, uy, half_len)
+    ring = (dist > ring_in) & (dist <= ring_out)
+    if np.count_nonzero(ring) < 8:
+        return None
+    background = float(np.median(sub[ring]))
+    excess = sub - background
+    mask = np.clip(r_mask + 0.5 - dist, 0.0, 1.0)
+    linear = _weighted_centre(excess * mask, xr, yr)
+    if linear is None:
+        return None
+    thresholded = _weighted_centre(np.maximum(excess - 0.5 * (level - background), 0.0) * mask, xr, yr)
+    tight = _weighted_centre(excess * np.clip(radius + tight_margin_px + 0.5 - dist, 0.0, 1.0), xr, yr)
+    lx, ly, _ = linear
+    residual = math.hypot(lx, ly)  # the recentred mask moves the centroid: not converged
+    disagreement = max(residual, math.inf if thresholded is None else math.hypot(thresholded[0], thresholded[1]))
+    margin_shift = math.inf if tight is None else math.hypot(tight[0] - lx, tight[1] - ly)
+    return residual, disagreement, margin_shift
 
 
 def _coverage_centroid(roi, bg, x0, y0, cx, cy, radius, blur_px, direction, marker_level, margin_px=2.5, iterations=3):

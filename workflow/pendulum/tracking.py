@@ -15,8 +15,12 @@ Per frame, in a small region of interest (ROI) around the predicted position:
 
 The blur-invariant marker signal Σ (I − b′) m, compared with its value at the
 start, gives each frame's quality: an occluder lowers it, glare raises it; an
-occluder that the signal misses makes the two centroids disagree (> 0.4 px) and
-is flagged too. A leave-one-out cubic check afterwards flags isolated jumps.
+occluder that the signal misses makes the linear and a thresholded centroid in
+the same capsule disagree (> 0.4 px), and something of the marker's grey in the
+capsule's margin moves the linear centroid when the mask shrinks to r + 1 px
+(> 0.25 px): both are flagged too (what lies beyond the capsule, a second object
+or a stripe past the body, does not count: it does not move the estimate). A
+leave-one-out cubic check afterwards flags isolated jumps.
 Finally each position is moved from the exposure's mean to the frame time,
 x(t) = x̄ − ẍ τ²/24, with the exposure τ measured from the streaks' lengths
 (see :func:`exposure_centre_correction`). Flagged frames keep their flag;
@@ -28,7 +32,8 @@ scene and the picture inside letterbox borders: a marker with no body around it
 is then measured as its coverage of the scene (:mod:`pendulum.centroids`), so
 the flags mean "this measurement is biased" (part of the marker over scene of
 its own grey, something else in its surround) rather than "the brightness
-changed". After lost frames the window follows the arc and stays bounded; a long
+changed". After lost frames the window follows the arc and stays bounded (a
+flagged measurement off the arc, another object's, does not move it); a long
 streak's coarse centroid is taken within the capsule it can occupy, thresholded
 at half its own peak.
 """
@@ -65,6 +70,9 @@ class TrackerSettings:
     jump_sigmas: float = 6.0
     reacquire_after_frames: int = 10
     max_centroid_disagreement_px: float = 0.4  # linear vs thresholded centroid; more: "occluded"
+    # the linear centroid moves more than this when its mask shrinks from r + 2.5 to r + 1 px: something of
+    # the marker's grey in the margin (which the thresholded centroid does not tell): "occluded"
+    max_margin_shift_px: float = 0.25
     max_width_ratio: float = 1.15  # spot wider across the motion than this × normal (width²): "occluded"
     min_acquire_score: float = 0.75  # disk-template correlation a spot needs to be taken for the marker
     min_usable_fraction: float = 0.3  # fewer "ok" frames than this: the video cannot give a record
@@ -347,6 +355,13 @@ class _Arc:
             return False
         return True
 
+    def off(self, x: float, y: float, tolerance_px: float) -> bool:
+        """Farther than ``tolerance_px`` from the circle (False while it is unknown)."""
+        if self.circle is None:
+            return False
+        cx, cy, arm = self.circle
+        return abs(math.hypot(x - cx, y - cy) - arm) > tolerance_px
+
     def predict(self, x1, y1, x0, y0, gap: int):
         """Position ``gap`` frames after (x1, y1) at the angular velocity from (x0, y0), on the arc,
         kept inside the swing seen so far (a pendulum's swing does not grow)."""
@@ -391,12 +406,13 @@ def track_video(
     With detection, the static scene (its background image) and the letterbox
     borders are known: the marker is measured as its coverage of the scene where
     no body surrounds it, the window never reaches into the borders (touching
-    them is ``edge``), and a spot that the scene itself holds is never taken for
-    the marker. After lost frames the search window is predicted along the
-    marker's arc (from detection, refitted on the track) at the last angular
+    them is ``edge``), and a spot that the scene itself holds (in the background
+    image) is never taken for the marker. After lost frames the search window is
+    predicted along the marker's arc (from detection, refitted on the track) at the last angular
     velocity, kept inside the swing seen so far and grows by at most
     ``max_lost_step_radii`` radii per frame; re-acquisition takes only spots on
-    the arc.
+    the arc. A flagged frame measured more than 1.5 r + 2 px off the arc (a second
+    object the window slid onto) keeps its flag but counts as lost for the window.
 
     The marker is (re)acquired only where a spot scores at least
     ``min_acquire_score`` against a disk and stands out of its surround (on
@@ -441,6 +457,9 @@ def track_video(
     r = settings.marker_radius_px
     keep_off = 1.5 * r
     intrudes = 2 * r + 7.5  # the ring around the mask reaches r + 6.5 px
+    # A flagged measurement this far off the marker's circle is something else's (the circle from
+    # detection is within a few px; a partly hidden marker's centroid stays inside its disk).
+    off_arc_px = 1.5 * r + 2.0
     max_step = 0.0  # largest frame-to-frame step of the marker seen
     best_seen: Candidate | None = None  # best spot of any failed acquisition, for the error message
     for index, t, image in iter_luma(path, damaged=True, report=video_report):
@@ -469,8 +488,9 @@ def track_video(
             if reference_contrast is not None or not hinted:  # a moving marker on its arc, not the scene's spot
                 moving = [c for c in likely if arc.near(c.x, c.y) and not _static_spot(image, background, c, r, None)]
                 if reference_contrast is None and background is not None:
-                    # static marker-like spots of the scene: never the marker
-                    distractors += [(c.x, c.y) for c in likely if c not in moving]
+                    # static marker-like spots of the scene: never the marker (a moving object off the
+                    # arc is not one: it will be elsewhere when the marker passes here)
+                    distractors += [(c.x, c.y) for c in likely if _static_spot(image, background, c, r, None)]
                 likely = moving
             if not likely:
                 if candidates and (best_seen is None or candidates[0].score > best_seen.score):
@@ -490,7 +510,12 @@ def track_video(
                 found = likely[0]
                 reference_contrast = found.contrast
                 # Other spots that the marker's threshold would also pick up: never taken for the marker.
-                distractors += [(c.x, c.y) for c in likely[1:] if c.contrast >= 0.5 * found.contrast]
+                distractors += [
+                    (c.x, c.y)
+                    for c in likely[1:]
+                    if c.contrast >= 0.5 * found.contrast
+                    and (background is None or _static_spot(image, background, c, r, None))
+                ]
             elif history:  # several candidates: the one nearest the last good position
                 found = min(likely, key=lambda c: math.hypot(c.x - history[-1][1], c.y - history[-1][2]))
             else:
@@ -580,6 +605,7 @@ def track_video(
             ratio < settings.min_signal_ratio
             # (a thresholded streak's centroid sits on its plateau: 2 % of the streak's excess length off)
             or m.disagreement_px > settings.max_centroid_disagreement_px + 0.02 * max(speed - r, 0.0)
+            or m.margin_shift_px > settings.max_margin_shift_px
             or m.unresolved > settings.max_unresolved
             # a free marker not measurable against the scene (something else around it): biased
             or (coverage_expected and not m.mode_coverage)
@@ -592,7 +618,10 @@ def track_video(
             flag, x, y = "glare", m.x, m.y
         else:
             flag, x, y = "ok", m.x, m.y
-        if flag == "lost":
+        # A flagged measurement off the marker's circle is likely another object's (the window slid onto a
+        # second object): it must not steer the next prediction, and counts towards re-acquisition.
+        astray = flag not in ("ok", "lost") and arc.off(x, y, off_arc_px)
+        if flag == "lost" or astray:
             lost_run += 1
         else:
             lost_run = 0
