@@ -68,6 +68,14 @@ class Detection:
     free_marker: bool = False  # the scene itself surrounds the marker (a ball on a string), no body around it
     background: np.ndarray | None = field(default=None, repr=False, compare=False)  # full-resolution median
 
+    def describe(self) -> str:
+        """One phrase: what was found, where it starts and its arc."""
+        start = "" if self.start_px is None else f" starting at ({self.start_px[0]:.0f}, {self.start_px[1]:.0f}) px"
+        return (
+            f"a {self.polarity} spot (radius ≈ {self.marker_radius_px:.0f} px){start} on an arc about "
+            f"({self.pivot_px[0]:.0f}, {self.pivot_px[1]:.0f}) px (arm {self.arm_px:.0f} px)"
+        )
+
     def summary(self) -> dict:
         """JSON-ready record of the detection (no image)."""
         return {
@@ -318,10 +326,10 @@ def _track(blobs: _Blobs, idx: np.ndarray, sign: int, circle, scale: int, radius
     return _Track(sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), reversals, span, curved, balance)
 
 
-def _quantile_backgrounds(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per-pixel BACKGROUND_QUANTILE and 1 − BACKGROUND_QUANTILE of the (n, h, w) samples (float32)."""
+def _quantile_backgrounds(stack: np.ndarray, quantile: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel ``quantile`` and 1 − ``quantile`` of the (n, h, w) samples (float32)."""
     n = stack.shape[0]
-    k_low = int(BACKGROUND_QUANTILE * (n - 1))
+    k_low = int(quantile * (n - 1))
     k_high = n - 1 - k_low
     ordered = np.partition(stack, sorted({k_low, k_high}), axis=0)
     return ordered[k_low].astype(np.float32), ordered[k_high].astype(np.float32)
@@ -372,6 +380,11 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     """Find the swinging marker in the video at ``path`` (see the module docstring).
 
     Only the first ``max_frames`` frames are read (30 s at 60 fps: a long clip's swing is there).
+    The search runs against two estimates of the static scene: the per-pixel median (a spot that
+    is elsewhere most of the time) and the quantiles (a marker that swings little or rests is
+    seen there too, but a scene patch the moving body often covers can look like a spot). When
+    both find a marker starting at the same place, or one finds none, the answer stands; when
+    they disagree, the video does not say which is the marker and the error names both.
 
     Raises :class:`DetectionError` when nothing, or more than one thing, swings about a
     fixed point; the message names what was found and the sidecar value that settles it.
@@ -383,6 +396,36 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
             f"{path}: only {n} frames: too short to find the swinging marker; give tracking polarity, "
             "marker_radius_px and start_px in the trial's sidecar"
         )
+    outcomes = []
+    for quantile in (0.5, BACKGROUND_QUANTILE):
+        try:
+            outcomes.append(_detect(path, small, full, scale, first, seed, quantile))
+        except DetectionError as error:
+            outcomes.append(error)
+    started = [d for d in outcomes if isinstance(d, Detection) and d.start_px is not None]
+    if len(started) == 2:
+        median_based, quantile_based = started
+        if math.dist(median_based.start_px, quantile_based.start_px) <= max(
+            median_based.marker_radius_px, quantile_based.marker_radius_px
+        ):
+            return median_based
+        raise DetectionError(
+            f"{path}: not sure which object is the marker: against the scene's median it is "
+            f"{median_based.describe()}, against the scene with every moving spot taken out "
+            f"{quantile_based.describe()}; give the marker's start_px (its centre in the first frame), polarity "
+            "and marker_radius_px in the trial's sidecar (with all three given, no detection runs)"
+        )
+    if started:
+        return started[0]
+    found = [d for d in outcomes if isinstance(d, Detection)]
+    if found:
+        return found[0]
+    raise outcomes[0]
+
+
+def _detect(path, small, full, scale: int, first, seed: int, quantile: float) -> Detection:
+    """The swinging marker in the samples, spots sought against the ``quantile`` background (0.5: the median)."""
+    n = len(small)
     stack = np.stack([img for _, img in small])
     background = np.median(stack, axis=0).astype(np.float32)
     some = stack[:: max(1, n // 10), ::4, ::4].astype(np.float32) - background[None, ::4, ::4]
@@ -391,14 +434,18 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     # A bright spot is sought against the scene without it: per pixel a low quantile over the samples
     # (a dark spot: a high one). A marker that swings little, or comes to rest, covers its pixels in
     # most samples: the median would hold it and hide it; the quantiles do while it is elsewhere in at
-    # least BACKGROUND_QUANTILE of them.
-    low, high = _quantile_backgrounds(stack)
+    # least that share of them.
+    if quantile == 0.5:
+        references = [(background, 0)]  # both signs against the median
+    else:
+        low, high = _quantile_backgrounds(stack, quantile)
+        references = [(low, 1), (high, -1)]
     rows = []
     for k in range(n):
         frame = stack[k].astype(np.float32)
-        for reference, wanted in ((low, 1), (high, -1)):
+        for reference, wanted in references:
             for sign, x, y, r, s in _dog_blobs(frame - reference, scale, threshold, per_sign=8):
-                if sign == wanted:
+                if wanted in (0, sign):
                     rows.append((k, sign, x, y, r, s))
     where = f"{path}: "
     hint = (
