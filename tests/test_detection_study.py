@@ -1,0 +1,61 @@
+"""Random scenes with every real-camera fault at once, no marker hints (issue 12's acceptance).
+
+The scenes are drawn by ``tests/benchmarks/detection_study.py`` (its ``random_scene``): polarity, marker
+radius 5–20 px, release ±(5–30)°, rig, roll, stripes (vertical, horizontal or slanted), a second disk of
+the marker's grey (line mover or bubbles) and letterbox or pillarbox borders. The study judges 80 of them
+(seeds 1000–1039 and 2000–2039); here the first twelve seeds from 7000 on that draw the cheap camera, none
+left out, as a guard that runs with the suite.
+"""
+
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent / "benchmarks"))
+
+from detection_study import evaluate_scene, random_scene  # noqa: E402
+
+from pendulum.synthetic import generate_trial  # noqa: E402
+
+# The first twelve seeds from 7000 whose scene is a 640×360, 30 fps camera (6 s clips): none chosen by
+# outcome. Measured: 10 pass; 7030 and 7035 end in a clear DetectionError ("two objects swing", "not sure
+# which object is the marker"); none is tracked on the wrong object.
+SEEDS = (7006, 7009, 7015, 7017, 7019, 7022, 7026, 7030, 7033, 7035, 7036, 7038)
+CLIP_S = 6.0
+ALLOWED_FAILURES = 3
+
+
+@pytest.mark.slow
+def test_random_faulty_scenes_are_found_and_tracked_or_refused_never_taken_wrongly(tmp_path):
+    """A scene passes when detection finds the marker (its start within 1 px of the truth), its radius is
+    within 10 % of the rendered one, and tracking with config.yaml's values (no hints) flags ≥ 95 % of the
+    frames after the release ``ok`` with the angle RMS ≤ 0.05° against the truth (true pivot).
+
+    Two rules, from the binomial distribution over n = 12 scenes:
+    * never wrong: a scene detection does not pass must end in a DetectionError (which names what it saw
+      and the sidecar values that settle it), never in a marker elsewhere. 0 allowed: were 20 % of
+      scenes silently wrong, 12 without one would have a chance of 0.8¹² = 6.9 %.
+    * at most ALLOWED_FAILURES = 3 failures: at the study's failure rate (8 of 80 = 10 %) the chance of
+      more than 3 in 12 is 2.6 %, so a sound detector rarely fails this; one failing half the scenes
+      passes it with a chance of 7.3 %.
+    """
+    rows = []
+    for seed in SEEDS:
+        spec = random_scene(seed, CLIP_S)
+        assert (spec.camera.width_px, spec.camera.fps) == (640, 30.0)
+        folder = tmp_path / str(seed)
+        generate_trial(spec, folder, folder, progress=None)
+        row = evaluate_scene(spec, folder)
+        radius_ok = row["det"] and abs(row["r_det"] / row["r_true"] - 1) <= 0.10
+        rows.append((seed, row["passed"] and radius_ok, row))
+    summary = "\n".join(
+        f"seed {seed}: r {row['r_true']:.2f}/{row.get('r_det', math.nan):.2f} px, ok "
+        f"{row.get('ok%', math.nan):.1f} %, angle RMS {row.get('rms', math.nan):.4f}° {row['error']}"
+        for seed, _, row in rows
+    )
+    wrong = [seed for seed, _, row in rows if not row["det"] and not row["error"].startswith("detection: ")]
+    assert not wrong, summary
+    failed = [seed for seed, good, _ in rows if not good]
+    assert len(failed) <= ALLOWED_FAILURES, summary
