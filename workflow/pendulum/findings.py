@@ -9,6 +9,7 @@ import pandas as pd
 from pendulum import diagnosis
 from pendulum.effects import TERMS
 from pendulum.groupfit import ordered
+from pendulum.uncertainty import Z95
 
 RESIDUAL_COLUMNS = ["model", "trial", "time_s", "residual_rad"]
 EXTINCTION_COLUMNS = ["model", "trial", "amplitude_rad", "mean_amplitude_rad", "amplitude_loss_rad"]
@@ -49,8 +50,9 @@ def _deg(rad: float) -> str:
 
 
 def verdict(document: dict) -> str:
-    """One line: the missing effects with their coefficients and the RMS before → after (in sample and held
-    out), the indistinguishable groups, and whether structure is left unexplained."""
+    """One line: the missing effects with their coefficients (value ± 1.96σ, the 95 % interval of the
+    report's tables) and the RMS before → after (in sample and held out), the indistinguishable groups, and
+    whether structure is left unexplained."""
     base, check = document["baseline"], document["residual_check"]
     rms = (
         f"RMS {_deg(base['rms_rad'])} → {_deg(document['rms_rad'])} "
@@ -59,8 +61,9 @@ def verdict(document: dict) -> str:
     parts = []
     for name in document["named_effects"]:
         term = TERMS[name]
-        values = [
-            f"{term.symbol}{label[len(term.parameter) :]} = {plus_minus(e['value'], e['stderr'])} {term.unit}"
+        values = [  # value ± 1.96σ: the 95 % interval the report's tables show
+            f"{term.symbol}{label[len(term.parameter) :]} = {plus_minus(e['value'], Z95 * e['stderr'])} {term.unit}"
+            " (95 %)"
             for label, e in document["parameters"].items()
             if label.split("[")[0] == term.parameter
         ]

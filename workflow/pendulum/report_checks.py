@@ -64,6 +64,51 @@ def frame_notes(frames: dict) -> list[str]:
     return notes
 
 
+def failure_cell(document: dict | None, said: set[str], span: int = 1) -> str:
+    """A failed stage's cell in a trial's row: its failure sentence, or "—" when the row says it already
+    (a later stage that failed because an earlier one did carries the same sentence); adds it to ``said``."""
+    text = failure_text(document)
+    if text in said:
+        return td("—", "na", span=span)
+    said.add(text)
+    return td(esc(text), "na fail", span=span)
+
+
+CALIBRATION_MODELS = ("rational", "fisheye")  # the lens models view.calibrate_lens compares
+
+
+def calibration_rows(calibration: dict) -> list[list[str]]:
+    """One row per camera setup (``results/calibration/<setup>.json``): lens model chosen, held-out reprojection
+    RMS of each model (px), focal length (px), plane board and its tilt (°), views used (held out)."""
+    rows = []
+    for setup, doc in sorted(calibration.items()):
+        if not is_ok(doc):
+            rows.append([td(esc(setup)), td(esc(failure_text(doc)), "na fail", span=6)])
+            continue
+        models = doc.get("models") or {}
+        held_out = [
+            td(esc(fmt((models.get(m) or {}).get("held_out_rms_px"), 3)), "num" if m in models else "na")
+            for m in CALIBRATION_MODELS
+        ]
+        focal = doc.get("focal_length_px")
+        views, held = doc.get("views"), doc.get("held_out_views")
+        plane = doc.get("plane")
+        rows.append(
+            [
+                td(esc(setup)),
+                td(esc(doc.get("chosen_model") or "none (ideal lens)")),
+                *held_out,
+                td(esc(", ".join(fmt(f, 4) for f in focal)) if focal else "—", "num" if focal else "na"),
+                td(esc(f"yes, tilt {fmt(plane.get('plane_tilt_deg'), 2)}°") if plane else "no", "num"),
+                td(
+                    (f"{len(views)}" + (f" ({len(held)} held out)" if held else "")) if views else "—",
+                    "num" if views else "na",
+                ),
+            ]
+        )
+    return rows
+
+
 class CheckSections(ReportData):
     """What was built from which code, the synthetic truth, tracking quality, failures and provenance."""
 
@@ -167,6 +212,26 @@ class CheckSections(ReportData):
         )
         return table_html(header, rows, caption=caption, table_id="truth-table")
 
+    def calibration_table(self) -> str:
+        """Table: each camera setup's calibration (lens model chosen by held-out error, focal length, plane)."""
+        header = [
+            "camera setup",
+            "lens model chosen",
+            "held-out reprojection RMS, rational (px)",
+            "held-out reprojection RMS, fisheye (px)",
+            "focal length f<sub>x</sub>, f<sub>y</sub> (px)",
+            "plane board",
+            "views used",
+        ]
+        caption = self.table_caption(
+            "Camera calibration (results/calibration/&lt;setup&gt;.json): the lens model chosen by the RMS "
+            "reprojection error of checkerboard views held out of the fit (the rational model only when more than "
+            "5 % below the fisheye's), the focal length of the chosen model, and whether a board held in the swing "
+            "plane gave the plane's homography (its tilt against the image plane). Views used: checkerboard views "
+            "found in the lens clip (in brackets, how many of them were held out for the choice)."
+        )
+        return table_html(header, calibration_rows(self.calibration), caption=caption, table_id="calibration-table")
+
     def tracking_section(self) -> str:
         """Per trial: frames, flags by kind, samples used; then the contact sheets."""
         rows, sheets, attrs = [], [], []
@@ -174,10 +239,11 @@ class CheckSections(ReportData):
         for trial in self.trial_order():
             frames, tracks, angles = (self.docs.get((trial, k)) for k in ("frames", "tracks", "angles"))
             kind = self.trials[trial].get("kind", "video")
+            said: set[str] = set()  # a failure propagated to the later stages is said once, where it happened
             if kind != "video":
                 frame_cells = [td("angle table (no video)", "na", span=4)]
             elif not is_ok(frames):
-                frame_cells = [td(esc(failure_text(frames)), "na fail", span=4)]
+                frame_cells = [failure_cell(frames, said, span=4)]
             else:
                 fps = frames.get("mean_fps") if _finite(frames.get("mean_fps")) else frames.get("nominal_fps")
                 variable = ' <span class="warn">variable</span>' if frames.get("variable_frame_rate") else ""
@@ -201,7 +267,7 @@ class CheckSections(ReportData):
                 bad = {k: n for k, n in sorted(flags.items()) if k != "ok" and n}
                 flag_cell = td(f"ok {flags.get('ok', 0)}" + "".join(f", {esc(k)} {n}" for k, n in bad.items()))
             else:
-                flag_cell = td(esc(failure_text(tracks)), "na fail")
+                flag_cell = failure_cell(tracks, said)
             if is_ok(angles):
                 angle_cells = [
                     td(str(angles.get("n_samples", "—")), "num"),
@@ -209,7 +275,7 @@ class CheckSections(ReportData):
                     td(esc(fmt(angles.get("noise_deg"), 2)), "num"),
                 ]
             else:
-                angle_cells = [td(esc(failure_text(angles)), "na fail", span=3)]
+                angle_cells = [failure_cell(angles, said, span=3)]
             fit = self.fits.get((variant_for[trial], trial)) if variant_for[trial] else None
             fitted = td(str(fit["n_samples"]), "num") if is_ok(fit) else td("—", "na")
             notes = [esc(n) for n in frame_notes(frames)] if kind == "video" and is_ok(frames) else []
@@ -248,7 +314,8 @@ class CheckSections(ReportData):
             "stamps), the marker followed (polarity and radius; “detected” when config and sidecar left them to the "
             "marker detection, “given” otherwise), the tracker's flags by kind (flagged frames are never "
             "interpolated), the angle samples from "
-            "release to rest and how many of them are flagged, the angle record's noise, and the samples the "
+            "release to rest and how many of them are flagged, the angle record's noise (σ from the third "
+            "differences of the whole record: Table 2's record noise), and the samples the "
             "recommended variant's fit used (after the release transient and outliers). fps: mean rate of the "
             "frames the decoder yields (“variable”: a variable-frame-rate file, every frame keeps its own time "
             "stamp). Notes: only what is notable — a trimmed clip's discarded packets, rotation metadata, more than "
@@ -256,6 +323,8 @@ class CheckSections(ReportData):
             "fit's garbage checks."
         )
         out = table_html(header, rows, caption=caption, table_id="tracking-table", row_attrs=attrs)
+        if self.calibration:
+            out += self.calibration_table()
         if sheets:
             caption = self.figure_caption(
                 "Contact sheets: key frames of each video, for a visual check of the scene, marker and lighting."

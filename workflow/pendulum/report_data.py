@@ -181,8 +181,8 @@ class ReportData:
     ``files``: the paths the rule declares as inputs (``summary``, ``status``,
     ``trials`` → per trial ``angles``/``frames``/``tracks``/``contact_sheet``/
     ``truth``, ``fits`` → variant → trial → ``fit``/``curve``/``cycles``,
-    ``joint`` → variant → rig). ``trials``: trial → ``rig``, ``kind``,
-    ``source``, ``overrides``. ``rigs``: rig → ``values``, ``tolerances`` (as
+    ``joint`` → variant → rig, ``calibration`` → camera setup, only when a rig has one). ``trials``: trial →
+    ``rig``, ``kind``, ``source``, ``overrides``. ``rigs``: rig → ``values``, ``tolerances`` (as
     stated). ``variants``: variant → terms.
     """
 
@@ -211,6 +211,7 @@ class ReportData:
             if kind in ("angles", "frames", "tracks")
         }
         self.truth = {t: yaml.safe_load(Path(p["truth"]).read_text()) for t, p in trial_files.items() if p.get("truth")}
+        self.calibration = {setup: read_json(p) for setup, p in sorted(f.get("calibration", {}).items())}
         self.order = variant_order(self.variants)
         self.colour = {v: PALETTE[i % len(PALETTE)] for i, v in enumerate(self.order)}
         self.marker = {v: MARKERS[i % len(MARKERS)] for i, v in enumerate(self.order)}

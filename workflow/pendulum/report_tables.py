@@ -29,6 +29,30 @@ from pendulum.report_format import (
     td,
 )
 
+NOISE_WORDS = "the record's noise"  # record_checks.misfit_warning's words for its noise
+FIT_NOISE_NOTE = (
+    "<p>“The record's noise” in these warnings: σ from the third differences of the fitted samples, on runs of "
+    "consecutive samples only (a flagged or dropped frame breaks a run), so it can differ slightly from the record "
+    "noise of Table 2 (the whole angle record).</p>"
+)
+
+
+def camera_rig_note(rigs: dict) -> str:
+    """The rig table's sentence on rigs filmed through a calibrated camera setup ("" without cameras)."""
+    parts = [
+        f"{esc(rig)} (camera setup {esc(str(info['values']['camera']))})"
+        for rig, info in sorted(rigs.items())
+        if info.get("values", {}).get("camera")
+    ]
+    if not parts:
+        return ""
+    return (
+        f" Camera: {', '.join(parts)} — the pivot and marker coordinates of these rigs are swing-plane coordinates "
+        "(marker centres undistorted by the lens model and mapped onto the swing plane by the plane board's "
+        "homography, when the setup has one; the camera calibration table is under Tracking quality), not raw image "
+        "pixels."
+    )
+
 
 class TableSections(ReportData):
     """Table 1 (rig values), Table 2 (RMS residuals) and Table 3 (coefficients) as HTML."""
@@ -104,6 +128,7 @@ class TableSections(ReportData):
             note = "No per-trial overrides: every trial uses its rig's values."
         trials_by_rig = "; ".join(f"{esc(r)}: {', '.join(esc(t) for t in self.rig_trials(r))}" for r in rigs)
         note += f" Trials per rig — {trials_by_rig}."
+        note += camera_rig_note({r: self.rigs[r] for r in rigs})
         caption = self.table_caption(
             "Rig values used (measured, not fitted) with their 1σ tolerances; a tolerance not stated in the "
             "configuration takes the default fraction. They enter the fits' systematic error budget."
@@ -138,7 +163,10 @@ class TableSections(ReportData):
         caption = self.table_caption(
             "RMS residual (fitted − measured angle over the fitted samples) per trial and model variant, in "
             "radians, degrees and metres of arc at the body (Lθ, here in mm). The record noise is the angle "
-            "noise of the tracked record: a variant that captures the physics leaves an RMS close to it."
+            "noise of the tracked record (σ from the third differences of the whole angle record, as in the "
+            "tracking table): a variant that captures the physics leaves an RMS close "
+            "to it. The fits' warnings quote the noise of the fitted samples only (runs of consecutive samples, a "
+            "gap breaks a run) and discovery a noise floor pooled over a group's trials, so they differ slightly."
             + self.dagger_note()
         )
         return table_html(header, rows, caption=caption, table_id="table2", row_attrs=attrs, note=self.garbage_note())
@@ -301,6 +329,7 @@ class TableSections(ReportData):
             )
             out += (
                 f'<details class="fit-warnings"><summary>The fits\' warnings in full ({len(notes)} fits)</summary>'
-                f"<ul>{items}</ul></details>"
+                + (FIT_NOISE_NOTE if any(NOISE_WORDS in w for *_, ws in notes for w in ws) else "")
+                + f"<ul>{items}</ul></details>"
             )
         return out

@@ -347,7 +347,15 @@ def report_files():
         trials[name] = entry
     variants = sorted(config["variants"])
     rigs = sorted(rig_trials(config, TRIALS))
+    # camera setups of rigs with video trials (calibration.smk); no key without cameras
+    cameras = {
+        config["rigs"][rig].get("camera")
+        for rig, names in rig_trials(config, TRIALS).items()
+        if any(TRIALS[n].kind == "video" for n in names)
+    } - {None}
+    calibration = {c: f"results/calibration/{c}.json" for c in sorted(cameras)}
     return {
+        **({"calibration": calibration} if calibration else {}),
         "summary": "results/fits/summary.csv",
         "status": "results/status/trials.csv",
         "trials": trials,

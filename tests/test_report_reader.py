@@ -1,0 +1,126 @@
+"""What a new reader of the report stumbled on: the verdict's ± (95 %, as the tables), a failure said once per
+tracking row, the camera calibration table of a rig filmed through a camera setup, and the three noise figures
+each labelled for what it is."""
+
+import json
+import math
+
+from pendulum import report as R
+from pendulum.effects import TERMS
+from pendulum.findings import verdict
+from pendulum.report_checks import calibration_rows, failure_cell
+from pendulum.report_discovery import residual_check_table
+
+VARIANTS = {"quadratic": ["quadratic_drag"], "linear": ["quadratic_drag", "linear_damping"]}
+RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322}
+
+
+def _check(rms_rad: float, floor_rad: float) -> dict:
+    white = {"ljung_box_q": 24.9, "dof": 28, "p_value": 0.63, "spacing_s": 0.2}
+    return {"rms_rad": rms_rad, "noise_floor_rad": floor_rad, "rms_over_noise": rms_rad / floor_rad}, white
+
+
+def _discovery_document() -> dict:
+    base, white = _check(math.radians(0.63), math.radians(0.0039))
+    final, _ = _check(math.radians(0.0039), math.radians(0.0039))
+    return {
+        "group": "rig",
+        "baseline": {
+            "terms": ["quadratic_drag"],
+            "rms_rad": base["rms_rad"],
+            "held_out_rms_rad": math.radians(0.98),
+            "residual_check": {**base, "whiteness": white, "structured": True},
+        },
+        "rms_rad": final["rms_rad"],
+        "held_out_rms_rad": math.radians(0.0041),
+        "residual_check": {**final, "whiteness": white, "structured": False},
+        "threshold": {"misfit_ratio": 5.0, "whiteness_alpha": 0.01},
+        "named_effects": ["coulomb_friction"],
+        "parameters": {"coulomb_friction_torque_nm": {"value": 0.020012, "stderr": 0.0004}},
+        "indistinguishable": [],
+        "unexplained": False,
+    }
+
+
+def test_the_verdict_gives_the_95_percent_interval_of_the_tables():
+    doc = _discovery_document()
+    doc["parameters"] = {TERMS["coulomb_friction"].parameter: {"value": 0.020012, "stderr": 0.0004}}
+    text = verdict(doc)
+    # 1.96 × 0.0004 = 0.000784 → one significant digit
+    assert text.startswith("missing effect: bearing (Coulomb) friction, τ_f = 0.0200 ± 0.0008 N·m (95 %); RMS")
+
+
+def test_a_failure_carried_to_later_stages_is_said_once_in_its_tracking_row(tmp_path):
+    said: set[str] = set()
+    tracks = {"status": "failed", "failed_stage": "tracks", "error": "data/raw/a.mp4: marker lost"}
+    first, again = failure_cell(tracks, said), failure_cell(dict(tracks), said, span=3)
+    assert "tracks failed: data/raw/a.mp4: marker lost" in first and 'class="na fail"' in first
+    assert again == '<td class="na" colspan="3">—</td>'
+
+    frames = tmp_path / "frames.json"
+    frames.write_text(json.dumps({"status": "ok", "n_frames": 300, "nominal_fps": 30.0}))
+    failed = tmp_path / "failed.json"
+    failed.write_text(json.dumps(tracks))
+    (tmp_path / "summary.csv").write_text("variant,fit\n")
+    files = {
+        "summary": str(tmp_path / "summary.csv"),
+        "trials": {"a": {"angles": str(failed), "frames": str(frames), "tracks": str(failed)}},
+        "fits": {v: {"a": {"fit": str(failed), "curve": "", "cycles": ""}} for v in VARIANTS},
+        "joint": {v: {"rig": str(failed)} for v in VARIANTS},
+    }
+    trials = {"a": {"rig": "rig", "kind": "video", "source": "data/raw/a.mp4", "overrides": {}}}
+    report = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": {}}}, variants=VARIANTS)
+    html = report.tracking_section()
+    assert html.count("tracks failed: data/raw/a.mp4: marker lost") == 1
+    assert "calibration-table" not in html and "Camera:" not in report.rig_table()
+
+
+CALIBRATION = {
+    "status": "ok",
+    "camera_setup": "gopro_tank",
+    "models": {"rational": {"held_out_rms_px": 0.16272}, "fisheye": {"held_out_rms_px": 0.18344}},
+    "chosen_model": "rational",
+    "views": list(range(30)),
+    "held_out_views": [3, 7, 11, 15, 19, 23, 27],
+    "focal_length_px": [900.5823, 900.6539],
+    "plane": {"px_per_m": 805.2, "plane_tilt_deg": 11.5886},
+}
+
+
+def test_a_rig_with_a_camera_gets_its_calibration_table_and_swing_plane_note(tmp_path):
+    cells = calibration_rows({"gopro_tank": CALIBRATION})[0]
+    assert [c.split(">", 1)[1].removesuffix("</td>") for c in cells] == [
+        "gopro_tank",
+        "rational",
+        "0.163",
+        "0.183",
+        "900.6, 900.7",
+        "yes, tilt 12°",
+        "30 (7 held out)",
+    ]
+    no_plane = {k: v for k, v in CALIBRATION.items() if k != "plane"}
+    assert '<td class="num">no</td>' in calibration_rows({"c": no_plane})[0]
+
+    path = tmp_path / "gopro_tank.json"
+    path.write_text(json.dumps(CALIBRATION))
+    angles = tmp_path / "angles.json"
+    angles.write_text(json.dumps({"status": "ok", "hold_angle_deg": 20.0, "noise_deg": 0.003}))
+    (tmp_path / "summary.csv").write_text("variant,fit\n")
+    files = {
+        "summary": str(tmp_path / "summary.csv"),
+        "trials": {"a": {"angles": str(angles)}},
+        "calibration": {"gopro_tank": str(path)},
+    }
+    trials = {"a": {"rig": "rig", "kind": "video", "source": "data/raw/a.mp4", "overrides": {}}}
+    rigs = {"rig": {"values": {**RIG, "camera": "gopro_tank"}, "tolerances": {}}}
+    report = R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS)
+    assert "gopro_rig" not in report.rig_table() and "rig (camera setup gopro_tank)" in report.rig_table()
+    assert "swing-plane coordinates" in report.rig_table()
+    html = report.tracking_section()
+    assert 'id="calibration-table"' in html and "Camera calibration" in html and "900.6, 900.7" in html
+
+
+def test_the_discovery_noise_floor_is_labelled_as_pooled_over_the_group():
+    html = residual_check_table(_discovery_document())
+    assert "<th>pooled noise floor (°)</th>" in html and "pooled over the group's fitted samples" in html
+    assert html.count(">0.0039</td>") == 3  # the floor twice, the final RMS once
