@@ -256,15 +256,20 @@ def test_two_marker_like_spots_are_refused_without_a_hint(folder, reflection):
 
 
 def test_with_a_start_hint_the_tracker_stays_on_the_marker_beside_a_reflection(folder, reflection):
-    """The marker passes 16 px (2.6 radii) from the reflection every half period: those frames are
-    flagged, never an ``ok`` position pulled towards it. Measured: 0.06 px RMS, 0.16 px max, 36 % ok."""
+    """The marker passes 16 px (2.6 radii) from the reflection every half period: frames where the
+    reflection reaches the ring the marker's background is taken from (capsule r + 2.5 px, ring 4 px
+    wider) are flagged, never an ``ok`` position pulled towards it; frames just clear of it are ``ok``
+    and unbiased. Measured: 75 % ok; beside it 1 frame ok of 45, 0.09 px off."""
     truth, start = reflection
     track = track_video(folder / "reflection.mp4", replace(SMALL, start_px=start))
     errors = errors_by_time(track, truth)
     rms, worst, ok = ok_error_px(errors)
     assert rms <= 0.1 and worst <= 0.3 and ok >= 0.3
-    beside = np.hypot(errors.marker_x_px - 172.0, errors.marker_y_px - 196.0) < 2 * 6.0 + 7.5
-    assert not (errors.flag[beside] == "ok").any()
+    distance = np.hypot(errors.marker_x_px - 172.0, errors.marker_y_px - 196.0)
+    reaching = distance < 6.0 + 2.5 + 4.0 + 6.0  # the reflection's disk (r 6) reaches into the ring
+    assert reaching.sum() >= 20 and not (errors.flag[reaching] == "ok").any()
+    beside = (distance < 2 * 6.0 + 7.5) & (errors.flag == "ok")
+    assert (errors.error_px[beside] <= 0.15).all()
 
 
 def test_a_dimmer_reflection_does_not_disturb_the_tracker(folder):

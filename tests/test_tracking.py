@@ -181,3 +181,43 @@ def test_a_jump_next_to_lost_frames_is_flagged(gap_offset):
     x[jump] += 4.0
     flagged = flag_jumps(x, y, usable, TrackerSettings())
     assert list(np.flatnonzero(flagged)) == [jump]
+
+
+def test_the_reference_along_the_arc_follows_a_smooth_curve_and_holds_beyond_it():
+    """ρ(φ) = 1 + 0.5 φ + 0.8 φ² (a lens's magnification along the swing), sampled by ok frames on a
+    250 px arm (r = 8 px) over φ = −0.3 … 0.3 rad, three of them 8 % low at φ = 0.1 (biased frames
+    inside the flag band): the fitted reference is within 0.3 % of ρ everywhere seen. It is the first
+    frames' value (ρ = 1) until the frames span 4 radii of arc, and beyond the angles seen it goes on
+    along its end tangent, the slope capped at 3 % per radius (0.9375 per rad here; ρ' ≈ 0.96), for
+    4 radii of arc (0.128 rad), then stays level."""
+    from types import SimpleNamespace
+
+    from pendulum.tracking import _Arc, _ArcReference
+
+    pivot, arm, r = (300.0, 20.0), 250.0, 8.0
+    arc = _Arc(SimpleNamespace(pivot_px=pivot, arm_px=arm), r)
+    ref = _ArcReference(arc, r, enabled=True)
+    ref.base = 100.0
+
+    def at(phi):
+        return pivot[0] + arm * math.sin(phi), pivot[1] + arm * math.cos(phi)
+
+    def rho(phi):
+        return 1.0 + 0.5 * phi + 0.8 * phi * phi
+
+    for phi in (0.0, 0.01, 0.02):  # less than 4 radii (0.128 rad) of arc: the first frames' value
+        ref.add(*at(phi), 100.0 * rho(phi))
+    assert ref.value(*at(0.2)) == 100.0
+    for phi in np.linspace(-0.3, 0.3, 121):
+        ref.add(*at(phi), 100.0 * rho(phi))
+    for _ in range(3):
+        ref.add(*at(0.1), 92.0 * rho(0.1))
+    for phi in np.linspace(-0.3, 0.3, 13):
+        assert ref.value(*at(phi)) == pytest.approx(100.0 * rho(phi), rel=0.003)
+    end = ref.fit[2]  # the largest angle seen at the last refit (0.29 rad: 0.3 fell in the same bin)
+    assert 0.28 <= end <= 0.3
+    beyond = 100.0 * (rho(end) + 0.9375 * 0.128)
+    assert ref.value(*at(0.35)) == pytest.approx(100.0 * (rho(end) + 0.9375 * (0.35 - end)), rel=0.003)
+    assert ref.value(*at(0.5)) == pytest.approx(beyond, rel=0.003)
+    assert ref.value(*at(0.8)) == pytest.approx(beyond, rel=0.003)
+    assert _ArcReference(arc, r, enabled=False).ratio(*at(0.3)) == 1.0

@@ -13,8 +13,13 @@ Per frame, in a small region of interest (ROI) around the predicted position:
    exposure. The ring keeps the background local: a small body or a long streak
    puts the ROI's border on the clutter behind, never the ring.
 
-The blur-invariant marker signal Σ (I − b′) m, compared with its value at the
-start, gives each frame's quality: an occluder lowers it, glare raises it; an
+The blur-invariant marker signal Σ (I − b′) m, compared with its normal value
+at the marker's place on its arc, gives each frame's quality: an occluder lowers
+it, glare raises it. The normal value (and the width² of the check below) is the
+first frames' value times a smooth curve in the arc angle fitted to the ok frames
+(:class:`_ArcReference`): a lens's magnification or vignetting changes it slowly
+and repeatably along the swing, an occluder or a stripe within a marker
+diameter, and flagged frames never enter the curve. An
 occluder that the signal misses makes the linear and a thresholded centroid in
 the same capsule disagree (> 0.4 px), and something of the marker's grey in the
 capsule's margin moves the linear centroid when the mask shrinks to r + 1 px
@@ -84,6 +89,10 @@ class TrackerSettings:
 
     max_unresolved: float = 0.03  # share of the marker over scene of its own grey, unmeasurable: "occluded"
     max_lost_step_radii: float = 2.0  # search window growth per lost frame, in marker radii (bounded, see below)
+    # The normal signal and width² as smooth functions of the marker's angle on its arc (lens
+    # magnification, vignetting, lighting falloff), fitted to the ok frames (see _ArcReference);
+    # False: the first frames' values everywhere.
+    reference_along_arc: bool = True
 
     def __post_init__(self):
         if self.polarity not in ("bright", "dark", "auto"):
@@ -374,6 +383,95 @@ class _Arc:
         return cx + arm * math.sin(a), cy + arm * math.cos(a)
 
 
+class _ArcReference:
+    """A normal value of the marker (its signal, or width²) as a smooth function of its arc angle φ.
+
+    The value changes smoothly and repeatably with the marker's place in the picture (lens
+    magnification, vignetting, lighting falloff), so it is referred to ``base`` (the first
+    frames' value) by a curve ρ(φ), φ = atan2(x − x_p, y − y_p) about the arc's pivot: the ok
+    frames' values / ``base`` are binned by φ (one marker radius of arc per bin) and a polynomial
+    (degree 1, or 2 from 8 bins on) is fitted to the bins' medians, weights √min(count, 10), once
+    more without the bins off it by more than max(3 %, 3 × their robust spread): the few biased
+    frames inside the flag band do not bend it, and flagged frames never enter. Outside the
+    angles seen, ρ goes on along its end tangent for at most :attr:`REACH_RADII` radii of arc, its
+    slope there at most :attr:`MAX_SLOPE_PER_RADIUS` per radius of arc (a smooth change; a stripe
+    or an occluder changes the signal by as much over one marker diameter), then stays level.
+    ρ = 1 (the first frames' value) while the circle is unknown, the ok frames span fewer than
+    :attr:`MIN_SPAN_RADII` radii of arc, or ``enabled`` is False. Refitted when the angles seen
+    grow by a bin, the frames by a quarter, or the circle is refitted.
+    """
+
+    MIN_SPAN_RADII = 4.0
+    REACH_RADII = 4.0
+    MAX_SLOPE_PER_RADIUS = 0.03
+
+    def __init__(self, arc: _Arc, radius_px: float, enabled: bool):
+        self.arc, self.r, self.enabled = arc, radius_px, enabled
+        self.base = math.nan
+        self.points: list[tuple[float, float, float]] = []  # (x, y, value) of ok frames
+        self.fit = None  # (coefficients of ρ(φ), φ_lo, φ_hi, circle)
+        self.fitted_n = 0
+        self.bins_seen = (math.inf, -math.inf)
+        self.fitted_circle = None
+
+    def ratio(self, x: float, y: float) -> float:
+        """ρ(φ) at the marker position (x, y): its normal value / ``base``."""
+        if self.fit is None:
+            return 1.0
+        coef, lo, hi, (cx, cy, arm) = self.fit
+        phi = math.atan2(x - cx, y - cy)
+        if lo <= phi <= hi:
+            return float(np.polyval(coef, phi))
+        end = lo if phi < lo else hi
+        cap = self.MAX_SLOPE_PER_RADIUS * arm / self.r  # per radian
+        slope = min(max(float(np.polyval(np.polyder(coef), end)), -cap), cap)
+        reach = self.REACH_RADII * self.r / arm
+        return float(np.polyval(coef, end)) + slope * min(max(phi - end, -reach), reach)
+
+    def value(self, x: float, y: float) -> float:
+        """The normal value at (x, y): ``base`` × ρ(φ), ρ kept within [0.5, 2]."""
+        return self.base * min(max(self.ratio(x, y), 0.5), 2.0)
+
+    def add(self, x: float, y: float, value: float) -> None:
+        """An ok frame's value at (x, y); refits ρ when due."""
+        if not self.enabled or not math.isfinite(self.base) or not math.isfinite(value):
+            return
+        self.points.append((x, y, value))
+        circle = self.arc.circle
+        if circle is None:
+            return
+        b = math.floor(self.arc.angle(x, y) * circle[2] / self.r)
+        lo, hi = self.bins_seen
+        grown = b < lo or b > hi
+        self.bins_seen = (min(lo, b), max(hi, b))
+        if grown or len(self.points) >= 1.25 * self.fitted_n or circle is not self.fitted_circle:
+            self._refit(circle)
+
+    def _refit(self, circle) -> None:
+        self.fitted_n, self.fitted_circle = len(self.points), circle
+        cx, cy, arm = circle
+        pts = np.asarray(self.points)
+        phi = np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)
+        rho = pts[:, 2] / self.base
+        bins = np.floor(phi * arm / self.r).astype(int)
+        keys, inverse, counts = np.unique(bins, return_inverse=True, return_counts=True)
+        if keys.size < 4 or keys[-1] - keys[0] + 1 < self.MIN_SPAN_RADII:
+            self.fit = None
+            return
+        order = np.argsort(inverse, kind="stable")
+        groups = np.split(order, np.cumsum(counts)[:-1])
+        centre = np.array([float(np.median(phi[g])) for g in groups])
+        median = np.array([float(np.median(rho[g])) for g in groups])
+        weight = np.sqrt(np.minimum(counts, 10)).astype(float)
+        degree = 2 if keys.size >= 8 else 1
+        coef = np.polyfit(centre, median, degree, w=weight)
+        resid = median - np.polyval(coef, centre)
+        keep = np.abs(resid) <= max(0.03, 3.0 * 1.4826 * float(np.median(np.abs(resid))))
+        if keep.sum() >= degree + 3 and not keep.all():
+            coef = np.polyfit(centre[keep], median[keep], degree, w=weight[keep])
+        self.fit = (coef, float(phi.min()), float(phi.max()), circle)
+
+
 def _static_spot(image, background, c: Candidate, radius: float, reference_contrast: float | None) -> bool:
     """True when the scene itself holds this spot (it is in the background image): not the marker."""
     if background is None:
@@ -436,6 +534,11 @@ def track_video(
     scene_behind = background if detection is not None and detection.free_marker else None
     bounds = None if detection is None else tuple(detection.active_box_px)
     arc = _Arc(detection, settings.marker_radius_px)
+    # the normal signal (per measurement kind) and width² along the arc, from the ok frames
+    signal_curves = {
+        kind: _ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc) for kind in (False, True)
+    }
+    width_curve = _ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc)
     rows = []
     history: list[tuple[int, float, float]] = []  # (frame, x, y) of good frames
     previous = None
@@ -590,10 +693,14 @@ def track_video(
             ratio = 1.0
             if len(signals[kind]) >= 5:
                 signal_refs[kind] = float(np.median(signals[kind]))
+                signal_curves[kind].base = signal_refs[kind]
             if len(widths) >= 5 and not math.isfinite(width_ref):
                 width_ref = float(np.median(widths))
+                width_curve.base = width_ref
         else:
-            ratio = m.signal / signal_refs[kind]
+            ratio = m.signal / signal_curves[kind].value(m.x, m.y)
+        # a long streak's mask takes in more of the scene's noise across it: r²/100 per radius of streak
+        streak_width2 = 0.01 * r * max(speed - r, 0.0)
         quality = float(np.clip(min(ratio, 1.0 / ratio) if ratio > 0 else 0.0, 0.0, 1.0))
         if ratio < 0.5:
             flag, x, y, quality = "lost", np.nan, np.nan, 0.0
@@ -610,8 +717,7 @@ def track_video(
             # a free marker not measurable against the scene (something else around it): biased
             or (coverage_expected and not m.mode_coverage)
             or _near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
-            # a long streak's mask takes in more of the scene's noise across it: r²/100 per radius of streak
-            or m.width2_px2 > settings.max_width_ratio * width_ref + 0.01 * r * max(speed - r, 0.0)
+            or m.width2_px2 > settings.max_width_ratio * width_curve.value(m.x, m.y) + streak_width2
         ):
             flag, x, y = "occluded", m.x, m.y
         elif ratio > settings.max_signal_ratio:
@@ -633,6 +739,8 @@ def track_video(
                 del history[:-3]
                 if flag == "ok":
                     arc.add(x, y)
+                    signal_curves[kind].add(x, y, m.signal)
+                    width_curve.add(x, y, m.width2_px2 - streak_width2)
                 if flag in ("ok", "edge"):
                     xi, yi, half = int(round(x)), int(round(y)), int(r + 4)
                     box = np.s_[max(yi - half, 0) : yi + half + 1, max(xi - half, 0) : xi + half + 1]
