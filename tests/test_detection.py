@@ -190,3 +190,64 @@ def test_a_line_mover_and_the_body_are_not_taken_for_a_second_swinging_object(tm
     released = math.radians(20.0)  # marker centre in frame 0: pivot + arm (sin θ0, cos θ0), image y down
     truth = (320.3 + 290.0 * math.sin(released), 20.6 + 290.0 * math.cos(released))
     assert math.dist(found.start_px, truth) <= 0.3  # measured 0.03 px
+
+
+def _arc_blobs(theta_rad, pivot=(300.0, 40.0), arm=200.0, radius=10.0):
+    """One blob per sample on the marker's arc: x = cx + arm sin θ, y = cy + arm cos θ (image y down)."""
+    from pendulum.arcs import Blobs
+
+    theta = np.asarray(theta_rad, float)
+    n = theta.size
+    return Blobs(
+        np.arange(n),
+        np.full(n, -1),
+        pivot[0] + arm * np.sin(theta),
+        pivot[1] + arm * np.cos(theta),
+        np.full(n, radius),
+        np.full(n, 40.0),
+    )
+
+
+def _sampled_swing(n, dt_s, theta0_deg, period_s, tau_s, hold=0):
+    """θ at n samples dt apart: held at θ0 for ``hold`` samples, then θ0 e^(−t/τ) cos(2πt/T)."""
+    t = np.clip(np.arange(n) * dt_s - hold * dt_s, 0.0, None)
+    return math.radians(theta0_deg) * np.exp(-t / tau_s) * np.cos(2 * math.pi * t / period_s)
+
+
+@pytest.mark.parametrize(
+    "dt_s, theta0_deg, period_s, tau_s, hold",
+    [
+        (0.133, 30.0, 1.2, 5.0, 8),  # 60 fps clip sampled every 8 frames, strong decay 30° → 4° over the samples
+        (0.133, 5.0, 2.0, 40.0, 0),  # small slow swing, released moving
+        (0.5, 20.0, 1.3, 10.0, 2),  # a long clip sampled sparsely: steps alias over the whole swing
+        (0.067, 12.0, 0.9, 3.0, 15),  # fast decay to rest within the samples
+    ],
+)
+def test_continuity_keeps_every_sample_of_a_clean_swing(dt_s, theta0_deg, period_s, tau_s, hold):
+    """A marker's own track, however it swings or decays, loses no member to the continuity test."""
+    from pendulum.arcs import arc_track, continuous_members
+
+    blobs = _arc_blobs(_sampled_swing(60, dt_s, theta0_deg, period_s, tau_s, hold))
+    track = arc_track(blobs, np.arange(60), -1, (300.0, 40.0, 200.0), 2, 10.0)
+    kept, _ = continuous_members(blobs, track, 2)
+    assert kept.tolist() == list(range(60))
+
+
+def test_continuity_drops_other_objects_on_the_same_circle():
+    """The RANSAC circle takes any blob near it: a static spot on the circle in the first samples, and a
+    second object's blobs crossing it later. The continuity test keeps exactly the marker's samples."""
+    from pendulum.arcs import arc_track, continuous_members
+
+    theta = _sampled_swing(60, 0.133, 15.0, 1.4, 8.0, hold=0)
+    wrong_theta = theta.copy()
+    wrong = np.zeros(60, bool)
+    wrong[[0, 1, 2]] = True  # a static spot 40° off the swing's middle (the marker unseen there)
+    wrong_theta[[0, 1, 2]] = math.radians(-40.0)
+    for k, deg in ((21, 60.0), (33, -55.0), (34, -55.0), (47, 48.0)):  # another object crossing the circle
+        wrong[k] = True
+        wrong_theta[k] = math.radians(deg)
+    blobs = _arc_blobs(wrong_theta)
+    track = arc_track(blobs, np.arange(60), -1, (300.0, 40.0, 200.0), 2, 10.0)
+    kept, limit = continuous_members(blobs, track, 2)
+    assert kept.tolist() == np.flatnonzero(~wrong).tolist()
+    assert math.isfinite(limit)

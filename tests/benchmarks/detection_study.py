@@ -329,7 +329,7 @@ def report(table: pd.DataFrame, duration_s: float, margin_px: float = MARGIN_PX)
         )
     print(
         f"times per scene ({duration_s:g} s clips): render {table.render_s.mean():.0f} s (0 when cached), detection "
-        f"{table.det_s.mean():.1f} s, tracking {table.track_s.mean():.1f} s (means)"
+        f"{table.det_s.mean():.1f} s, tracking {table.get('track_s', pd.Series(dtype=float)).mean():.1f} s (means)"
     )
     for _, row in table[~table.passed].iterrows():
         spec = random_scene(int(row.seed), duration_s, margin_px)

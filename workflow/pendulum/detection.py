@@ -19,7 +19,9 @@ the whole clip, reduced to ≤ ~640 px wide):
    way as the other: a bubble that rises and starts again does not) on a path that is a
    circle of bounded radius; a second object (a bubble, a float moving on a line, a border)
    or another part of the same pendulum (a track about the same pivot, or blobs that keep
-   their place in the frame turning with the marker) is told apart by that;
+   their place in the frame turning with the marker) is told apart by that; of the chosen
+   track, blobs reached by a jump there and back (another object on the same circle, a spot
+   held before the release) are dropped (:func:`pendulum.arcs.continuous_members`);
 4. the marker's radius is refined at full resolution from its width across the arc,
    width² = 4 var_across = r² for a disk (blur along the arc does not change it), and its
    centre in the first frame from the linear centroid.
@@ -32,11 +34,20 @@ When no object qualifies, or two swing about different pivots with similar suppo
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
+from pendulum.arcs import (
+    ArcTrack,
+    Blobs,
+    arc_track,
+    continuous_members,
+    find_arc_tracks,
+    fit_circle,
+)
 from pendulum.centroids import linear_centroid
 from pendulum.video import VideoError, iter_luma
 
@@ -92,16 +103,6 @@ class Detection:
             "rival": self.rival,
             "free_marker": self.free_marker,
         }
-
-
-@dataclass
-class _Blobs:
-    sample: np.ndarray  # index of the sample (0 = first)
-    sign: np.ndarray  # +1 brighter than the background, −1 darker
-    x: np.ndarray  # full-resolution pixels
-    y: np.ndarray
-    r: np.ndarray  # radius estimate, full-resolution pixels
-    s: np.ndarray  # DoG response (grey levels)
 
 
 def _sample_frames(path, max_samples: int, max_full: int, max_frames: int):
@@ -178,152 +179,6 @@ def _dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
     for sign in (1, -1):
         out.extend([b for b in kept if b[0] == sign][:per_sign])
     return out
-
-
-def _circle_through(p1, p2, p3):
-    (ax, ay), (bx, by), (cx, cy) = p1, p2, p3
-    d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
-    if abs(d) < 1e-9:
-        return None
-    a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
-    ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
-    uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
-    return ux, uy, math.hypot(ax - ux, ay - uy)
-
-
-def _fit_circle(x, y):
-    """Algebraic (Kåsa) least-squares circle: centre and radius."""
-    a = np.column_stack([x, y, np.ones_like(x)])
-    b = x * x + y * y
-    (p, q, c), *_ = np.linalg.lstsq(a, b, rcond=None)
-    cx, cy = p / 2, q / 2
-    return cx, cy, math.sqrt(max(c + cx * cx + cy * cy, 0.0))
-
-
-@dataclass
-class _Track:
-    sign: int
-    cx: float
-    cy: float
-    arm: float
-    members: np.ndarray  # blob indices, one per sample
-    radius: float  # median blob radius
-    strength: float  # median response
-    reversals: int
-    span_px: float  # arc length covered
-    curved: bool  # a circle fits clearly better than a straight line
-    balance: float  # moves one way over moves the other (≤ 1): ~1 for a swing, small for creep-and-jump-back
-
-    @property
-    def support(self) -> float:
-        return len(self.members) * self.strength
-
-    def describe(self, n_samples: int) -> str:
-        kind = "bright" if self.sign > 0 else "dark"
-        return (
-            f"a {kind} spot (radius ≈ {self.radius:.0f} px) on an arc about ({self.cx:.0f}, {self.cy:.0f}) px "
-            f"(arm {self.arm:.0f} px) in {len(self.members)} of {n_samples} sampled frames"
-        )
-
-
-def _inliers(blobs: _Blobs, cand: np.ndarray, cx, cy, arm, radius, tol):
-    d = np.abs(np.hypot(blobs.x[cand] - cx, blobs.y[cand] - cy) - arm)
-    ok = (d <= tol) & (blobs.r[cand] <= 2.2 * radius) & (blobs.r[cand] >= radius / 2.2)
-    idx = cand[ok]
-    # one blob per sample: the one nearest the circle
-    order = np.lexsort((d[ok], blobs.sample[idx]))
-    idx = idx[order]
-    first = np.ones(idx.size, bool)
-    first[1:] = blobs.sample[idx][1:] != blobs.sample[idx][:-1]
-    return idx[first]
-
-
-def _moves(angles: np.ndarray, noise: float) -> tuple[int, float]:
-    """Direction changes of a sequence (steps below ``noise`` ignored), and how evenly it moves both ways.
-
-    Each move is a change of at least ``noise`` from the last anchor; the balance is
-    min(n_up, n_down) / max(n_up, n_down) over the moves: about 1 for a swing (out and back alike),
-    small for a path that creeps one way and jumps back (a rising bubble that starts again).
-    """
-    count, direction, anchor = 0, 0, angles[0] if angles.size else 0.0
-    ups = downs = 0
-    for a in angles[1:]:
-        step = a - anchor
-        if abs(step) <= noise:
-            continue
-        d = 1 if step > 0 else -1
-        ups, downs = ups + (d > 0), downs + (d < 0)
-        if direction and d != direction:
-            count += 1
-        direction, anchor = d, a
-    return count, (min(ups, downs) / max(ups, downs) if max(ups, downs) else 0.0)
-
-
-def _find_tracks(blobs: _Blobs, n_samples: int, shape, scale: int, rng, exclude=None, iterations: int = 1500):
-    """Best arc track per sign (RANSAC), then refit; tracks that move back and forth only."""
-    h, w = shape
-    max_arm = 2.0 * math.hypot(h, w)
-    tracks = []
-    for sign in (1, -1):
-        cand = np.flatnonzero((blobs.sign == sign) & (np.ones(blobs.sign.size, bool) if exclude is None else ~exclude))
-        if cand.size < 6 or np.unique(blobs.sample[cand]).size < 6:
-            continue
-        weights = blobs.s[cand] / blobs.s[cand].sum()
-        best = None
-        for _ in range(iterations):
-            pick = rng.choice(cand, size=3, replace=False, p=weights)
-            if np.unique(blobs.sample[pick]).size < 3:
-                continue
-            rs = sorted(blobs.r[pick])
-            radius = float(rs[1])
-            if rs[2] > 2.2 * rs[0]:
-                continue
-            pts = list(zip(blobs.x[pick], blobs.y[pick], strict=True))
-            if min(math.dist(pts[i], pts[j]) for i, j in ((0, 1), (0, 2), (1, 2))) < 1.5 * radius:
-                continue
-            circle = _circle_through(*pts)
-            if circle is None or not 3 * radius <= circle[2] <= max_arm:
-                continue
-            tol = max(1.5 * scale, 0.35 * radius)
-            idx = _inliers(blobs, cand, circle[0], circle[1], circle[2], radius, tol)
-            score = blobs.s[idx].sum()
-            if best is None or score > best[0]:
-                best = (score, circle, radius, tol)
-        if best is None:
-            continue
-        _, (cx, cy, arm), radius, tol = best
-        idx = _inliers(blobs, cand, cx, cy, arm, radius, tol)
-        for _ in range(2):  # refit on the inliers
-            if idx.size < 5:
-                break
-            cx, cy, arm = _fit_circle(blobs.x[idx], blobs.y[idx])
-            radius = float(np.median(blobs.r[idx]))
-            idx = _inliers(blobs, cand, cx, cy, arm, radius, tol)
-        if idx.size < 5 or not arm <= max_arm:
-            continue
-        tracks.append(_track(blobs, idx, sign, (cx, cy, arm), scale, radius))
-    return tracks
-
-
-def _track(blobs: _Blobs, idx: np.ndarray, sign: int, circle, scale: int, radius: float | None = None) -> _Track:
-    """The track of blobs ``idx`` on ``circle`` (cx, cy, arm): its span, reversals and whether it is curved.
-
-    ``radius``: the spot's radius (default: the median blob radius).
-    """
-    cx, cy, arm = circle
-    idx = idx[np.argsort(blobs.sample[idx])]
-    radius = float(np.median(blobs.r[idx])) if radius is None else radius
-    x, y = blobs.x[idx], blobs.y[idx]
-    angles = np.unwrap(np.arctan2(x - cx, y - cy))
-    span = float(angles.max() - angles.min()) * arm
-    # a straight line through the same points: residual RMS against the circle's
-    centred = np.column_stack([x - x.mean(), y - y.mean()])
-    line_rms = float(np.linalg.svd(centred, compute_uv=False)[-1] / math.sqrt(len(x)))
-    circle_rms = float(np.sqrt(np.mean((np.hypot(x - cx, y - cy) - arm) ** 2)))
-    curved = line_rms > 2.0 * circle_rms + 0.5 * scale
-    noise = max(0.5 * radius, 1.0 * scale) / arm
-    reversals, balance = _moves(angles, noise)
-    return _Track(sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), reversals, span, curved, balance)
 
 
 def _quantile_backgrounds(stack: np.ndarray, quantile: float) -> tuple[np.ndarray, np.ndarray]:
@@ -455,20 +310,20 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     if not rows:
         raise DetectionError(f"{where}nothing moves in {n} sampled frames; {hint}")
     a = np.array(rows, float)
-    blobs = _Blobs(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2], a[:, 3], a[:, 4], a[:, 5])
+    blobs = Blobs(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2], a[:, 3], a[:, 4], a[:, 5])
     rng = np.random.default_rng(seed)
     h, w = first.shape
-    tracks = _find_tracks(blobs, n, (h, w), scale, rng)
+    tracks = find_arc_tracks(blobs, n, (h, w), scale, rng)
     # a second round without the first tracks' blobs: other objects
     used = np.zeros(blobs.sign.size, bool)
     for t in tracks:
         used[t.members] = True
-    tracks += _find_tracks(blobs, n, (h, w), scale, rng, exclude=used)
+    tracks += find_arc_tracks(blobs, n, (h, w), scale, rng, exclude=used)
     for t in tracks:  # rank by the spot's own contrast in the frame (a disk on its surround), not the DoG's
         t.strength = _local_contrast(stack, blobs, t, scale)
     min_members = max(6, int(0.25 * n))
 
-    def swings(t: _Track) -> bool:
+    def swings(t: ArcTrack) -> bool:
         return (
             t.reversals >= 2
             and t.balance >= MIN_SWING_BALANCE
@@ -495,7 +350,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     swinging.sort(key=lambda t: -t.support)
     best = swinging[0]
 
-    def same_pendulum(t: _Track) -> bool:
+    def same_pendulum(t: ArcTrack) -> bool:
         """About the same pivot, or rigidly attached to the best track: a part of the same pendulum."""
         return math.hypot(t.cx - best.cx, t.cy - best.cy) <= max(3 * best.radius, 0.08 * best.arm) or _attached(
             blobs, t, best
@@ -511,7 +366,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             rest = t.members[~own]
             if rest.size < 5:
                 continue
-            t = _track(blobs, rest, t.sign, _fit_circle(blobs.x[rest], blobs.y[rest]), scale)
+            t = arc_track(blobs, rest, t.sign, fit_circle(blobs.x[rest], blobs.y[rest]), scale)
             t.strength = _local_contrast(stack, blobs, t, scale)
             if not swings(t) or same_pendulum(t):
                 continue
@@ -527,6 +382,27 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             "(its centre in the first frame), polarity and marker_radius_px in the trial's sidecar (with all three "
             "given, no detection runs)"
         )
+    # Blobs of other objects on the same circle (reached by a jump there and back) are not the marker's.
+    kept, step_limit = continuous_members(blobs, best, scale)
+    cleaned = arc_track(blobs, kept, best.sign, (best.cx, best.cy, best.arm), scale, best.radius)  # RANSAC's circle
+    if kept.size < best.members.size and swings(cleaned):
+        best = cleaned
+        first_kept = kept[int(np.argmin(blobs.sample[kept]))]
+        if 1 <= blobs.sample[first_kept] <= 2:  # the first sample's member was dropped: the marker there, if near
+            nearby = np.flatnonzero(
+                (blobs.sample == 0)
+                & (blobs.sign == best.sign)
+                & (blobs.r <= 2.2 * best.radius)
+                & (blobs.r >= best.radius / 2.2)
+                & (
+                    np.hypot(blobs.x - blobs.x[first_kept], blobs.y - blobs.y[first_kept])
+                    <= step_limit * int(blobs.sample[first_kept])
+                )
+            )
+            if nearby.size:
+                d = np.hypot(blobs.x[nearby] - blobs.x[first_kept], blobs.y[nearby] - blobs.y[first_kept])
+                with_start = np.concatenate([[nearby[int(np.argmin(d))]], best.members])
+                best = arc_track(blobs, with_start, best.sign, (best.cx, best.cy, best.arm), scale, best.radius)
     # Full-resolution refinement: radius from samples on the arc, start in frame 0.
     positions = {small[int(blobs.sample[i])][0]: (blobs.x[i], blobs.y[i]) for i in best.members}
     bg_full = _marker_free_background(full, positions, best.radius)
@@ -570,7 +446,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         if not radii and res is not None:
             radius = res[2]
     coverage = len(best.members) / n
-    rival_share = 0.0 if rival is None else rival.support / best.support
+    rival_share = 0.0 if rival is None else min(1.0, rival.support / best.support)
     confidence = float(min(1.0, coverage / 0.6) * min(1.0, best.reversals / 4) * (1.0 - rival_share))
     return Detection(
         polarity="bright" if best.sign > 0 else "dark",
@@ -589,7 +465,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     )
 
 
-def _local_contrast(stack: np.ndarray, blobs: _Blobs, track: _Track, scale: int) -> float:
+def _local_contrast(stack: np.ndarray, blobs: Blobs, track: ArcTrack, scale: int) -> float:
     """Median contrast of a track's spots against their own surround in the frame, in its polarity.
 
     Mean grey within 0.7 r of the centre minus the mean over the ring 1.3–2 r (reduced frames):
@@ -613,7 +489,7 @@ def _local_contrast(stack: np.ndarray, blobs: _Blobs, track: _Track, scale: int)
     return max(float(np.median(values)), 0.0) if values else 0.0
 
 
-def _body_frame(blobs: _Blobs, other: _Track, track: _Track) -> tuple[np.ndarray, np.ndarray]:
+def _body_frame(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> tuple[np.ndarray, np.ndarray]:
     """Where ``other``'s blobs sit in the frame turning with ``track``: (member positions, points).
 
     Each blob is rotated about the track's pivot by minus the track's angle in the same sample
@@ -632,7 +508,7 @@ def _body_frame(blobs: _Blobs, other: _Track, track: _Track) -> tuple[np.ndarray
     return np.array(rows, int), np.array(pts, float).reshape(-1, 2)
 
 
-def _attached(blobs: _Blobs, other: _Track, track: _Track) -> bool:
+def _attached(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> bool:
     """True when ``other`` keeps its place in the frame that turns with ``track`` (a part of the same body):
     its blobs' places there (:func:`_body_frame`) lie within a few marker radii of one point."""
     _, pts = _body_frame(blobs, other, track)
@@ -647,7 +523,7 @@ def _distances(points: np.ndarray) -> np.ndarray:
     return np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
 
 
-def _attached_members(blobs: _Blobs, other: _Track, track: _Track, scale: int) -> np.ndarray:
+def _attached_members(blobs: Blobs, other: ArcTrack, track: ArcTrack, scale: int) -> np.ndarray:
     """Which blobs of ``other`` are rigid parts of ``track``'s pendulum (bool per member).
 
     Blobs that keep one place in the frame turning with the pendulum (:func:`_body_frame`;
@@ -682,7 +558,7 @@ def _attached_members(blobs: _Blobs, other: _Track, track: _Track, scale: int) -
     return attached
 
 
-def _tangent(x, y, track: _Track):
+def _tangent(x, y, track: ArcTrack):
     rx, ry = x - track.cx, y - track.cy
     norm = math.hypot(rx, ry) or 1.0
     return (-ry / norm, rx / norm)
@@ -692,8 +568,10 @@ def _marker_free_background(frames, positions: dict, radius: float) -> np.ndarra
     """Per-pixel median over ``frames`` [(index, image)] leaving out the marker's neighbourhood in each.
 
     ``positions``: frame index → marker centre (full resolution). Pixels within 2.5 r + 4 px
-    of the marker in a frame do not count for that frame; a pixel covered in every frame (a
-    marker at rest there throughout) is NaN: the scene behind it is unknown.
+    of the marker in a frame do not count for that frame (a body around the marker can have
+    nearly the scene's grey: a tighter reach takes it for the scene); a pixel covered in every
+    frame (a marker at rest there throughout, or the middle of a swing narrower than that
+    reach) is NaN: the scene behind it is unknown.
     """
     stack = np.stack([img for _, img in frames]).astype(np.float32)
     h, w = stack.shape[1:]
@@ -715,12 +593,9 @@ def _marker_free_background(frames, positions: dict, radius: float) -> np.ndarra
                 values[k] = np.nan
         for k, x, y in disks:
             values[k, np.hypot(xs - x, ys - y) <= reach] = np.nan
-        with np.errstate(all="ignore"):
-            import warnings
-
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                background[ys, xs] = np.nanmedian(values, axis=0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            background[ys, xs] = np.nanmedian(values, axis=0)
     return background.astype(np.float32)
 
 
