@@ -27,10 +27,19 @@ def noise_floor_rad(record, noise_deg: float | None = None) -> float:
     """σ of the record's sample noise: the angles stage's ``noise_deg`` (third differences), else recomputed.
 
     A record quantised by its tracker (integer-pixel clicks) can have most third differences
-    exactly zero; the floor is then at least the quantisation step's uniform σ, step/√12.
+    exactly zero; when at least a quarter are, the floor is at least the quantisation step's
+    uniform σ, step/√12 (the step: the median gap between the distinct values). A record of
+    continuous values has no such step: the gap between its distinct values is only how densely
+    the samples fill the swing (a 60° swing of 600 samples: 0.2°, whose /√12 is four times a
+    tracker's 0.005°).
     """
     sigma = math.radians(noise_deg) if noise_deg is not None else noise_level(record.theta_rad)
-    steps = np.abs(np.diff(np.unique(np.round(record.theta_rad, 12))))
+    theta = np.asarray(record.theta_rad, float)
+    theta = theta[np.isfinite(theta)]
+    d3 = np.diff(theta, 3)
+    if d3.size == 0 or np.mean(np.abs(d3) < 1e-12) < 0.25:
+        return sigma
+    steps = np.diff(np.unique(np.round(theta, 12)))
     quantum = float(np.median(steps)) if steps.size else 0.0
     return max(sigma, quantum / math.sqrt(12))
 
