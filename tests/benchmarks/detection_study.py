@@ -230,7 +230,8 @@ def evaluate_scene(spec: TrialSpec, folder: Path, settings: TrackerSettings | No
     row["start"] = math.nan if found.start_px is None else math.dist(found.start_px, start)
     row["det"] = bool(row["start"] <= MAX_START_ERROR_PX)
     if not row["det"]:
-        row["error"] = f"detection took another object: {found.summary()}"
+        what = "found no start (not seen in the first frame)" if found.start_px is None else "took another object"
+        row["error"] = f"detection {what}: {found.summary()}"
     started = time.perf_counter()
     try:
         track = track_video(video, settings, detection=found)

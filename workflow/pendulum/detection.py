@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -77,6 +77,9 @@ class Detection:
     active_box_px: tuple[int, int, int, int]  # x0, y0, x1, y1 of the picture inside letterbox borders
     rival: str | None = None  # the best other moving object, described, or None
     free_marker: bool = False  # the scene itself surrounds the marker (a ball on a string), no body around it
+    # the first sample's spot on the arc when the continuity test dropped it (start_px then None): used only
+    # when no search has a start that passed the test
+    unchecked_start_px: tuple[float, float] | None = None
     background: np.ndarray | None = field(default=None, repr=False, compare=False)  # full-resolution median
 
     def describe(self) -> str:
@@ -273,6 +276,9 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     if started:
         return started[0]
     found = [d for d in outcomes if isinstance(d, Detection)]
+    unchecked = [d for d in found if d.unchecked_start_px is not None]
+    if unchecked:  # no search has a start that passed the continuity test: the first sample's spot on the arc
+        return replace(unchecked[0], start_px=unchecked[0].unchecked_start_px)
     if found:
         return found[0]
     raise outcomes[0]
@@ -383,26 +389,12 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             "given, no detection runs)"
         )
     # Blobs of other objects on the same circle (reached by a jump there and back) are not the marker's.
-    kept, step_limit = continuous_members(blobs, best, scale)
+    # The first sample's member, if dropped, is kept aside: a start for when no search has a checked one.
+    first_member = next((int(i) for i in best.members if blobs.sample[i] == 0), None)
+    kept, _ = continuous_members(blobs, best, scale)
     cleaned = arc_track(blobs, kept, best.sign, (best.cx, best.cy, best.arm), scale, best.radius)  # RANSAC's circle
     if kept.size < best.members.size and swings(cleaned):
         best = cleaned
-        first_kept = kept[int(np.argmin(blobs.sample[kept]))]
-        if 1 <= blobs.sample[first_kept] <= 2:  # the first sample's member was dropped: the marker there, if near
-            nearby = np.flatnonzero(
-                (blobs.sample == 0)
-                & (blobs.sign == best.sign)
-                & (blobs.r <= 2.2 * best.radius)
-                & (blobs.r >= best.radius / 2.2)
-                & (
-                    np.hypot(blobs.x - blobs.x[first_kept], blobs.y - blobs.y[first_kept])
-                    <= step_limit * int(blobs.sample[first_kept])
-                )
-            )
-            if nearby.size:
-                d = np.hypot(blobs.x[nearby] - blobs.x[first_kept], blobs.y[nearby] - blobs.y[first_kept])
-                with_start = np.concatenate([[nearby[int(np.argmin(d))]], best.members])
-                best = arc_track(blobs, with_start, best.sign, (best.cx, best.cy, best.arm), scale, best.radius)
     # Full-resolution refinement: radius from samples on the arc, start in frame 0.
     positions = {small[int(blobs.sample[i])][0]: (blobs.x[i], blobs.y[i]) for i in best.members}
     bg_full = _marker_free_background(full, positions, best.radius)
@@ -436,13 +428,16 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         if res is not None:
             radii.append(res[2])
     radius = float(np.median(radii)) if radii else best.radius
-    start = None
-    if 0 in on_arc:
-        i = on_arc[0]
+    start = unchecked_start = None
+    for i in (on_arc.get(0), first_member if 0 not in on_arc else None):
+        if i is None:
+            continue
         tangent = _tangent(blobs.x[i], blobs.y[i], best)
         res = _refine(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
-        if res is not None:
+        if res is not None and i == on_arc.get(0):
             start = (float(res[0]), float(res[1]))
+        elif res is not None:
+            unchecked_start = (float(res[0]), float(res[1]))
         if not radii and res is not None:
             radius = res[2]
     coverage = len(best.members) / n
@@ -462,6 +457,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         rival=None if rival is None else rival.describe(n),
         background=bg_full,
         free_marker=free,
+        unchecked_start_px=unchecked_start,
     )
 
 
