@@ -16,7 +16,7 @@ from scipy.optimize import brentq, nnls
 
 from pendulum.decay import half_cycles
 from pendulum.effects import TERMS
-from pendulum.geometry import noise_level
+from pendulum.geometry import sample_noise_rad
 from pendulum.groupfit import GroupFit
 
 WHITENESS_SPACING_S = 0.2  # residuals thinned to this spacing before the whiteness test (tracker noise decorrelates)
@@ -24,7 +24,7 @@ WHITENESS_MAX_LAGS = 20
 
 
 def noise_floor_rad(record, noise_deg: float | None = None) -> float:
-    """σ of the record's sample noise: the angles stage's ``noise_deg`` (third differences), else recomputed.
+    """σ of the record's sample noise: the angles stage's ``noise_deg`` (fifth differences), else recomputed.
 
     A record quantised by its tracker (integer-pixel clicks) can have most third differences
     exactly zero; when at least a quarter are, the floor is at least the quantisation step's
@@ -33,7 +33,7 @@ def noise_floor_rad(record, noise_deg: float | None = None) -> float:
     the samples fill the swing (a 60° swing of 600 samples: 0.2°, whose /√12 is four times a
     tracker's 0.005°).
     """
-    sigma = math.radians(noise_deg) if noise_deg is not None else noise_level(record.theta_rad)
+    sigma = math.radians(noise_deg) if noise_deg is not None else sample_noise_rad(record.theta_rad)
     theta = np.asarray(record.theta_rad, float)
     theta = theta[np.isfinite(theta)]
     d3 = np.diff(theta, 3)
