@@ -163,7 +163,7 @@ class TableSections(ReportData):
         caption = self.table_caption(
             "RMS residual (fitted − measured angle over the fitted samples) per trial and model variant, in "
             "radians, degrees and metres of arc at the body (Lθ, here in mm). The record noise is the angle "
-            "noise of the tracked record (σ from the third differences of the whole angle record, as in the "
+            "noise of the tracked record (σ from the fifth differences of the whole angle record, as in the "
             "tracking table): a variant that captures the physics leaves an RMS close "
             "to it. The fits' warnings quote the noise of the fitted samples only (runs of consecutive samples, a "
             "gap breaks a run) and discovery a noise floor pooled over a group's trials, so they differ slightly."
