@@ -207,10 +207,10 @@ def continuous_members(blobs: Blobs, track: ArcTrack, scale: int) -> tuple[np.nd
 
     def verdict(a: int | None, b: int) -> bool | None:
         """Is member ``b`` reached from kept member ``a``? None: no kept member within eight samples."""
-        if a is None or abs(int(sample[b]) - int(sample[a])) > 8:
+        gap = None if a is None else abs(int(sample[b]) - int(sample[a]))
+        if gap is None or gap > 8:
             return None
-        gap = abs(int(sample[b]) - int(sample[a]))
-        return math.hypot(x[a] - x[b], y[a] - y[b]) <= limits[min(a, b, steps.size - 1)] * min(2, gap)
+        return bool(math.hypot(x[a] - x[b], y[a] - y[b]) <= limits[min(a, b, steps.size - 1)] * min(2, gap))
 
     changed = True
     while changed:  # grow outwards from the largest piece: a piece joins when reached on every side it has

@@ -429,17 +429,17 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             radii.append(res[2])
     radius = float(np.median(radii)) if radii else best.radius
     start = unchecked_start = None
-    for i in (on_arc.get(0), first_member if 0 not in on_arc else None):
-        if i is None:
-            continue
+    i = on_arc.get(0, first_member)  # the first sample's spot: checked while it is on the kept track
+    if i is not None:
         tangent = _tangent(blobs.x[i], blobs.y[i], best)
         res = _refine(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
-        if res is not None and i == on_arc.get(0):
-            start = (float(res[0]), float(res[1]))
-        elif res is not None:
-            unchecked_start = (float(res[0]), float(res[1]))
-        if not radii and res is not None:
-            radius = res[2]
+        if res is not None:
+            if 0 in on_arc:
+                start = (float(res[0]), float(res[1]))
+            else:
+                unchecked_start = (float(res[0]), float(res[1]))
+            if not radii:
+                radius = res[2]
     coverage = len(best.members) / n
     rival_share = 0.0 if rival is None else min(1.0, rival.support / best.support)
     confidence = float(min(1.0, coverage / 0.6) * min(1.0, best.reversals / 4) * (1.0 - rival_share))
