@@ -251,3 +251,36 @@ def test_continuity_drops_other_objects_on_the_same_circle():
     kept, limit = continuous_members(blobs, track, 2)
     assert kept.tolist() == np.flatnonzero(~wrong).tolist()
     assert math.isfinite(limit)
+
+
+def _marker_on_a_rod(radius, centre=(80.37, 90.61), plate_px=3.0):
+    """A dark marker (30) on a light plate (200) just ``plate_px`` larger than it across the rod, a dark rod
+    (70) running up from it, on a grey wall (150): the shape of study scene 2003's pendulum (smoothed ×4)."""
+    canvas = np.full((180, 160), 150.0, np.float32)
+    cx, cy = centre
+    big = np.zeros((720, 640), np.uint8)  # 4× supersampled plate and rod, area-averaged to the frame
+    x4, y4 = 4 * cx + 1.5, 4 * cy + 1.5
+    half_w, half_h = 4 * (radius + 10.0), 4 * (radius + plate_px)
+    cv2.rectangle(big, (int(x4 - half_w), int(y4 - half_h)), (int(x4 + half_w), int(y4 + half_h)), 1, -1)
+    cv2.rectangle(big, (int(x4 - 0.8 * radius), 0), (int(x4 + 0.8 * radius), int(y4)), 2, -1)  # 0.4 r wide
+    shade = np.select([big == 1, big == 2], [200.0, 70.0], 150.0).astype(np.float32)
+    canvas = cv2.resize(shade, (160, 180), interpolation=cv2.INTER_AREA)
+    _draw_disk(canvas, cx, cy, radius, 30.0)
+    return canvas
+
+
+@pytest.mark.parametrize("radius", [5.3, 9.7, 14.8, 19.2])
+def test_marker_radius_is_read_from_its_edge_when_a_rod_widens_its_moments(radius):
+    """Study scene 2003: the width² of the moments took in the rod and the plate's edge and read 16.1 px for a
+    14.8 px marker (the tracker then flagged 92 % of frames). The edge radius sees the rod in a few rays only."""
+    from pendulum.centroids import edge_radius, linear_centroid
+    from pendulum.detection import _refine
+
+    image = _marker_on_a_rod(radius)
+    inverted = 255.0 - image
+    moments = linear_centroid(inverted, 0, 0, 80.37, 90.61, radius, 0.0, (1.0, 0.0))
+    assert math.sqrt(moments[4]) - radius > 0.3  # the failure: moments at the true radius read wide
+    assert edge_radius(inverted, 80.37, 90.61, radius) == pytest.approx(radius, abs=0.1)
+    x, y, r = _refine(image, 81.0, 90.0, -1, 1.2 * radius, (1.0, 0.0))  # started 20 % wide, 0.9 px off
+    assert r == pytest.approx(radius, abs=0.15)
+    assert abs(x - 80.37) <= 0.05 and abs(y - 90.61) <= 0.5  # the rod pulls along the arm only
