@@ -426,6 +426,9 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     diff = full[len(full) // 2][1][::2, ::2] - bg_full[::2, ::2]
     noise_full = 1.4826 * float(np.nanmedian(np.abs(diff - np.nanmedian(diff))))
     free = _surround_is_scene(full, outer, bg_full, best.radius, max(5.0, 2.5 * noise_full))
+    if free and np.isnan(bg_full).any():  # no body: the scene is seen closer to the marker (a narrow swing's middle)
+        closer = _marker_free_background(full, positions, best.radius, reach_radii=1.2)
+        bg_full = np.where(np.isnan(bg_full), closer, bg_full)
 
     def scene_removed(image):
         """For a free marker: the image less the scene (a striped wall does not bend the moments)."""
@@ -579,18 +582,18 @@ def _tangent(x, y, track: ArcTrack):
     return (-ry / norm, rx / norm)
 
 
-def _marker_free_background(frames, positions: dict, radius: float) -> np.ndarray:
+def _marker_free_background(frames, positions: dict, radius: float, reach_radii: float = 2.5) -> np.ndarray:
     """Per-pixel median over ``frames`` [(index, image)] leaving out the marker's neighbourhood in each.
 
-    ``positions``: frame index → marker centre (full resolution). Pixels within 2.5 r + 4 px
+    ``positions``: frame index → marker centre (full resolution). Pixels within ``reach_radii`` r + 4 px
     of the marker in a frame do not count for that frame (a body around the marker can have
-    nearly the scene's grey: a tighter reach takes it for the scene); a pixel covered in every
-    frame (a marker at rest there throughout, or the middle of a swing narrower than that
-    reach) is NaN: the scene behind it is unknown.
+    nearly the scene's grey: a tighter reach takes it for the scene, so 1.2 r + 4 px only for a
+    marker with no body); a pixel covered in every frame (a marker at rest there throughout, or
+    the middle of a swing narrower than that reach) is NaN: the scene behind it is unknown.
     """
     stack = np.stack([img for _, img in frames]).astype(np.float32)
     h, w = stack.shape[1:]
-    reach = 2.5 * radius + 4.0
+    reach = reach_radii * radius + 4.0
     near = np.zeros((h, w), np.uint8)
     disks = []
     for k, (index, _) in enumerate(frames):
