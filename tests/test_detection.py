@@ -284,3 +284,34 @@ def test_marker_radius_is_read_from_its_edge_when_a_rod_widens_its_moments(radiu
     x, y, r = _refine(image, 81.0, 90.0, -1, 1.2 * radius, (1.0, 0.0))  # started 20 % wide, 0.9 px off
     assert r == pytest.approx(radius, abs=0.15)
     assert abs(x - 80.37) <= 0.05 and abs(y - 90.61) <= 0.5  # the rod pulls along the arm only
+
+
+def test_of_two_answers_the_single_swing_below_its_pivot_is_taken():
+    """Rules of ``_one_swing``: continuity (≥ 2× the samples one object visits in turn), then hanging (median angle
+    within HANGS_DEG of the vertical below the pivot, the other's beyond twice that); otherwise no answer."""
+    from pendulum.detection import HANGS_DEG, Detection, _one_swing
+
+    def answer(n_continuous, rest_deg):
+        return Detection(
+            "dark",
+            10.0,
+            (1.0, 2.0),
+            (0.0, 0.0),
+            100.0,
+            1.0,
+            75,
+            75,
+            8,
+            (0, 0, 640, 360),
+            n_continuous=n_continuous,
+            rest_deg=rest_deg,
+        )
+
+    marker, mixed = answer(75, 1.5), answer(32, -23.5)  # scene 1010
+    assert _one_swing(marker, mixed) is marker and _one_swing(mixed, marker) is marker
+    line = answer(74, 13.5)  # scene 2034: a line mover's circle
+    assert _one_swing(line, answer(74, 3.1)).rest_deg == 3.1
+    assert _one_swing(answer(40, 0.0), answer(80, 0.0)).n_continuous == 80  # twice: settled
+    assert _one_swing(answer(41, 0.0), answer(80, 0.0)) is None
+    assert _one_swing(answer(60, 0.5 * HANGS_DEG), answer(75, 1.5 * HANGS_DEG)) is None  # neither rule: not sure
+    assert _one_swing(answer(60, 3 * HANGS_DEG), answer(75, -3 * HANGS_DEG)) is None

@@ -54,6 +54,7 @@ from pendulum.video import VideoError, iter_luma
 PYRAMID_SIGMAS = (1.0, 1.5, 2.25, 3.375)  # DoG σ at each pyramid level (× 2^level), ratio 1.5
 RADIUS_PER_SIGMA = 1.7  # disk radius ≈ 1.7 σ of the DoG scale where it responds most
 MIN_SWING_BALANCE = 0.35  # moves one way over the other: a swing ~1 (0.53–1 seen), creep-and-jump-back ≤ 0.25
+HANGS_DEG = 6.0  # a pendulum swings about the vertical below its pivot: its median angle within the camera roll
 BACKGROUND_QUANTILE = 0.1  # scene behind a bright spot: the 10 % quantile of the samples (a dark one: 90 %)
 
 
@@ -80,6 +81,8 @@ class Detection:
     # the first sample's spot on the arc when the continuity test dropped it (start_px then None): used only
     # when no search has a start that passed the test
     unchecked_start_px: tuple[float, float] | None = None
+    n_continuous: int = 0  # samples on the arc that one object could have visited in turn (continuity test)
+    rest_deg: float = 0.0  # median angle of the arc's samples about the pivot from the image's downward vertical
     background: np.ndarray | None = field(default=None, repr=False, compare=False)  # full-resolution median
 
     def describe(self) -> str:
@@ -286,6 +289,9 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
             median_based.marker_radius_px, quantile_based.marker_radius_px
         ):
             return median_based
+        settled = _one_swing(median_based, quantile_based)
+        if settled is not None:
+            return settled
         raise DetectionError(
             f"{path}: not sure which object is the marker: against the scene's median it is "
             f"{median_based.describe()}, against the scene with every moving spot taken out "
@@ -301,6 +307,24 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     if found:
         return found[0]
     raise outcomes[0]
+
+
+def _one_swing(a: Detection, b: Detection) -> Detection | None:
+    """Of two answers that disagree, the one whose path is a pendulum's swing, if only one is.
+
+    An arc that one object visits in turn in at least twice as many samples beats the other (whose
+    blobs, jumping there and back, are of several objects: body features, a second object); then
+    an arc that swings about the vertical below its pivot (median angle within ``HANGS_DEG``: the
+    camera's roll) beats one whose samples lie more than twice that to one side (a circle fitted to
+    an object moving on a line has its centre anywhere). None when neither rule separates them.
+    """
+    for one, other in ((a, b), (b, a)):
+        if one.n_continuous >= 2 * other.n_continuous:
+            return one
+    for one, other in ((a, b), (b, a)):
+        if abs(one.rest_deg) <= HANGS_DEG and abs(other.rest_deg) > 2 * HANGS_DEG:
+            return one
+    return None
 
 
 def _detect(path, small, full, scale: int, first, seed: int, quantile: float) -> Detection:
@@ -480,6 +504,8 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         background=bg_full,
         free_marker=free,
         unchecked_start_px=unchecked_start,
+        n_continuous=int(kept.size),
+        rest_deg=math.degrees(middle),
     )
 
 
