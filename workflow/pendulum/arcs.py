@@ -141,14 +141,17 @@ def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclud
                 best = (score, circle, radius, tol)
         if best is None:
             continue
-        _, (cx, cy, arm), radius, tol = best
+        score, (cx, cy, arm), radius, tol = best
         idx = arc_inliers(blobs, cand, cx, cy, arm, radius, tol)
-        for _ in range(2):  # refit on the inliers
+        for _ in range(2):  # refit on the inliers, kept while it holds as much response (inliers of other objects pull)
             if idx.size < 5:
                 break
-            cx, cy, arm = fit_circle(blobs.x[idx], blobs.y[idx])
-            radius = float(np.median(blobs.r[idx]))
-            idx = arc_inliers(blobs, cand, cx, cy, arm, radius, tol)
+            circle = fit_circle(blobs.x[idx], blobs.y[idx])
+            r_refit = float(np.median(blobs.r[idx]))
+            refit = arc_inliers(blobs, cand, *circle, r_refit, tol)
+            if blobs.s[refit].sum() < score:
+                break
+            (cx, cy, arm), radius, idx, score = circle, r_refit, refit, blobs.s[refit].sum()
         if idx.size < 5 or not arm <= max_arm:
             continue
         tracks.append(arc_track(blobs, idx, sign, (cx, cy, arm), scale, radius))

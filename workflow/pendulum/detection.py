@@ -140,6 +140,24 @@ def _sample_frames(path, max_samples: int, max_full: int, max_frames: int):
     return small, full, scale, first
 
 
+def _peak_offset(response: np.ndarray, y: int, x: int, sign: int) -> tuple[float, float]:
+    """Sub-sample offset of a peak of ``sign`` × ``response`` at (x, y): the vertex of the parabola through it
+    and its two neighbours, per axis, δ = (f₋ − f₊) / (2 (f₋ − 2 f₀ + f₊)), within ±0.5 (0 at the border).
+
+    On a coarse pyramid level a sample is 4–8 px of the frame: without it, the blobs of a large marker on a
+    small swing lie on a grid, and a circle through them cannot show the arc's 2 px sagitta."""
+    h, w = response.shape
+    offsets = []
+    for dy, dx in ((0, 1), (1, 0)):
+        if not (0 < y < h - 1 and 0 < x < w - 1):
+            offsets.append(0.0)
+            continue
+        lo, mid, hi = (sign * float(response[y + k * dy, x + k * dx]) for k in (-1, 0, 1))
+        curvature = lo - 2.0 * mid + hi
+        offsets.append(float(np.clip(0.5 * (lo - hi) / curvature, -0.5, 0.5)) if curvature < 0 else 0.0)
+    return offsets[0], offsets[1]
+
+
 def _dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
     """Peaks of the scale-normalised DoG of ``fg`` (both signs): list of (sign, x, y, r, s), full-res units."""
     found = []
@@ -164,11 +182,12 @@ def _dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
             for yy, xx in zip(ys, xs, strict=True):
                 which = int(np.argmax([sign * d[yy, xx] for d in dogs]))
                 sigma = PYRAMID_SIGMAS[which] * 1.22
+                dx, dy = _peak_offset(dogs[which], yy, xx, sign)
                 found.append(
                     (
                         sign,
-                        (xx + 0.5) * f - 0.5,
-                        (yy + 0.5) * f - 0.5,
+                        (xx + dx + 0.5) * f - 0.5,
+                        (yy + dy + 0.5) * f - 0.5,
                         RADIUS_PER_SIGMA * sigma * f,
                         float(best[yy, xx]),
                     )
@@ -263,8 +282,10 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     The search runs against two estimates of the static scene: the per-pixel median (a spot that
     is elsewhere most of the time) and the quantiles (a marker that swings little or rests is
     seen there too, but a scene patch the moving body often covers can look like a spot). When
-    both find a marker starting at the same place, or one finds none, the answer stands; when
-    they disagree, the video does not say which is the marker and the error names both.
+    both find a marker starting at the same place, the one whose arc holds more of the marker's
+    samples stands (its pivot is the better founded); when one finds none, the other's stands; when
+    they disagree and only one path is a pendulum's swing (:func:`_one_swing`), that one stands;
+    otherwise the video does not say which is the marker and the error names both.
 
     Raises :class:`DetectionError` when nothing, or more than one thing, swings about a
     fixed point; the message names what was found and the sidecar value that settles it.
@@ -287,8 +308,8 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
         median_based, quantile_based = started
         if math.dist(median_based.start_px, quantile_based.start_px) <= max(
             median_based.marker_radius_px, quantile_based.marker_radius_px
-        ):
-            return median_based
+        ):  # the same marker: the arc one object visits in more samples (the median's on a tie)
+            return max(started, key=lambda d: d.n_continuous)
         settled = _one_swing(median_based, quantile_based)
         if settled is not None:
             return settled
@@ -435,8 +456,9 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     # The first sample's member, if dropped, is kept aside: a start for when no search has a checked one.
     first_member = next((int(i) for i in best.members if blobs.sample[i] == 0), None)
     kept, _ = continuous_members(blobs, best, scale)
-    cleaned = arc_track(blobs, kept, best.sign, (best.cx, best.cy, best.arm), scale, best.radius)  # RANSAC's circle
-    if kept.size < best.members.size and swings(cleaned):
+    refit = fit_circle(blobs.x[kept], blobs.y[kept])  # least squares on the one object's sub-pixel blobs
+    cleaned = arc_track(blobs, kept, best.sign, refit, scale, best.radius)
+    if swings(cleaned):
         best = cleaned
     # Full-resolution refinement: radius from samples on the arc, start in frame 0.
     positions = {small[int(blobs.sample[i])][0]: (blobs.x[i], blobs.y[i]) for i in best.members}
@@ -479,6 +501,8 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     if i is not None:
         tangent = _tangent(blobs.x[i], blobs.y[i], best)
         res = _refine(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
+        if res is not None and math.dist(res[:2], (blobs.x[i], blobs.y[i])) > max(0.5 * radius, 2.0 * scale):
+            res = None  # the refinement ran off its spot (to a stripe, a rod): no marker-sized spot there
         if res is not None:
             if 0 in on_arc:
                 start = (float(res[0]), float(res[1]))
