@@ -11,7 +11,7 @@ the whole clip, reduced to ≤ ~640 px wide):
 2. in every sample, the foreground F = I − B is searched for blobs (bright ones in I − B_bright,
    dark ones in I − B_dark) with a scale-normalised difference of Gaussians,
    DoG_σ = G_σ ∗ F − G_1.5σ ∗ F (a disk of radius r responds most near σ ≈ r / 1.7), on a
-   Gaussian pyramid;
+   Gaussian pyramid, each peak placed to a fraction of its level's sample (parabola vertex);
 3. per sign, RANSAC finds the circle through blobs of different samples that holds most
    samples: |‖p − c‖ − R| ≤ tol, blob sizes alike; its least-squares refit gives the pivot
    c and arm R. An object qualifies when it moves (spans more than two radii of the arc)
@@ -21,10 +21,12 @@ the whole clip, reduced to ≤ ~640 px wide):
    or another part of the same pendulum (a track about the same pivot, or blobs that keep
    their place in the frame turning with the marker) is told apart by that; of the chosen
    track, blobs reached by a jump there and back (another object on the same circle, a spot
-   held before the release) are dropped (:func:`pendulum.arcs.continuous_members`);
+   held before the release) are dropped (:func:`pendulum.arcs.continuous_members`) and the
+   circle is refitted by least squares to the rest;
 4. the marker's radius is refined at full resolution from its width across the arc,
-   width² = 4 var_across = r² for a disk (blur along the arc does not change it), and its
-   centre in the first frame from the linear centroid.
+   width² = 4 var_across = r² for a disk (blur along the arc does not change it; where a rod
+   or a body edge in the mask widens it, the edge radius stands), and its centre in the first
+   frame from the linear centroid.
 
 When no object qualifies, or two swing about different pivots with similar support,
 :class:`DetectionError` says what was found and which tracking value (``polarity``,
@@ -417,7 +419,8 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             )
         )
         raise DetectionError(f"{where}no object swings back and forth about a fixed point ({what}); {hint}")
-    swinging.sort(key=lambda t: -t.support)
+    # A clearly curved arc beats a path that a straight line fits as well (an object moving on a line).
+    swinging.sort(key=lambda t: (not t.curved, -t.support))
     best = swinging[0]
 
     def same_pendulum(t: ArcTrack) -> bool:
@@ -497,14 +500,16 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             radii.append(res[2])
     radius = float(np.median(radii)) if radii else best.radius
     start = unchecked_start = None
-    i = on_arc.get(0, first_member)  # the first sample's spot: checked while it is on the kept track
+    held = _held_from_the_start(blobs, on_arc, max(1.5 * scale, 0.1 * radius))
+    # the first sample's spot: checked while it is on the kept track, or where the marker is held still
+    i = on_arc[0] if 0 in on_arc else held if held is not None else first_member
     if i is not None:
         tangent = _tangent(blobs.x[i], blobs.y[i], best)
         res = _refine(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
         if res is not None and math.dist(res[:2], (blobs.x[i], blobs.y[i])) > max(0.5 * radius, 2.0 * scale):
             res = None  # the refinement ran off its spot (to a stripe, a rod): no marker-sized spot there
         if res is not None:
-            if 0 in on_arc:
+            if 0 in on_arc or held is not None:
                 start = (float(res[0]), float(res[1]))
             else:
                 unchecked_start = (float(res[0]), float(res[1]))
@@ -531,6 +536,24 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         n_continuous=int(kept.size),
         rest_deg=math.degrees(middle),
     )
+
+
+def _held_from_the_start(blobs: Blobs, on_arc: dict, still_px: float) -> int | None:
+    """The first kept member when the marker is held still from the track's start, else None.
+
+    When the first sample's spot is not on the kept track (another object's spot on the circle there) but
+    the first three kept members lie in samples 1–4 within ``still_px`` of each other, the marker was
+    held there before the release: in the first frame it is at that place too.
+    """
+    if 0 in on_arc or len(on_arc) < 3:
+        return None
+    firsts = sorted(on_arc)[:3]
+    if firsts[-1] > 4:
+        return None
+    points = [(blobs.x[on_arc[k]], blobs.y[on_arc[k]]) for k in firsts]
+    if max(math.dist(p, q) for p in points for q in points) > still_px:
+        return None
+    return int(on_arc[firsts[0]])
 
 
 def _local_contrast(stack: np.ndarray, blobs: Blobs, track: ArcTrack, scale: int) -> float:
