@@ -419,9 +419,17 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             )
         )
         raise DetectionError(f"{where}no object swings back and forth about a fixed point ({what}); {hint}")
-    # A clearly curved arc beats a path that a straight line fits as well (an object moving on a line).
-    swinging.sort(key=lambda t: (not t.curved, -t.support))
+    swinging.sort(key=lambda t: -t.support)
     best = swinging[0]
+    if not best.curved:
+        # A path that a straight line fits as well as a circle shows no pivot of its own (its circle is an
+        # extrapolation; an object moving on a line gives one too): a clearly curved arc that hangs below
+        # its pivot, with at least half the support, is the better evidence of a pendulum.
+        hanging = [t for t in swinging[1:] if t.curved and abs(_rest_deg(blobs, t)) <= HANGS_DEG]
+        if hanging and hanging[0].support >= 0.5 * best.support:
+            best = hanging[0]
+            swinging.remove(best)
+            swinging.insert(0, best)
 
     def same_pendulum(t: ArcTrack) -> bool:
         """About the same pivot, or rigidly attached to the best track: a part of the same pendulum."""
@@ -536,6 +544,12 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         n_continuous=int(kept.size),
         rest_deg=math.degrees(middle),
     )
+
+
+def _rest_deg(blobs: Blobs, track: ArcTrack) -> float:
+    """Median angle of a track's blobs about its pivot from the image's downward vertical, atan2(x − cx, y − cy)."""
+    idx = track.members
+    return math.degrees(float(np.median(np.arctan2(blobs.x[idx] - track.cx, blobs.y[idx] - track.cy))))
 
 
 def _held_from_the_start(blobs: Blobs, on_arc: dict, still_px: float) -> int | None:
