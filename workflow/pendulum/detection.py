@@ -419,23 +419,33 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
             )
         )
         raise DetectionError(f"{where}no object swings back and forth about a fixed point ({what}); {hint}")
-    swinging.sort(key=lambda t: -t.support)
+
+    # A pendulum hangs below its pivot: arcs whose samples lie about the vertical below their pivot (median
+    # angle within 2 HANGS_DEG; for a flat path, whose fitted centre may fall on either side, also about the
+    # vertical above it) come first. An object moving on a sloped line (its fitted centre off to one side)
+    # or a curved arc above its centre is taken only when no arc hangs.
+    def hangs(t: ArcTrack, within_deg: float = 2 * HANGS_DEG) -> bool:
+        off = abs(_rest_deg(blobs, t))
+        return (off if t.curved else min(off, 180.0 - off)) <= within_deg
+
+    swinging.sort(key=lambda t: (not hangs(t), -t.support))
     best = swinging[0]
-    if not best.curved:
-        # A path that a straight line fits as well as a circle shows no pivot of its own (its circle is an
-        # extrapolation; an object moving on a line gives one too): a clearly curved arc that hangs below
-        # its pivot, with at least half the support, is the better evidence of a pendulum.
-        hanging = [t for t in swinging[1:] if t.curved and abs(_rest_deg(blobs, t)) <= HANGS_DEG]
-        if hanging and hanging[0].support >= 0.5 * best.support:
-            best = hanging[0]
-            swinging.remove(best)
-            swinging.insert(0, best)
 
     def same_pendulum(t: ArcTrack) -> bool:
         """About the same pivot, or rigidly attached to the best track: a part of the same pendulum."""
         return math.hypot(t.cx - best.cx, t.cy - best.cy) <= max(3 * best.radius, 0.08 * best.arm) or _attached(
             blobs, t, best
         )
+
+    if not best.curved:
+        # A path that a straight line fits as well as a circle shows no pivot of its own (its circle is an
+        # extrapolation; an object moving on a line gives one too): a clearly curved arc that hangs below
+        # its pivot, with at least half the support, is the better evidence of a pendulum.
+        hanging = [t for t in swinging[1:] if t.curved and hangs(t, HANGS_DEG)]
+        if hanging and hanging[0].support >= 0.5 * best.support:
+            best = hanging[0]
+            swinging.remove(best)
+            swinging.insert(0, best)
 
     rivals = []
     for t in swinging[1:]:
@@ -453,9 +463,12 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
                 continue
         rivals.append(t)
     rivals.sort(key=lambda t: -t.support)
-    # A clearly curved arc beats a path that a straight line fits as well (an object moving on a line).
+    # A clearly curved arc beats a path that a straight line fits as well (an object moving on a line),
+    # and an arc that hangs below its pivot one that does not (a second pendulum hangs too).
     if rivals and best.curved:
         rivals = [t for t in rivals if t.curved]
+    if rivals and hangs(best):
+        rivals = [t for t in rivals if hangs(t)]
     rival = rivals[0] if rivals else None
     if rival is not None and rival.support >= 0.5 * best.support:
         raise DetectionError(
