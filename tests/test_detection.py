@@ -36,7 +36,7 @@ def _swing(t, pivot, arm, theta0_deg=25.0, period_s=1.6, tau_s=8.0):
     return pivot[0] + arm * np.sin(theta), pivot[1] + arm * np.cos(theta)
 
 
-def _scene(path, *, marker, second=None, second_pivot=None, stripes=False, seconds=5.0, seed=0):
+def _scene(path, *, marker, second=None, second_pivot=None, stripes=False, seconds=5.0, seed=0, theta0_deg=25.0):
     """Write the scene to ``path``; return the marker's true centres (exposure means) per frame."""
     n = int(seconds * FPS)
     wall = _wall(seed, 170.0, stripes)
@@ -45,7 +45,7 @@ def _scene(path, *, marker, second=None, second_pivot=None, stripes=False, secon
     sub = (np.arange(6) + 0.5) / 6 - 0.5  # exposure: half the frame interval, 6 sub-exposures
     for i in range(n):
         times = (i + 0.5 * sub) / FPS
-        mx, my = _swing(times, marker["pivot"], marker["arm"])
+        mx, my = _swing(times, marker["pivot"], marker["arm"], theta0_deg)
         acc = np.zeros((H, W), np.float32)
         for j in range(sub.size):
             canvas = wall.copy()
@@ -53,7 +53,7 @@ def _scene(path, *, marker, second=None, second_pivot=None, stripes=False, secon
                 u = 0.5 * (1 - np.cos(2 * math.pi * times[j] / 2.3))
                 sx = second[0][0] + u * (second[1][0] - second[0][0])
                 sy = second[0][1] + u * (second[1][1] - second[0][1])
-                _draw_disk(canvas, sx, sy, marker["radius"], marker["grey"])
+                _draw_disk(canvas, sx, sy, marker.get("second_radius", marker["radius"]), marker["grey"])
             if second_pivot is not None:  # a second pendulum about another pivot
                 ox, oy = _swing(times[j : j + 1] + 0.4, second_pivot, marker["arm"] * 0.8, 20.0, 1.3)
                 _draw_disk(canvas, float(ox[0]), float(oy[0]), marker["radius"], marker["grey"])
@@ -351,3 +351,23 @@ def test_a_small_swing_on_a_long_arm_is_found_though_a_line_fits_its_arc(trial):
     assert abs(found.marker_radius_px - camera["marker_radius_px"]) <= 0.3  # measured 0.03 px
     assert math.dist(found.start_px, (start.marker_x_px, start.marker_y_px)) <= 0.3  # measured 0.04 px
     assert math.dist(found.pivot_px, camera["pivot_px"]) <= 20.0  # measured 9.2 and 5.8 px (a 5° chord)
+
+
+def test_a_spot_dropped_from_the_marker_track_is_not_taken_for_the_start(tmp_path):
+    """A 5° swing on a 440 px arm (flat at the search's scale) whose first samples hide in the scene's median
+    (it starts at its turning point), beside a larger disk of its grey moving on a vertical line. Neither
+    search keeps a first-sample spot on the marker's circle; the line mover's spot, once kept aside as an
+    unchecked start, was taken (radius 10 px for the marker's 8, 110 px off the circle) and the track was
+    usable in 2 of 150 frames. A dropped spot is a start only on the circle and marker-sized; without one
+    the tracker takes the marker up from the frames."""
+    path = tmp_path / "flat_swing_and_line_mover.mp4"
+    marker = {**DARK_BALL, "pivot": (200.3, -240.0), "arm": 440.0, "second_radius": 10.0}
+    truth = _scene(path, marker=marker, second=((390.0, 30.0), (400.0, 240.0)), theta0_deg=5.0)
+    found = detect_marker(path)
+    assert found.start_px is None or math.dist(found.start_px, truth[0]) <= 0.3  # measured: None
+    assert math.dist(found.pivot_px, marker["pivot"]) <= 20.0  # measured 8.6 px
+    track = track_video(path, TrackerSettings(polarity="auto", marker_radius_px=None))
+    ok = (track.flag == "ok").to_numpy()
+    err = np.hypot(track.x_px - truth[:, 0], track.y_px - truth[:, 1]).to_numpy()
+    assert ok.mean() >= 0.95  # measured 100 %
+    assert err[ok].max() <= 0.5  # measured 0.18 px

@@ -420,13 +420,13 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         )
         raise DetectionError(f"{where}no object swings back and forth about a fixed point ({what}); {hint}")
 
-    # A pendulum hangs below its pivot: arcs whose samples lie about the vertical below their pivot (median
-    # angle within 2 HANGS_DEG; for a flat path, whose fitted centre may fall on either side, also about the
-    # vertical above it) come first. An object moving on a sloped line (its fitted centre off to one side)
-    # or a curved arc above its centre is taken only when no arc hangs.
-    def hangs(t: ArcTrack, within_deg: float = 2 * HANGS_DEG) -> bool:
+    # A pendulum hangs below its pivot: arcs whose samples lie about the vertical through their fitted
+    # centre (median angle within 2 HANGS_DEG of straight below it or, since a nearly flat arc's centre
+    # may be fitted on the wrong side, straight above) come first. An object moving on a sloped line (its
+    # fitted centre off to one side) is taken only when no arc hangs.
+    def hangs(t: ArcTrack) -> bool:
         off = abs(_rest_deg(blobs, t))
-        return (off if t.curved else min(off, 180.0 - off)) <= within_deg
+        return min(off, 180.0 - off) <= 2 * HANGS_DEG
 
     swinging.sort(key=lambda t: (not hangs(t), -t.support))
     best = swinging[0]
@@ -441,7 +441,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         # A path that a straight line fits as well as a circle shows no pivot of its own (its circle is an
         # extrapolation; an object moving on a line gives one too): a clearly curved arc that hangs below
         # its pivot, with at least half the support, is the better evidence of a pendulum.
-        hanging = [t for t in swinging[1:] if t.curved and hangs(t, HANGS_DEG)]
+        hanging = [t for t in swinging[1:] if t.curved and abs(_rest_deg(blobs, t)) <= HANGS_DEG]
         if hanging and hanging[0].support >= 0.5 * best.support:
             best = hanging[0]
             swinging.remove(best)
@@ -532,7 +532,10 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         if res is not None:
             if 0 in on_arc or held is not None:
                 start = (float(res[0]), float(res[1]))
-            else:
+            elif (
+                abs(math.dist(res[:2], (best.cx, best.cy)) - best.arm) <= max(radius, 2.0 * scale)
+                and abs(res[2] / radius - 1.0) <= 0.2
+            ):  # a spot dropped from the track: a start only where it is on the circle and marker-sized
                 unchecked_start = (float(res[0]), float(res[1]))
             if not radii:
                 radius = res[2]
