@@ -288,7 +288,8 @@ def test_marker_radius_is_read_from_its_edge_when_a_rod_widens_its_moments(radiu
 
 def test_of_two_answers_the_single_swing_below_its_pivot_is_taken():
     """Rules of ``_one_swing``: continuity (≥ 2× the samples one object visits in turn), then hanging (median angle
-    within HANGS_DEG of the vertical below the pivot, the other's beyond twice that); otherwise no answer."""
+    within HANGS_DEG of the vertical below the pivot, or above it for a flat arc fitted on the wrong side, the
+    other's beyond twice that); otherwise no answer."""
     from pendulum.detection import HANGS_DEG, Detection, _one_swing
 
     def answer(n_continuous, rest_deg):
@@ -315,6 +316,9 @@ def test_of_two_answers_the_single_swing_below_its_pivot_is_taken():
     assert _one_swing(answer(41, 0.0), answer(80, 0.0)) is None
     assert _one_swing(answer(60, 0.5 * HANGS_DEG), answer(75, 1.5 * HANGS_DEG)) is None  # neither rule: not sure
     assert _one_swing(answer(60, 3 * HANGS_DEG), answer(75, -3 * HANGS_DEG)) is None
+    flipped = answer(60, 176.0)  # scene 7030: a 7° swing fitted about a centre below it (4° off straight up)
+    assert _one_swing(line, flipped) is flipped and _one_swing(flipped, line) is flipped
+    assert _one_swing(answer(60, 90.0), answer(75, 3 * HANGS_DEG)) is None  # both to one side
 
 
 def test_a_marker_held_still_from_the_start_gives_the_start_when_the_first_spot_is_anothers():

@@ -338,16 +338,23 @@ def _one_swing(a: Detection, b: Detection) -> Detection | None:
     An arc that one object visits in turn in at least twice as many samples beats the other (whose
     blobs, jumping there and back, are of several objects: body features, a second object); then
     an arc that swings about the vertical below its pivot (median angle within ``HANGS_DEG``: the
-    camera's roll) beats one whose samples lie more than twice that to one side (a circle fitted to
-    an object moving on a line has its centre anywhere). None when neither rule separates them.
+    camera's roll; or about the vertical above it, for a nearly flat arc fitted about a centre on
+    the wrong side) beats one whose samples lie more than twice that to one side (a circle fitted
+    to an object moving on a line has its centre anywhere). None when neither rule separates them.
     """
     for one, other in ((a, b), (b, a)):
         if one.n_continuous >= 2 * other.n_continuous:
             return one
     for one, other in ((a, b), (b, a)):
-        if abs(one.rest_deg) <= HANGS_DEG and abs(other.rest_deg) > 2 * HANGS_DEG:
+        if _off_vertical_deg(one.rest_deg) <= HANGS_DEG and _off_vertical_deg(other.rest_deg) > 2 * HANGS_DEG:
             return one
     return None
+
+
+def _off_vertical_deg(rest_deg: float) -> float:
+    """How far an arc's median angle lies from the vertical through its centre, below or above: a nearly
+    flat arc's centre may be fitted on the wrong side (median angle near ±180°)."""
+    return min(abs(rest_deg), 180.0 - abs(rest_deg))
 
 
 def _detect(path, small, full, scale: int, first, seed: int, quantile: float) -> Detection:
@@ -425,8 +432,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     # may be fitted on the wrong side, straight above) come first. An object moving on a sloped line (its
     # fitted centre off to one side) is taken only when no arc hangs.
     def hangs(t: ArcTrack) -> bool:
-        off = abs(_rest_deg(blobs, t))
-        return min(off, 180.0 - off) <= 2 * HANGS_DEG
+        return _off_vertical_deg(_rest_deg(blobs, t)) <= 2 * HANGS_DEG
 
     swinging.sort(key=lambda t: (not hangs(t), -t.support))
     best = swinging[0]
