@@ -274,14 +274,14 @@ def test_marker_radius_is_read_from_its_edge_when_a_rod_widens_its_moments(radiu
     """Study scene 2003: the width² of the moments took in the rod and the plate's edge and read 16.1 px for a
     14.8 px marker (the tracker then flagged 92 % of frames). The edge radius sees the rod in a few rays only."""
     from pendulum.centroids import edge_radius, linear_centroid
-    from pendulum.detection import _refine
+    from pendulum.spots import refine_spot
 
     image = _marker_on_a_rod(radius)
     inverted = 255.0 - image
     moments = linear_centroid(inverted, 0, 0, 80.37, 90.61, radius, 0.0, (1.0, 0.0))
     assert math.sqrt(moments[4]) - radius > 0.3  # the failure: moments at the true radius read wide
     assert edge_radius(inverted, 80.37, 90.61, radius) == pytest.approx(radius, abs=0.1)
-    x, y, r = _refine(image, 81.0, 90.0, -1, 1.2 * radius, (1.0, 0.0))  # started 20 % wide, 0.9 px off
+    x, y, r = refine_spot(image, 81.0, 90.0, -1, 1.2 * radius, (1.0, 0.0))  # started 20 % wide, 0.9 px off
     assert r == pytest.approx(radius, abs=0.15)
     assert abs(x - 80.37) <= 0.05 and abs(y - 90.61) <= 0.5  # the rod pulls along the arm only
 

@@ -10,11 +10,8 @@ from conftest import DEMO_RAW, DEMO_TRUTH, demo_trials
 from pendulum.centroids import measure_marker
 from pendulum.synthetic import Camera, TrialSpec, generate_trial, release_time_s
 from pendulum.synthetic_scene import _draw_disk
-from pendulum.tracking import (
-    TrackerSettings,
-    exposure_centre_correction,
-    track_video,
-)
+from pendulum.track_checks import exposure_centre_correction
+from pendulum.tracking import TrackerSettings, track_video
 from truth import track_errors
 
 
@@ -169,7 +166,8 @@ def test_fast_marker_on_a_small_body_keeps_angle_accuracy(fast_video):
 @pytest.mark.parametrize("gap_offset", [1, 2, 3, 4, -1, -3])
 def test_a_jump_next_to_lost_frames_is_flagged(gap_offset):
     """The leave-one-out stencil has holes beside lost frames; a jump there is still seen, and nothing else."""
-    from pendulum.tracking import TrackerSettings, flag_jumps
+    from pendulum.track_checks import flag_jumps
+    from pendulum.tracking import TrackerSettings
 
     rng = np.random.default_rng(abs(gap_offset))
     t = np.arange(300) / 30.0
@@ -192,11 +190,11 @@ def test_the_reference_along_the_arc_follows_a_smooth_curve_and_holds_beyond_it(
     4 radii of arc (0.128 rad), then stays level."""
     from types import SimpleNamespace
 
-    from pendulum.tracking import _Arc, _ArcReference
+    from pendulum.marker_arc import ArcReference, MarkerArc
 
     pivot, arm, r = (300.0, 20.0), 250.0, 8.0
-    arc = _Arc(SimpleNamespace(pivot_px=pivot, arm_px=arm), r)
-    ref = _ArcReference(arc, r, enabled=True)
+    arc = MarkerArc(SimpleNamespace(pivot_px=pivot, arm_px=arm), r)
+    ref = ArcReference(arc, r, enabled=True)
     ref.base = 100.0
 
     def at(phi):
@@ -220,4 +218,4 @@ def test_the_reference_along_the_arc_follows_a_smooth_curve_and_holds_beyond_it(
     assert ref.value(*at(0.35)) == pytest.approx(100.0 * (rho(end) + 0.9375 * (0.35 - end)), rel=0.003)
     assert ref.value(*at(0.5)) == pytest.approx(beyond, rel=0.003)
     assert ref.value(*at(0.8)) == pytest.approx(beyond, rel=0.003)
-    assert _ArcReference(arc, r, enabled=False).ratio(*at(0.3)) == 1.0
+    assert ArcReference(arc, r, enabled=False).ratio(*at(0.3)) == 1.0

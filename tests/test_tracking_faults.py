@@ -163,10 +163,10 @@ def test_after_lost_frames_the_window_follows_the_arc_and_stays_inside_the_swing
     seen so far (+ 2 marker radii), however long the gap (the old linear guess ran off the arc)."""
     from types import SimpleNamespace
 
-    from pendulum.tracking import _Arc
+    from pendulum.marker_arc import MarkerArc
 
     pivot, arm, radius = (300.0, 20.0), 250.0, 8.0
-    arc = _Arc(SimpleNamespace(pivot_px=pivot, arm_px=arm), radius)
+    arc = MarkerArc(SimpleNamespace(pivot_px=pivot, arm_px=arm), radius)
     angles = 0.3 * np.cos(np.linspace(0, 2 * np.pi, 40))  # one swing of ±0.3 rad
     for a in angles:
         arc.add(pivot[0] + arm * math.sin(a), pivot[1] + arm * math.cos(a))

@@ -3,7 +3,7 @@
 Run: .venv/bin/python tests/benchmarks/coverage_study.py [--workdir /tmp/coverage_study] [--out note.md]
 
 24 synthetic trials are rendered (cached in --workdir; a rerun only re-tracks when
-tracking.py/video.py changed, and always refits), in 6 groups of 4 trials. A group is one
+the tracker's modules changed, and always refits), in 6 groups of 4 trials. A group is one
 camera set-up on one rig: the paper's Table 1 rig (as data/synthetic/demo.yaml) or a
 second rig (heavier, shorter, larger body with a given inertia, seen by a camera placed
 differently, smaller marker). Groups alternate rig, marker polarity (bright marker on a
@@ -176,7 +176,9 @@ def build_trial(spec: TrialSpec, workdir: str, rerender: bool) -> dict:
         timing["render_s"] = time.perf_counter() - start
     settings = TrackerSettings(marker_radius_px=spec.camera.marker_radius_px, polarity=spec.camera.polarity)
     key = {
-        "tracker": _source_hash("tracking.py", "video.py"),
+        "tracker": _source_hash(
+            "tracking.py", "acquisition.py", "marker_arc.py", "track_checks.py", "centroids.py", "video.py"
+        ),
         "settings": asdict(settings),
         "video": video.stat().st_size,
     }

@@ -1,10 +1,12 @@
 """Arcs in sparse blob detections: RANSAC circle tracks, their swing statistics and continuity.
 
-The blobs come from :mod:`pendulum.detection` (one list over all samples, full-resolution pixels).
+The blobs come from :mod:`pendulum.spots` (one list over all samples, full-resolution pixels).
 A track is the set of blobs, at most one per sample, on a circle |‖p − c‖ − R| ≤ tol with sizes
 alike; it is judged by its span, its reversals (the angle about c changes direction), the balance of
 its moves both ways, whether a circle fits it clearly better than a line, and (for the chosen
-track) which of its blobs one object can have visited in turn.
+track) which of its blobs one object can have visited in turn. Another track's blobs are parts of the
+same pendulum when they keep their place in the frame turning with it (rotated about its pivot by
+minus its angle in the same sample).
 """
 
 from __future__ import annotations
@@ -232,3 +234,78 @@ def continuous_members(blobs: Blobs, track: ArcTrack, scale: int) -> tuple[np.nd
                 keep[members] = changed = True
     first = int(np.flatnonzero(keep)[0])
     return m[keep], float(limits[min(first, steps.size - 1)])
+
+
+def _body_frame(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> tuple[np.ndarray, np.ndarray]:
+    """Where ``other``'s blobs sit in the frame turning with ``track``: (member positions, points).
+
+    Each blob is rotated about the track's pivot by minus the track's angle in the same sample
+    (members in samples without a track blob are left out).
+    """
+    angle = {int(blobs.sample[i]): math.atan2(blobs.x[i] - track.cx, blobs.y[i] - track.cy) for i in track.members}
+    rows, pts = [], []
+    for k, i in enumerate(other.members):
+        a = angle.get(int(blobs.sample[i]))
+        if a is None:
+            continue
+        dx, dy = blobs.x[i] - track.cx, blobs.y[i] - track.cy
+        c, s = math.cos(a), math.sin(a)
+        rows.append(k)
+        pts.append((dx * c - dy * s, dx * s + dy * c))  # rotate by −a (angle measured from +y towards +x)
+    return np.array(rows, int), np.array(pts, float).reshape(-1, 2)
+
+
+def attached(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> bool:
+    """True when ``other`` keeps its place in the frame that turns with ``track`` (a part of the same body):
+    its blobs' places there (:func:`_body_frame`) lie within a few marker radii of one point."""
+    _, pts = _body_frame(blobs, other, track)
+    if len(pts) < 5:
+        return False
+    spread = np.median(np.hypot(*(pts - np.median(pts, axis=0)).T))
+    return bool(spread <= max(3 * track.radius, 0.05 * track.arm))
+
+
+def _distances(points: np.ndarray) -> np.ndarray:
+    """All pairwise Euclidean distances of (n, 2) points: an (n, n) array."""
+    return np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+
+
+def attached_members(blobs: Blobs, other: ArcTrack, track: ArcTrack, scale: int) -> np.ndarray:
+    """Which blobs of ``other`` are rigid parts of ``track``'s pendulum (bool per member).
+
+    Blobs that keep one place in the frame turning with the pendulum (:func:`_body_frame`;
+    at least five within tol = max(0.6 r, 0.02 arm, 1.5 px × sample scale)) while their image
+    positions move apart by more than 4 tol are parts of it, and so are blobs on the pendulum's
+    axis (|x| ≤ tol from the pivot to 3 r beyond the marker: the rod's or body's outline against
+    the scene). A second object that only passes one place now and then (at rest, or at one phase
+    of the swing) does not.
+    """
+    attached = np.zeros(len(other.members), bool)
+    rows_left, body_left = _body_frame(blobs, other, track)
+    tol = max(0.6 * other.radius, 0.02 * track.arm, 1.5 * scale)
+    if rows_left.size:
+        # on the line from the pivot through the marker (the rod, the body's axis): features of the
+        # pendulum's own outline, e.g. where the rod crosses a background stripe
+        x, y = body_left[:, 0], body_left[:, 1]
+        on_axis = (np.abs(x) <= tol) & (y >= -tol) & (y <= track.arm + 3 * track.radius)
+        attached[rows_left[on_axis]] = True
+        rows_left, body_left = rows_left[~on_axis], body_left[~on_axis]
+    while rows_left.size >= 5:
+        near = _distances(body_left) <= tol
+        centre = int(np.argmax(near.sum(axis=1)))
+        cluster = near[centre]
+        if cluster.sum() < 5:
+            break
+        members = other.members[rows_left[cluster]]
+        image = np.column_stack([blobs.x[members], blobs.y[members]])
+        moved = _distances(image).max()
+        if moved > 4 * tol:
+            attached[rows_left[cluster]] = True
+        rows_left, body_left = rows_left[~cluster], body_left[~cluster]
+    return attached
+
+
+def arc_tangent(x, y, track: ArcTrack):
+    rx, ry = x - track.cx, y - track.cy
+    norm = math.hypot(rx, ry) or 1.0
+    return (-ry / norm, rx / norm)

@@ -36,25 +36,33 @@ When no object qualifies, or two swing about different pivots with similar suppo
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field, replace
 
-import cv2
 import numpy as np
 
 from pendulum.arcs import (
     ArcTrack,
     Blobs,
+    arc_tangent,
     arc_track,
+    attached,
+    attached_members,
     continuous_members,
     find_arc_tracks,
     fit_circle,
 )
-from pendulum.centroids import edge_radius, linear_centroid
-from pendulum.video import VideoError, iter_luma
+from pendulum.spots import (
+    active_box,
+    dog_blobs,
+    local_contrast,
+    marker_free_background,
+    quantile_backgrounds,
+    refine_spot,
+    sample_frames,
+    surround_is_scene,
+)
+from pendulum.video import VideoError
 
-PYRAMID_SIGMAS = (1.0, 1.5, 2.25, 3.375)  # DoG σ at each pyramid level (× 2^level), ratio 1.5
-RADIUS_PER_SIGMA = 1.7  # disk radius ≈ 1.7 σ of the DoG scale where it responds most
 MIN_SWING_BALANCE = 0.35  # moves one way over the other: a swing ~1 (0.53–1 seen), creep-and-jump-back ≤ 0.25
 HANGS_DEG = 6.0  # a pendulum swings about the vertical below its pivot: its median angle within the camera roll
 BACKGROUND_QUANTILE = 0.1  # scene behind a bright spot: the 10 % quantile of the samples (a dark one: 90 %)
@@ -113,170 +121,6 @@ class Detection:
         }
 
 
-def _sample_frames(path, max_samples: int, max_full: int, max_frames: int):
-    """Every k-th frame (k doubling as needed) of the first ``max_frames``, at reduced scale; fewer at full size."""
-    small, full = [], []  # (frame index, image)
-    stride, stride_full, scale = 1, 1, None
-    first = None
-    for index, _t, image in iter_luma(path):
-        if index >= max_frames:
-            break
-        if scale is None:
-            scale = max(1, int(round(max(image.shape) / 640)))
-            first = image.copy()
-        if index % stride == 0:
-            reduced = (
-                image
-                if scale == 1
-                else cv2.resize(image, (image.shape[1] // scale, image.shape[0] // scale), interpolation=cv2.INTER_AREA)
-            )
-            small.append((index, reduced.copy()))
-            if len(small) >= 2 * max_samples:
-                small, stride = small[::2], stride * 2
-        if index % stride_full == 0:
-            full.append((index, image.copy()))
-            if len(full) >= 2 * max_full:
-                full, stride_full = full[::2], stride_full * 2
-    if first is None:
-        raise VideoError(f"{path}: no frame could be decoded")
-    return small, full, scale, first
-
-
-def _peak_offset(response: np.ndarray, y: int, x: int, sign: int) -> tuple[float, float]:
-    """Sub-sample offset of a peak of ``sign`` × ``response`` at (x, y): the vertex of the parabola through it
-    and its two neighbours, per axis, δ = (f₋ − f₊) / (2 (f₋ − 2 f₀ + f₊)), within ±0.5 (0 at the border).
-
-    On a coarse pyramid level a sample is 4–8 px of the frame: without it, the blobs of a large marker on a
-    small swing lie on a grid, and a circle through them cannot show the arc's 2 px sagitta."""
-    h, w = response.shape
-    offsets = []
-    for dy, dx in ((0, 1), (1, 0)):
-        if not (0 < y < h - 1 and 0 < x < w - 1):
-            offsets.append(0.0)
-            continue
-        lo, mid, hi = (sign * float(response[y + k * dy, x + k * dx]) for k in (-1, 0, 1))
-        curvature = lo - 2.0 * mid + hi
-        offsets.append(float(np.clip(0.5 * (lo - hi) / curvature, -0.5, 0.5)) if curvature < 0 else 0.0)
-    return offsets[0], offsets[1]
-
-
-def _dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
-    """Peaks of the scale-normalised DoG of ``fg`` (both signs): list of (sign, x, y, r, s), full-res units."""
-    found = []
-    level_img = fg
-    level = 0
-    while min(level_img.shape) >= 24 and level < 4:
-        blurred = [cv2.GaussianBlur(level_img, (0, 0), s) for s in PYRAMID_SIGMAS]
-        blurred.append(cv2.GaussianBlur(level_img, (0, 0), PYRAMID_SIGMAS[-1] * 1.5))
-        dogs = [cv2.subtract(blurred[i], blurred[i + 1]) for i in range(len(PYRAMID_SIGMAS))]
-        top, low = dogs[0], dogs[0]
-        for dog in dogs[1:]:
-            top, low = cv2.max(top, dog), cv2.min(low, dog)
-        kernel = np.ones((3, 3), np.uint8)
-        f = scale * (1 << level)
-        for sign in (1, -1):
-            best = top if sign > 0 else cv2.multiply(low, -1.0)
-            peaks = (best >= cv2.dilate(best, kernel)) & (best > threshold)
-            ys, xs = np.nonzero(peaks)
-            if ys.size > per_sign:
-                keep = np.argsort(best[ys, xs])[-per_sign:]
-                ys, xs = ys[keep], xs[keep]
-            for yy, xx in zip(ys, xs, strict=True):
-                which = int(np.argmax([sign * d[yy, xx] for d in dogs]))
-                sigma = PYRAMID_SIGMAS[which] * 1.22
-                dx, dy = _peak_offset(dogs[which], yy, xx, sign)
-                found.append(
-                    (
-                        sign,
-                        (xx + dx + 0.5) * f - 0.5,
-                        (yy + dy + 0.5) * f - 0.5,
-                        RADIUS_PER_SIGMA * sigma * f,
-                        float(best[yy, xx]),
-                    )
-                )
-        level_img = cv2.pyrDown(level_img)
-        level += 1
-    # One blob per place: the strongest response suppresses weaker ones within its radius (any scale).
-    found.sort(key=lambda b: -b[4])
-    kept: list = []
-    for b in found:
-        if all(b[0] != k[0] or math.hypot(b[1] - k[1], b[2] - k[2]) > max(b[3], k[3]) for k in kept):
-            kept.append(b)
-    out = []
-    for sign in (1, -1):
-        out.extend([b for b in kept if b[0] == sign][:per_sign])
-    return out
-
-
-def _quantile_backgrounds(stack: np.ndarray, quantile: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per-pixel ``quantile`` and 1 − ``quantile`` of the (n, h, w) samples (float32)."""
-    n = stack.shape[0]
-    k_low = int(quantile * (n - 1))
-    k_high = n - 1 - k_low
-    ordered = np.partition(stack, sorted({k_low, k_high}), axis=0)
-    return ordered[k_low].astype(np.float32), ordered[k_high].astype(np.float32)
-
-
-def _active_box(background: np.ndarray, scale: int) -> tuple[int, int, int, int]:
-    """The picture inside uniform borders (letterbox/pillarbox): edge rows/columns of one flat grey."""
-    b = background.astype(np.float32)
-
-    def border(lines: np.ndarray) -> int:
-        """How many lines from the start are flat (std < 2) and of the first line's grey (± 3)."""
-        n = 0
-        level = float(lines[0].mean())
-        while n < lines.shape[0] // 3 and lines[n].std() < 2.0 and abs(float(lines[n].mean()) - level) < 3.0:
-            n += 1
-        return n
-
-    h, w = b.shape
-    top, bottom = border(b), border(b[::-1])
-    left, right = border(b.T), border(b.T[::-1])
-    return left * scale, top * scale, (w - right) * scale, (h - bottom) * scale
-
-
-def _refine(image: np.ndarray, x: float, y: float, sign: int, radius: float, tangent):
-    """Radius from width² across the motion and centre from the linear centroid (full resolution).
-
-    The width² of the moments takes in whatever touches the marker inside its mask (a rod, a body
-    barely larger than the marker: +1.4 px on a 14.8 px marker); on an unblurred spot whose edge
-    radius (:func:`edge_radius`) disagrees by more than max(0.25 px, 2.5 %), the edge radius stands
-    (on clean rendered disks of 5–20 px the two agree within 0.1 px).
-    """
-    h, w = image.shape
-
-    def window(x, y, r):
-        half = int(math.ceil(2.5 * r + 10))
-        xi, yi = int(round(x)), int(round(y))
-        x0, x1, y0, y1 = max(0, xi - half), min(w, xi + half + 1), max(0, yi - half), min(h, yi + half + 1)
-        roi = image[y0:y1, x0:x1].astype(np.float32)
-        return (255.0 - roi if sign < 0 else roi), x0, y0
-
-    r = radius
-    for _ in range(4):
-        roi, x0, y0 = window(x, y, r)
-        res = linear_centroid(roi, x0, y0, x, y, r, 0.0, tangent)
-        if res is None or not math.isfinite(res[4]) or res[4] <= 0:
-            return None
-        x, y = res[0], res[1]
-        r_new = float(np.clip(math.sqrt(res[4]), 0.7 * r, 1.4 * r))
-        if abs(r_new - r) < 0.02 * r:
-            r = r_new
-            break
-        r = r_new
-    streak2 = res[2]
-    if math.isfinite(streak2) and streak2 < (0.5 * r) ** 2:
-        r_edge = edge_radius(roi, x - x0, y - y0, r)
-        if r_edge is not None and abs(r_edge - r) > max(0.25, 0.025 * r_edge):
-            r = r_edge
-            roi, x0, y0 = window(x, y, r)
-            res = linear_centroid(roi, x0, y0, x, y, r, 0.0, tangent)
-            if res is None:
-                return None
-            x, y = res[0], res[1]
-    return x, y, r
-
-
 def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: int = 1800, seed: int = 0) -> Detection:
     """Find the swinging marker in the video at ``path`` (see the module docstring).
 
@@ -292,7 +136,7 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     Raises :class:`DetectionError` when nothing, or more than one thing, swings about a
     fixed point; the message names what was found and the sidecar value that settles it.
     """
-    small, full, scale, first = _sample_frames(path, max_samples, max_full, max_frames)
+    small, full, scale, first = sample_frames(path, max_samples, max_full, max_frames)
     n = len(small)
     if n < 12:
         raise DetectionError(
@@ -372,13 +216,13 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     if quantile == 0.5:
         references = [(background, 0)]  # both signs against the median
     else:
-        low, high = _quantile_backgrounds(stack, quantile)
+        low, high = quantile_backgrounds(stack, quantile)
         references = [(low, 1), (high, -1)]
     rows = []
     for k in range(n):
         frame = stack[k].astype(np.float32)
         for reference, wanted in references:
-            for sign, x, y, r, s in _dog_blobs(frame - reference, scale, threshold, per_sign=8):
+            for sign, x, y, r, s in dog_blobs(frame - reference, scale, threshold, per_sign=8):
                 if wanted in (0, sign):
                     rows.append((k, sign, x, y, r, s))
     where = f"{path}: "
@@ -399,7 +243,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         used[t.members] = True
     tracks += find_arc_tracks(blobs, n, (h, w), scale, rng, exclude=used)
     for t in tracks:  # rank by the spot's own contrast in the frame (a disk on its surround), not the DoG's
-        t.strength = _local_contrast(stack, blobs, t, scale)
+        t.strength = local_contrast(stack, blobs, t, scale)
     min_members = max(6, int(0.25 * n))
 
     def swings(t: ArcTrack) -> bool:
@@ -439,7 +283,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
 
     def same_pendulum(t: ArcTrack) -> bool:
         """About the same pivot, or rigidly attached to the best track: a part of the same pendulum."""
-        return math.hypot(t.cx - best.cx, t.cy - best.cy) <= max(3 * best.radius, 0.08 * best.arm) or _attached(
+        return math.hypot(t.cx - best.cx, t.cy - best.cy) <= max(3 * best.radius, 0.08 * best.arm) or attached(
             blobs, t, best
         )
 
@@ -458,13 +302,13 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         if same_pendulum(t):
             continue
         # Blobs of the pendulum's own body can share an arc with another object's: judged without them.
-        own = _attached_members(blobs, t, best, scale)
+        own = attached_members(blobs, t, best, scale)
         if own.any():
             rest = t.members[~own]
             if rest.size < 5:
                 continue
             t = arc_track(blobs, rest, t.sign, fit_circle(blobs.x[rest], blobs.y[rest]), scale)
-            t.strength = _local_contrast(stack, blobs, t, scale)
+            t.strength = local_contrast(stack, blobs, t, scale)
             if not swings(t) or same_pendulum(t):
                 continue
         rivals.append(t)
@@ -492,7 +336,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         best = cleaned
     # Full-resolution refinement: radius from samples on the arc, start in frame 0.
     positions = {small[int(blobs.sample[i])][0]: (blobs.x[i], blobs.y[i]) for i in best.members}
-    bg_full = _marker_free_background(full, positions, best.radius)
+    bg_full = marker_free_background(full, positions, best.radius)
     # Judged where the scene is best known: in the outer half of the swing (a body moving with the
     # marker covers the middle of the swing in most frames, and so is part of the median there).
     angles = {f: math.atan2(x - best.cx, y - best.cy) for f, (x, y) in positions.items()}
@@ -501,9 +345,9 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     outer = {f: xy for f, xy in positions.items() if abs(angles[f] - middle) >= 0.5 * reach}
     diff = full[len(full) // 2][1][::2, ::2] - bg_full[::2, ::2]
     noise_full = 1.4826 * float(np.nanmedian(np.abs(diff - np.nanmedian(diff))))
-    free = _surround_is_scene(full, outer, bg_full, best.radius, max(5.0, 2.5 * noise_full))
+    free = surround_is_scene(full, outer, bg_full, best.radius, max(5.0, 2.5 * noise_full))
     if free and np.isnan(bg_full).any():  # no body: the scene is seen closer to the marker (a narrow swing's middle)
-        closer = _marker_free_background(full, positions, best.radius, reach_radii=1.2)
+        closer = marker_free_background(full, positions, best.radius, reach_radii=1.2)
         bg_full = np.where(np.isnan(bg_full), closer, bg_full)
 
     def scene_removed(image):
@@ -521,8 +365,8 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         if k is None or k not in on_arc:
             continue
         i = on_arc[k]
-        tangent = _tangent(blobs.x[i], blobs.y[i], best)
-        res = _refine(scene_removed(image), blobs.x[i], blobs.y[i], best.sign, best.radius, tangent)
+        tangent = arc_tangent(blobs.x[i], blobs.y[i], best)
+        res = refine_spot(scene_removed(image), blobs.x[i], blobs.y[i], best.sign, best.radius, tangent)
         if res is not None:
             radii.append(res[2])
     radius = float(np.median(radii)) if radii else best.radius
@@ -531,8 +375,8 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     # the first sample's spot: checked while it is on the kept track, or where the marker is held still
     i = on_arc[0] if 0 in on_arc else held if held is not None else first_member
     if i is not None:
-        tangent = _tangent(blobs.x[i], blobs.y[i], best)
-        res = _refine(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
+        tangent = arc_tangent(blobs.x[i], blobs.y[i], best)
+        res = refine_spot(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
         if res is not None and math.dist(res[:2], (blobs.x[i], blobs.y[i])) > max(0.5 * radius, 2.0 * scale):
             res = None  # the refinement ran off its spot (to a stripe, a rod): no marker-sized spot there
         if res is not None:
@@ -558,7 +402,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         n_samples=n,
         n_on_arc=len(best.members),
         reversals=best.reversals,
-        active_box_px=_active_box(background, scale),
+        active_box_px=active_box(background, scale),
         rival=None if rival is None else rival.describe(n),
         background=bg_full,
         free_marker=free,
@@ -590,164 +434,3 @@ def _held_from_the_start(blobs: Blobs, on_arc: dict, still_px: float) -> int | N
     if max(math.dist(p, q) for p in points for q in points) > still_px:
         return None
     return int(on_arc[firsts[0]])
-
-
-def _local_contrast(stack: np.ndarray, blobs: Blobs, track: ArcTrack, scale: int) -> float:
-    """Median contrast of a track's spots against their own surround in the frame, in its polarity.
-
-    Mean grey within 0.7 r of the centre minus the mean over the ring 1.3–2 r (reduced frames):
-    a marker dot scores its full contrast; a corner or edge of a body scores a fraction.
-    """
-    values = []
-    _, h, w = stack.shape
-    for i in track.members:
-        img = stack[int(blobs.sample[i])]
-        x, y, r = blobs.x[i] / scale, blobs.y[i] / scale, max(1.0, blobs.r[i] / scale)
-        half = int(math.ceil(2 * r)) + 1
-        xi, yi = int(round(x)), int(round(y))
-        if xi - half < 0 or yi - half < 0 or xi + half >= w or yi + half >= h:
-            continue
-        patch = img[yi - half : yi + half + 1, xi - half : xi + half + 1].astype(np.float32)
-        yy, xx = np.mgrid[-half : half + 1, -half : half + 1]
-        d = np.hypot(xx + xi - x, yy + yi - y)
-        inner, ring = d <= 0.7 * r, (d >= 1.3 * r) & (d <= 2 * r)
-        if inner.any() and ring.any():
-            values.append(track.sign * (float(patch[inner].mean()) - float(patch[ring].mean())))
-    return max(float(np.median(values)), 0.0) if values else 0.0
-
-
-def _body_frame(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> tuple[np.ndarray, np.ndarray]:
-    """Where ``other``'s blobs sit in the frame turning with ``track``: (member positions, points).
-
-    Each blob is rotated about the track's pivot by minus the track's angle in the same sample
-    (members in samples without a track blob are left out).
-    """
-    angle = {int(blobs.sample[i]): math.atan2(blobs.x[i] - track.cx, blobs.y[i] - track.cy) for i in track.members}
-    rows, pts = [], []
-    for k, i in enumerate(other.members):
-        a = angle.get(int(blobs.sample[i]))
-        if a is None:
-            continue
-        dx, dy = blobs.x[i] - track.cx, blobs.y[i] - track.cy
-        c, s = math.cos(a), math.sin(a)
-        rows.append(k)
-        pts.append((dx * c - dy * s, dx * s + dy * c))  # rotate by −a (angle measured from +y towards +x)
-    return np.array(rows, int), np.array(pts, float).reshape(-1, 2)
-
-
-def _attached(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> bool:
-    """True when ``other`` keeps its place in the frame that turns with ``track`` (a part of the same body):
-    its blobs' places there (:func:`_body_frame`) lie within a few marker radii of one point."""
-    _, pts = _body_frame(blobs, other, track)
-    if len(pts) < 5:
-        return False
-    spread = np.median(np.hypot(*(pts - np.median(pts, axis=0)).T))
-    return bool(spread <= max(3 * track.radius, 0.05 * track.arm))
-
-
-def _distances(points: np.ndarray) -> np.ndarray:
-    """All pairwise Euclidean distances of (n, 2) points: an (n, n) array."""
-    return np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
-
-
-def _attached_members(blobs: Blobs, other: ArcTrack, track: ArcTrack, scale: int) -> np.ndarray:
-    """Which blobs of ``other`` are rigid parts of ``track``'s pendulum (bool per member).
-
-    Blobs that keep one place in the frame turning with the pendulum (:func:`_body_frame`;
-    at least five within tol = max(0.6 r, 0.02 arm, 1.5 px × sample scale)) while their image
-    positions move apart by more than 4 tol are parts of it, and so are blobs on the pendulum's
-    axis (|x| ≤ tol from the pivot to 3 r beyond the marker: the rod's or body's outline against
-    the scene). A second object that only passes one place now and then (at rest, or at one phase
-    of the swing) does not.
-    """
-    attached = np.zeros(len(other.members), bool)
-    rows_left, body_left = _body_frame(blobs, other, track)
-    tol = max(0.6 * other.radius, 0.02 * track.arm, 1.5 * scale)
-    if rows_left.size:
-        # on the line from the pivot through the marker (the rod, the body's axis): features of the
-        # pendulum's own outline, e.g. where the rod crosses a background stripe
-        x, y = body_left[:, 0], body_left[:, 1]
-        on_axis = (np.abs(x) <= tol) & (y >= -tol) & (y <= track.arm + 3 * track.radius)
-        attached[rows_left[on_axis]] = True
-        rows_left, body_left = rows_left[~on_axis], body_left[~on_axis]
-    while rows_left.size >= 5:
-        near = _distances(body_left) <= tol
-        centre = int(np.argmax(near.sum(axis=1)))
-        cluster = near[centre]
-        if cluster.sum() < 5:
-            break
-        members = other.members[rows_left[cluster]]
-        image = np.column_stack([blobs.x[members], blobs.y[members]])
-        moved = _distances(image).max()
-        if moved > 4 * tol:
-            attached[rows_left[cluster]] = True
-        rows_left, body_left = rows_left[~cluster], body_left[~cluster]
-    return attached
-
-
-def _tangent(x, y, track: ArcTrack):
-    rx, ry = x - track.cx, y - track.cy
-    norm = math.hypot(rx, ry) or 1.0
-    return (-ry / norm, rx / norm)
-
-
-def _marker_free_background(frames, positions: dict, radius: float, reach_radii: float = 2.5) -> np.ndarray:
-    """Per-pixel median over ``frames`` [(index, image)] leaving out the marker's neighbourhood in each.
-
-    ``positions``: frame index → marker centre (full resolution). Pixels within ``reach_radii`` r + 4 px
-    of the marker in a frame do not count for that frame (a body around the marker can have
-    nearly the scene's grey: a tighter reach takes it for the scene, so 1.2 r + 4 px only for a
-    marker with no body); a pixel covered in every frame (a marker at rest there throughout, or
-    the middle of a swing narrower than that reach) is NaN: the scene behind it is unknown.
-    """
-    stack = np.stack([img for _, img in frames]).astype(np.float32)
-    h, w = stack.shape[1:]
-    reach = reach_radii * radius + 4.0
-    near = np.zeros((h, w), np.uint8)
-    disks = []
-    for k, (index, _) in enumerate(frames):
-        if index in positions:
-            x, y = positions[index]
-            disks.append((k, x, y))
-            cv2.circle(near, (int(round(x)), int(round(y))), int(math.ceil(reach)) + 1, 1, -1)
-    background = np.median(stack, axis=0)
-    ys, xs = np.nonzero(near)
-    if ys.size:
-        values = stack[:, ys, xs]
-        seen = {k for k, _, _ in disks}
-        for k in range(len(frames)):
-            if k not in seen:  # marker not found in this frame (e.g. at rest, in the median): not used here
-                values[k] = np.nan
-        for k, x, y in disks:
-            values[k, np.hypot(xs - x, ys - y) <= reach] = np.nan
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            background[ys, xs] = np.nanmedian(values, axis=0)
-    return background.astype(np.float32)
-
-
-def _surround_is_scene(frames, positions: dict, background: np.ndarray, radius: float, tolerance: float) -> bool:
-    """True when, in most frames, the ring just outside the marker shows the static scene (no body).
-
-    Ring: r + 3.5 to r + 6.5 px around the marker; it matches when 85 % of its pixels are
-    within ``tolerance`` grey levels (the noise's) of the background.
-    """
-    votes = []
-    for index, image in frames:
-        if index not in positions:
-            continue
-        x, y = positions[index]
-        half = int(math.ceil(radius + 8))
-        xi, yi = int(round(x)), int(round(y))
-        h, w = image.shape
-        if xi - half < 0 or yi - half < 0 or xi + half >= w or yi + half >= h:
-            continue
-        box = np.s_[yi - half : yi + half + 1, xi - half : xi + half + 1]
-        yy, xx = np.mgrid[box]
-        d = np.hypot(xx - x, yy - y)
-        ring = (d > radius + 3.5) & (d <= radius + 6.5)
-        img, bg = image[box].astype(np.float32), background[box]
-        if not np.isfinite(bg[ring]).all():
-            continue
-        votes.append(float(np.percentile(np.abs(img[ring] - bg[ring]), 85)) <= tolerance)
-    return len(votes) >= 5 and float(np.mean(votes)) >= 0.6

@@ -17,7 +17,7 @@ The blur-invariant marker signal Σ (I − b′) m, compared with its normal val
 at the marker's place on its arc, gives each frame's quality: an occluder lowers
 it, glare raises it. The normal value (and the width² of the check below) is the
 first frames' value times a smooth curve in the arc angle fitted to the ok frames
-(:class:`_ArcReference`): a lens's magnification or vignetting changes it slowly
+(:class:`pendulum.marker_arc.ArcReference`): a lens's magnification or vignetting changes it slowly
 and repeatably along the swing, an occluder or a stripe within a marker
 diameter, and flagged frames never enter the curve. An
 occluder that the signal misses makes the linear and a thresholded centroid in
@@ -50,12 +50,13 @@ import math
 import time
 from dataclasses import dataclass, replace
 
-import cv2
 import numpy as np
 import pandas as pd
-from scipy.ndimage import maximum_filter1d
 
+from pendulum.acquisition import Candidate, inner_grey, marker_candidates, marker_like, near_any, static_spot
 from pendulum.centroids import measure_marker
+from pendulum.marker_arc import ArcReference, MarkerArc
+from pendulum.track_checks import estimate_exposure_fraction, exposure_centre_correction, flag_jumps
 from pendulum.video import VideoError, iter_luma
 
 log = logging.getLogger(__name__)
@@ -90,7 +91,7 @@ class TrackerSettings:
     max_unresolved: float = 0.03  # share of the marker over scene of its own grey, unmeasurable: "occluded"
     max_lost_step_radii: float = 2.0  # search window growth per lost frame, in marker radii (bounded, see below)
     # The normal signal and width² as smooth functions of the marker's angle on its arc (lens
-    # magnification, vignetting, lighting falloff), fitted to the ok frames (see _ArcReference);
+    # magnification, vignetting, lighting falloff), fitted to the ok frames (see ArcReference);
     # False: the first frames' values everywhere.
     reference_along_arc: bool = True
 
@@ -107,186 +108,6 @@ class TrackerSettings:
     @property
     def needs_detection(self) -> bool:
         return self.polarity == "auto" or self.marker_radius_px is None
-
-
-def _disk_template(radius: float) -> np.ndarray:
-    size = int(math.ceil(radius * 4)) | 1
-    c = size // 2
-    yy, xx = np.mgrid[0:size, 0:size]
-    return (np.hypot(xx - c, yy - c) <= radius).astype(np.float32)
-
-
-MIN_MARKER_CONTRAST = 6.0  # grey levels between a marker candidate's disk and its surround
-
-
-@dataclass(frozen=True)
-class Candidate:
-    x: float
-    y: float
-    score: float  # normalised correlation with a disk of the marker's radius (1 = perfect)
-    contrast: float  # mean grey level inside the disk minus its surround, in the marker's polarity
-
-
-def marker_candidates(image: np.ndarray, settings: TrackerSettings, near=None, search_radius_px=None, n: int = 2):
-    """The ``n`` best disk-like spots by normalised template matching (on a 2× reduced image).
-
-    Spots closer than four marker radii to a better one are not counted (one
-    blurred marker is one spot). Positions in full-resolution pixels.
-    """
-    img = image if settings.polarity == "bright" else 255 - image
-    x0 = y0 = 0
-    if near is not None and search_radius_px is not None:
-        h, w = img.shape
-        x0 = max(0, int(near[0] - search_radius_px))
-        y0 = max(0, int(near[1] - search_radius_px))
-        x1 = min(w, int(near[0] + search_radius_px))
-        y1 = min(h, int(near[1] + search_radius_px))
-        img = img[y0:y1, x0:x1]
-    small = cv2.resize(img, None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA).astype(np.float32)
-    template = _disk_template(settings.marker_radius_px / 2)
-    size = template.shape[0]
-    if small.shape[0] <= size or small.shape[1] <= size:
-        return []
-    response = cv2.matchTemplate(small, template, cv2.TM_CCOEFF_NORMED)
-    response = np.nan_to_num(response, nan=0.0)
-    inside = template > 0
-    half = size // 2
-    keep_out = int(math.ceil(settings.marker_radius_px * 2))  # 4 radii at full resolution
-    found = []
-    for _ in range(n):
-        _, score, _, loc = cv2.minMaxLoc(response)
-        if score <= 0:
-            break
-        patch = small[loc[1] : loc[1] + size, loc[0] : loc[0] + size]
-        contrast = float(patch[inside].mean() - patch[~inside].mean())
-        found.append(Candidate(x0 + 2 * (loc[0] + half) + 0.5, y0 + 2 * (loc[1] + half) + 0.5, float(score), contrast))
-        response[
-            max(0, loc[1] - keep_out) : loc[1] + keep_out + 1, max(0, loc[0] - keep_out) : loc[0] + keep_out + 1
-        ] = -1
-    return found
-
-
-def acquire_marker(image: np.ndarray, settings: TrackerSettings, near=None, search_radius_px=None):
-    """Coarse marker position by normalised template matching of a disk (on a 2× reduced image).
-
-    Returns ``(x, y, score)`` in full-resolution pixels, or None if the search window is empty.
-    """
-    found = marker_candidates(image, settings, near, search_radius_px, n=1)
-    return (found[0].x, found[0].y, found[0].score) if found else None
-
-
-def _near_any(x: float, y: float, points, distance_px: float) -> bool:
-    return any(math.hypot(x - px, y - py) <= distance_px for px, py in points)
-
-
-def _marker_like(c: Candidate, settings: TrackerSettings, reference_contrast: float | None) -> bool:
-    floor = MIN_MARKER_CONTRAST if reference_contrast is None else max(MIN_MARKER_CONTRAST, 0.5 * reference_contrast)
-    return c.score >= settings.min_acquire_score and c.contrast >= floor
-
-
-def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:
-    """Shutter-open fraction of the frame interval: streak length over the frame-to-frame step.
-
-    Median over usable frames whose step exceeds ``min_step_px`` (a short streak is lost
-    in the noise of its second moment); None when fewer than 10 such frames.
-    """
-    x, y, streak2 = (np.asarray(a, float) for a in (x, y, streak2))
-    step2 = np.full(x.size, np.nan)
-    both = usable[2:] & usable[:-2] & usable[1:-1]
-    step2[1:-1] = np.where(both, ((x[2:] - x[:-2]) ** 2 + (y[2:] - y[:-2]) ** 2) / 4.0, np.nan)
-    pick = np.isfinite(step2) & np.isfinite(streak2) & (step2 > min_step_px**2)
-    if pick.sum() < 10:
-        return None
-    ratio = np.median(streak2[pick] / step2[pick])
-    return float(np.sqrt(np.clip(ratio, 0.0, 1.0)))
-
-
-def exposure_centre_correction(x, usable, exposure_fraction: float) -> np.ndarray:
-    """Correction to add to a blurred marker's centroid to get its position at the frame time.
-
-    The centroid of the exposure is the mean position over the shutter-open time τ
-    (in frame intervals), centred on the frame time: x̄ = x(t) + ẍ τ²/24 + O(τ⁴). The
-    arc's curvature (x̄ lies inside the circle) and the angular acceleration (x̄ falls
-    short of the turning points) both enter through ẍ, here the track's central second
-    difference (its noise, ×τ²/24 ≈ 0.01, is negligible). Frames without two usable
-    neighbours get no correction.
-    """
-    x = np.asarray(x, float)
-    corr = np.zeros(x.size)
-    if x.size < 3:
-        return corr
-    both = usable[2:] & usable[:-2] & usable[1:-1]
-    d2 = x[2:] - 2.0 * x[1:-1] + x[:-2]
-    corr[1:-1] = np.where(both, -d2 * exposure_fraction**2 / 24.0, 0.0)
-    return corr
-
-
-def _leave_one_out_weights(half_window: int = 4, degree: int = 3) -> np.ndarray:
-    """Weights c_j predicting x_i = Σ c_j x_{i+j} from a cubic through the neighbours (j ≠ 0)."""
-    offsets = np.array([j for j in range(-half_window, half_window + 1) if j != 0], float)
-    design = np.vander(offsets, degree + 1, increasing=True)
-    weights = np.linalg.pinv(design)[0]  # value of the fitted polynomial at offset 0
-    full = np.zeros(2 * half_window + 1)
-    full[np.arange(2 * half_window + 1) != half_window] = weights
-    return full
-
-
-def _fill_gap_residuals(
-    resid: np.ndarray, x: np.ndarray, y: np.ndarray, ok: np.ndarray, half: int, where: np.ndarray
-) -> None:
-    """Leave-one-out residuals for usable frames next to unusable ones (where the fixed stencil has a hole).
-
-    The same prediction, a polynomial through the usable neighbours within ±half
-    frames (cubic with ≥ 6 of them, quadratic with 4–5), evaluated at the frame,
-    its residual scaled to the full stencil's noise; only frames in ``where``,
-    and frames with fewer usable neighbours stay unchecked.
-    """
-    full_noise2 = float(np.sum(_leave_one_out_weights(half) ** 2))
-    for i in np.flatnonzero(ok & ~np.isfinite(resid) & where):
-        offsets = np.array([j for j in range(-half, half + 1) if j and 0 <= i + j < x.size and ok[i + j]])
-        if offsets.size < 4:
-            continue
-        degree = 3 if offsets.size >= 6 else 2
-        design = np.vander(offsets.astype(float), degree + 1, increasing=True)
-        weights = np.linalg.pinv(design)[0]
-        # scaled to the full stencil's noise: a sparser prediction is noisier
-        scale = math.sqrt((1 + full_noise2) / (1 + float(weights @ weights)))
-        resid[i] = scale * math.hypot(x[i] - weights @ x[i + offsets], y[i] - weights @ y[i + offsets])
-
-
-def flag_jumps(x: np.ndarray, y: np.ndarray, usable: np.ndarray, settings: TrackerSettings) -> np.ndarray:
-    """Frames whose position departs from a cubic through their 8 neighbours (isolated jumps)."""
-    weights = _leave_one_out_weights()
-    half = len(weights) // 2
-    jumps = np.zeros(x.size, bool)
-    window = 2 * half + 1
-    # Frames beside lost/flagged ones are checked with a sparser stencil, but not frames beside a
-    # jump found here: that would cascade through a genuinely abrupt motion (the release).
-    near_gap = maximum_filter1d((~usable).astype(np.uint8), window) > 0
-    for _ in range(4):
-        ok = usable & ~jumps
-        xv = np.where(ok, x, np.nan)
-        yv = np.where(ok, y, np.nan)
-        rx = xv - np.convolve(xv, weights[::-1], mode="same")
-        ry = yv - np.convolve(yv, weights[::-1], mode="same")
-        resid = np.hypot(rx, ry)
-        near_jump = maximum_filter1d(jumps.astype(np.uint8), window) > 0
-        _fill_gap_residuals(resid, xv, yv, ok, half, near_gap & ~near_jump)
-        resid[:half] = resid[-half:] = np.nan
-        finite = np.isfinite(resid)
-        if finite.sum() < 10:
-            break
-        sigma = 1.4826 * np.median(np.abs(resid[finite]))
-        limit = max(settings.jump_floor_px, settings.jump_sigmas * sigma)
-        over = finite & (resid > limit)
-        if not over.any():
-            break
-        # Flag only the largest within ±half frames: a jump also disturbs its neighbours'
-        # predictions (most beside a gap, where the stencil extrapolates); the next pass sees the rest.
-        padded = np.where(finite, resid, 0.0)
-        local_max = over & (padded >= maximum_filter1d(padded, window, mode="constant"))
-        jumps |= local_max
-    return jumps
 
 
 def resolve_settings(path, settings: TrackerSettings, progress=None):
@@ -314,177 +135,6 @@ def resolve_settings(path, settings: TrackerSettings, progress=None):
             f"{found.confidence:.2f} ({time.perf_counter() - started:.1f} s)"
         )
     return replace(settings, polarity=polarity, marker_radius_px=float(radius), start_px=start), found
-
-
-def _marker_grey(image, x: float, y: float, radius: float, polarity: str) -> float:
-    """Median grey inside the marker's inner half (in the marker's polarity): its own grey M."""
-    half = max(1, int(0.5 * radius))
-    xi, yi = int(round(x)), int(round(y))
-    patch = image[max(0, yi - half) : yi + half + 1, max(0, xi - half) : xi + half + 1].astype(np.float32)
-    grey = float(np.median(patch))
-    return 255.0 - grey if polarity == "dark" else grey
-
-
-class _Arc:
-    """The marker's circle (centre, radius): from detection, refitted on the track as it grows."""
-
-    def __init__(self, detection, radius_px: float):
-        self.r = radius_px
-        self.circle = None if detection is None else (*detection.pivot_px, detection.arm_px)
-        self.angles = [math.inf, -math.inf]  # range of the marker's angle seen so far
-        self.points: list[tuple[float, float]] = []
-        self.next_fit = 60
-
-    def angle(self, x, y) -> float:
-        return math.atan2(x - self.circle[0], y - self.circle[1])
-
-    def add(self, x: float, y: float) -> None:
-        self.points.append((x, y))
-        if len(self.points) >= self.next_fit:
-            self.next_fit = int(len(self.points) * 1.5)
-            pts = np.array(self.points[:: max(1, len(self.points) // 400)])
-            a = np.column_stack([pts[:, 0], pts[:, 1], np.ones(len(pts))])
-            (p, q, c), *_ = np.linalg.lstsq(a, (pts**2).sum(axis=1), rcond=None)
-            cx, cy = p / 2, q / 2
-            arm = math.sqrt(max(c + cx * cx + cy * cy, 0.0))
-            resid = np.abs(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - arm)
-            span = np.ptp(np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)) * arm
-            if span >= 6 * self.r and float(np.median(resid)) <= 0.5 and arm >= 3 * self.r:
-                self.circle = (float(cx), float(cy), float(arm))
-        if self.circle is not None:
-            a = self.angle(x, y)
-            self.angles = [min(self.angles[0], a), max(self.angles[1], a)]
-
-    def near(self, x: float, y: float) -> bool:
-        """On the arc (within a few marker radii) and inside the swing seen (when seen)."""
-        if self.circle is None:
-            return True
-        cx, cy, arm = self.circle
-        if abs(math.hypot(x - cx, y - cy) - arm) > max(3 * self.r, 0.05 * arm):
-            return False
-        return True
-
-    def off(self, x: float, y: float, tolerance_px: float) -> bool:
-        """Farther than ``tolerance_px`` from the circle (False while it is unknown)."""
-        if self.circle is None:
-            return False
-        cx, cy, arm = self.circle
-        return abs(math.hypot(x - cx, y - cy) - arm) > tolerance_px
-
-    def predict(self, x1, y1, x0, y0, gap: int):
-        """Position ``gap`` frames after (x1, y1) at the angular velocity from (x0, y0), on the arc,
-        kept inside the swing seen so far (a pendulum's swing does not grow)."""
-        cx, cy, arm = self.circle
-        a1, a0 = self.angle(x1, y1), self.angle(x0, y0)
-        a = a1 + (a1 - a0) * gap
-        if self.angles[0] <= self.angles[1]:
-            margin = 2 * self.r / arm
-            a = min(max(a, self.angles[0] - margin), self.angles[1] + margin)
-        return cx + arm * math.sin(a), cy + arm * math.cos(a)
-
-
-class _ArcReference:
-    """A normal value of the marker (its signal, or width²) as a smooth function of its arc angle φ.
-
-    The value changes smoothly and repeatably with the marker's place in the picture (lens
-    magnification, vignetting, lighting falloff), so it is referred to ``base`` (the first
-    frames' value) by a curve ρ(φ), φ = atan2(x − x_p, y − y_p) about the arc's pivot: the ok
-    frames' values / ``base`` are binned by φ (one marker radius of arc per bin) and a polynomial
-    (degree 1, or 2 from 8 bins on) is fitted to the bins' medians, weights √min(count, 10), once
-    more without the bins off it by more than max(3 %, 3 × their robust spread): the few biased
-    frames inside the flag band do not bend it, and flagged frames never enter. Outside the
-    angles seen, ρ goes on along its end tangent for at most :attr:`REACH_RADII` radii of arc, its
-    slope there at most :attr:`MAX_SLOPE_PER_RADIUS` per radius of arc (a smooth change; a stripe
-    or an occluder changes the signal by as much over one marker diameter), then stays level.
-    ρ = 1 (the first frames' value) while the circle is unknown, the ok frames span fewer than
-    :attr:`MIN_SPAN_RADII` radii of arc, or ``enabled`` is False. Refitted when the angles seen
-    grow by a bin, the frames by a quarter, or the circle is refitted.
-    """
-
-    MIN_SPAN_RADII = 4.0
-    REACH_RADII = 4.0
-    MAX_SLOPE_PER_RADIUS = 0.03
-
-    def __init__(self, arc: _Arc, radius_px: float, enabled: bool):
-        self.arc, self.r, self.enabled = arc, radius_px, enabled
-        self.base = math.nan
-        self.points: list[tuple[float, float, float]] = []  # (x, y, value) of ok frames
-        self.fit = None  # (coefficients of ρ(φ), φ_lo, φ_hi, circle)
-        self.fitted_n = 0
-        self.bins_seen = (math.inf, -math.inf)
-        self.fitted_circle = None
-
-    def ratio(self, x: float, y: float) -> float:
-        """ρ(φ) at the marker position (x, y): its normal value / ``base``."""
-        if self.fit is None:
-            return 1.0
-        coef, lo, hi, (cx, cy, arm) = self.fit
-        phi = math.atan2(x - cx, y - cy)
-        if lo <= phi <= hi:
-            return float(np.polyval(coef, phi))
-        end = lo if phi < lo else hi
-        cap = self.MAX_SLOPE_PER_RADIUS * arm / self.r  # per radian
-        slope = min(max(float(np.polyval(np.polyder(coef), end)), -cap), cap)
-        reach = self.REACH_RADII * self.r / arm
-        return float(np.polyval(coef, end)) + slope * min(max(phi - end, -reach), reach)
-
-    def value(self, x: float, y: float) -> float:
-        """The normal value at (x, y): ``base`` × ρ(φ), ρ kept within [0.5, 2]."""
-        return self.base * min(max(self.ratio(x, y), 0.5), 2.0)
-
-    def add(self, x: float, y: float, value: float) -> None:
-        """An ok frame's value at (x, y); refits ρ when due."""
-        if not self.enabled or not math.isfinite(self.base) or not math.isfinite(value):
-            return
-        self.points.append((x, y, value))
-        circle = self.arc.circle
-        if circle is None:
-            return
-        b = math.floor(self.arc.angle(x, y) * circle[2] / self.r)
-        lo, hi = self.bins_seen
-        grown = b < lo or b > hi
-        self.bins_seen = (min(lo, b), max(hi, b))
-        if grown or len(self.points) >= 1.25 * self.fitted_n or circle is not self.fitted_circle:
-            self._refit(circle)
-
-    def _refit(self, circle) -> None:
-        self.fitted_n, self.fitted_circle = len(self.points), circle
-        cx, cy, arm = circle
-        pts = np.asarray(self.points)
-        phi = np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)
-        rho = pts[:, 2] / self.base
-        bins = np.floor(phi * arm / self.r).astype(int)
-        keys, inverse, counts = np.unique(bins, return_inverse=True, return_counts=True)
-        if keys.size < 4 or keys[-1] - keys[0] + 1 < self.MIN_SPAN_RADII:
-            self.fit = None
-            return
-        order = np.argsort(inverse, kind="stable")
-        groups = np.split(order, np.cumsum(counts)[:-1])
-        centre = np.array([float(np.median(phi[g])) for g in groups])
-        median = np.array([float(np.median(rho[g])) for g in groups])
-        weight = np.sqrt(np.minimum(counts, 10)).astype(float)
-        degree = 2 if keys.size >= 8 else 1
-        coef = np.polyfit(centre, median, degree, w=weight)
-        resid = median - np.polyval(coef, centre)
-        keep = np.abs(resid) <= max(0.03, 3.0 * 1.4826 * float(np.median(np.abs(resid))))
-        if keep.sum() >= degree + 3 and not keep.all():
-            coef = np.polyfit(centre[keep], median[keep], degree, w=weight[keep])
-        self.fit = (coef, float(phi.min()), float(phi.max()), circle)
-
-
-def _static_spot(image, background, c: Candidate, radius: float, reference_contrast: float | None) -> bool:
-    """True when the scene itself holds this spot (it is in the background image): not the marker."""
-    if background is None:
-        return False
-    half = max(1, int(radius * 0.7))
-    xi, yi = int(round(c.x)), int(round(c.y))
-    h, w = image.shape
-    box = np.s_[max(0, yi - half) : min(h, yi + half + 1), max(0, xi - half) : min(w, xi + half + 1)]
-    if image[box].size == 0:
-        return True
-    change = float(np.abs(image[box].astype(np.float32) - background[box]).mean())
-    floor = MIN_MARKER_CONTRAST if reference_contrast is None else 0.3 * reference_contrast
-    return change < floor
 
 
 def track_video(
@@ -533,12 +183,12 @@ def track_video(
     # The marker is measured as coverage of the scene only when no body surrounds it (see detection).
     scene_behind = background if detection is not None and detection.free_marker else None
     bounds = None if detection is None else tuple(detection.active_box_px)
-    arc = _Arc(detection, settings.marker_radius_px)
+    arc = MarkerArc(detection, settings.marker_radius_px)
     # the normal signal (per measurement kind) and width² along the arc, from the ok frames
     signal_curves = {
-        kind: _ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc) for kind in (False, True)
+        kind: ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc) for kind in (False, True)
     }
-    width_curve = _ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc)
+    width_curve = ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc)
     rows = []
     history: list[tuple[int, float, float]] = []  # (frame, x, y) of good frames
     previous = None
@@ -581,19 +231,19 @@ def track_video(
             hinted = reference_contrast is None and settings.start_px is not None
             if hinted:  # the spot near the hint first, then the others (possible distractors)
                 local = marker_candidates(image, settings, near=settings.start_px, search_radius_px=60, n=1)
-                others = [c for c in candidates if not local or not _near_any(c.x, c.y, [(local[0].x, local[0].y)], 4)]
-                candidates = local + others if local and _marker_like(local[0], settings, None) else []
+                others = [c for c in candidates if not local or not near_any(c.x, c.y, [(local[0].x, local[0].y)], 4)]
+                candidates = local + others if local and marker_like(local[0], settings, None) else []
             likely = [
                 c
                 for c in candidates
-                if _marker_like(c, settings, reference_contrast) and not _near_any(c.x, c.y, distractors, keep_off)
+                if marker_like(c, settings, reference_contrast) and not near_any(c.x, c.y, distractors, keep_off)
             ]
             if reference_contrast is not None or not hinted:  # a moving marker on its arc, not the scene's spot
-                moving = [c for c in likely if arc.near(c.x, c.y) and not _static_spot(image, background, c, r, None)]
+                moving = [c for c in likely if arc.near(c.x, c.y) and not static_spot(image, background, c, r, None)]
                 if reference_contrast is None and background is not None:
                     # static marker-like spots of the scene: never the marker (a moving object off the
                     # arc is not one: it will be elsewhere when the marker passes here)
-                    distractors += [(c.x, c.y) for c in likely if _static_spot(image, background, c, r, None)]
+                    distractors += [(c.x, c.y) for c in likely if static_spot(image, background, c, r, None)]
                 likely = moving
             if not likely:
                 if candidates and (best_seen is None or candidates[0].score > best_seen.score):
@@ -617,7 +267,7 @@ def track_video(
                     (c.x, c.y)
                     for c in likely[1:]
                     if c.contrast >= 0.5 * found.contrast
-                    and (background is None or _static_spot(image, background, c, r, None))
+                    and (background is None or static_spot(image, background, c, r, None))
                 ]
             elif history:  # several candidates: the one nearest the last good position
                 found = min(likely, key=lambda c: math.hypot(c.x - history[-1][1], c.y - history[-1][2]))
@@ -675,14 +325,14 @@ def track_video(
             background=scene_behind if marker_grey is not None else None,
             bounds=bounds,
         )
-        if m is None or _near_any(m.x, m.y, distractors, keep_off):  # a known distractor is not the marker
+        if m is None or near_any(m.x, m.y, distractors, keep_off):  # a known distractor is not the marker
             rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))
             lost_run += 1
             continue
         if marker_level is None:
             marker_level = m.level
         if marker_grey is None and background is not None:
-            marker_grey = _marker_grey(image, m.x, m.y, r, settings.polarity)
+            marker_grey = inner_grey(image, m.x, m.y, r, settings.polarity)
             marker_level = marker_grey
         kind = m.mode_coverage
         if kind not in signal_refs:
@@ -716,7 +366,7 @@ def track_video(
             or m.unresolved > settings.max_unresolved
             # a free marker not measurable against the scene (something else around it): biased
             or (coverage_expected and not m.mode_coverage)
-            or _near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
+            or near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
             or m.width2_px2 > settings.max_width_ratio * width_curve.value(m.x, m.y) + streak_width2
         ):
             flag, x, y = "occluded", m.x, m.y
