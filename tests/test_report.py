@@ -411,3 +411,25 @@ def test_the_report_renders_in_chromium_with_every_image_and_table3_complete(rep
     )
     assert screenshot.is_file() and screenshot.stat().st_size > 100_000, proc.stderr[-2000:]
     print(f"screenshot: {screenshot} (1280 × {height} px)")
+
+
+def test_a_log_axis_spanning_less_than_a_factor_three_has_several_labels():
+    """A new user's local-C_d panel (1.0 to 1.9) had the single label '1'; wide spans keep 1-2-5 ticks."""
+    from pendulum.report_figures import log_axes, new_figure
+
+    fig = new_figure(6, 2.5)
+    narrow, wide = fig.subplots(1, 2)
+    narrow.plot([0.5, 3.0], [1.05, 1.85], "s")
+    wide.plot([0.1, 30.0], [0.01, 5.0], "s")
+    for ax in (narrow, wide):
+        log_axes(ax, "x", "y")
+    fig.canvas.draw()
+
+    def shown(ax):
+        low, high = ax.get_ylim()
+        return [
+            float(t.get_text()) for t, v in zip(ax.get_yticklabels(), ax.get_yticks(), strict=True) if low <= v <= high
+        ]
+
+    assert len(shown(narrow)) >= 3
+    assert {0.01, 0.1, 1.0, 0.2, 2.0}.issubset(shown(wide))

@@ -124,3 +124,33 @@ def test_the_discovery_noise_floor_is_labelled_as_pooled_over_the_group():
     html = residual_check_table(_discovery_document())
     assert "<th>pooled noise floor (°)</th>" in html and "pooled over the group's fitted samples" in html
     assert html.count(">0.0039</td>") == 3  # the floor twice, the final RMS once
+
+
+def test_table_1_shows_the_estimated_pivot_and_defaults_and_the_notes_carry_geometry_warnings(tmp_path):
+    """A new user's rigs from sidecars: ρ, g and ν read '—' although the fit used defaults, the estimated pivot
+    was only 'not given', and 'the pivot is poorly determined' stayed in results/geometry/ out of the report."""
+    warning = "rig geometry: the pivot is poorly determined by the marker paths (standard error 17 px ...)"
+    angles = tmp_path / "angles.json"
+    angles.write_text(
+        json.dumps(
+            {
+                "status": "ok",
+                "hold_angle_deg": 9.0,
+                "noise_deg": 0.01,
+                "pivot_px": [300.0714, -42.3172],
+                "vertical_deg": 0.0223,
+                "pivot_covariance_px2": [[0.0030, 0.02], [0.02, 0.5036]],
+                "warnings": [warning],
+            }
+        )
+    )
+    (tmp_path / "summary.csv").write_text("variant,fit\n")
+    files = {"summary": str(tmp_path / "summary.csv"), "trials": {"a": {"angles": str(angles)}}}
+    trials = {"a": {"rig": "rig", "kind": "video", "source": "data/raw/a.mp4", "overrides": {}}}
+    report = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": {}}}, variants=VARIANTS)
+    table = report.rig_table()
+    # √0.0030 = 0.0548, √0.5036 = 0.7096
+    assert "300.07 ± 0.055, −42.317 ± 0.71 (estimated from the marker paths)" in table
+    assert "0.0223 (estimated from the swings)" in table
+    assert "1000 (default)" in table and "9.810 (default)" in table and "1.000×10⁻⁶ (default)" in table
+    assert "poorly determined by the marker paths" in report.tracking_section()

@@ -381,3 +381,16 @@ def test_a_smooth_change_along_the_arc_is_not_glare_but_a_sudden_one_is_flagged(
     clear = np.abs(280.0 * np.sin(theta - 0.15)) >= 40.0 + 9.0 * 1.1 + 7.0
     assert inside.sum() >= 6 and not ok[inside].any()
     assert ok[clear].mean() >= 0.95
+
+
+def test_a_track_lost_to_occluded_flags_names_the_cause_and_the_remedy():
+    """Most frames occluded (a new user's bare ball over stripes, 374 of 420): the message names both causes
+    (covered, or the background behind the path) and the settings that decide, not just 'partly hidden'."""
+    from pendulum.tracking import unusable_reason
+
+    message = unusable_reason({"ok": 40, "occluded": 374, "lost": 6}, 420)
+    assert message.startswith("the marker is usable in only 40 of 420 frames (10 %; lost 6, occluded 374)")
+    assert "background behind its path" in message and "plain background" in message
+    assert "min_signal_ratio/max_signal_ratio in config.yaml" in message
+    lost = unusable_reason({"ok": 40, "lost": 300, "occluded": 80}, 420)
+    assert "out of view" in lost and "min_signal_ratio" not in lost

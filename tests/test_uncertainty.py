@@ -12,7 +12,7 @@ from pendulum.geometry import image_angle_rad
 from pendulum.physics import PendulumModel, Rig
 from pendulum.records import FitSettings, load_record, rig_tolerances
 from pendulum.synthetic_records import synthetic_angle_table
-from pendulum.uncertainty import consistency_test, interval95
+from pendulum.uncertainty import coefficient_entry, consistency_test, interval95
 
 RIG = PAPER_RIG
 TERMS = VARIANTS["friction"]
@@ -163,3 +163,18 @@ def test_a_wrong_vertical_changes_no_coefficient():
         assert refit["parameters"][name]["value"] == pytest.approx(fit["parameters"][name]["value"], rel=1e-6)
     offsets = [f["trials"]["a"]["rest_offset_deg"] for f in (fit, refit)]
     assert offsets[1] - offsets[0] == pytest.approx(0.7, abs=1e-6)
+
+
+def test_a_huge_relative_standard_error_is_worded_as_a_factor_not_millions_of_percent():
+    """A term the record cannot see (σ 45 394 times its estimate; a new user's report read '4539384 %')."""
+    warnings: list = []
+    entry = coefficient_entry("coulomb_torque_nm", "N m", 1e-6, 0.0453938, {}, 0.0, False, 0.5, warnings)
+    assert entry["identifiable"] is False
+    assert warnings == [
+        "coulomb_torque_nm is not identifiable from this record (standard error 4.5e+04 times the estimate)"
+    ]
+    warnings.clear()
+    coefficient_entry("linear_damping_nm_s", "N m s", 0.1, 0.212, {}, 0.0, False, 0.5, warnings)
+    assert warnings == [
+        "linear_damping_nm_s is not identifiable from this record (standard error 212 % of the estimate)"
+    ]

@@ -143,8 +143,8 @@ class CheckSections(ReportData):
         """Joint estimates against the synthetic truth: error in standard errors, coverage of the 95 % intervals."""
         if not self.truth:
             return (
-                "<p>No truth files (<code>truth_dir</code>): these are real records, so the estimates cannot be "
-                "checked against known values.</p>"
+                "<p>No trial has a truth file (<code>truth_dir</code>, written only for synthetic renders), so "
+                "the estimates are not checked against known values here.</p>"
             )
         rows, seen = [], set()
         garbage = [t for t in self.trial_order() if t in self.truth and self.trial_problems(t)]
@@ -279,6 +279,7 @@ class CheckSections(ReportData):
             fit = self.fits.get((variant_for[trial], trial)) if variant_for[trial] else None
             fitted = td(str(fit["n_samples"]), "num") if is_ok(fit) else td("—", "na")
             notes = [esc(n) for n in frame_notes(frames)] if kind == "video" and is_ok(frames) else []
+            notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
             problems = record_problems(fit) or self.trial_problems(trial)
             if problems:
                 found = problem_text(trial, problems[0], first_clause=True)

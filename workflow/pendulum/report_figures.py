@@ -26,10 +26,18 @@ def figure_png(fig) -> bytes:
 
 
 def log_ticks(axis) -> None:
-    """Ticks at 1, 2, 5 × 10ⁿ labelled as plain numbers (no crowded minor labels)."""
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    """Ticks at 1, 2, 5 × 10ⁿ labelled as plain numbers (no crowded minor labels); an axis spanning less
+    than a factor 3 (local C_d from 1.0 to 1.9 showed the single label "1") gets 3–5 evenly stepped ticks."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
-    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    class ReadableLogLocator(LogLocator):
+        def tick_values(self, vmin, vmax):
+            low, high = sorted((vmin, vmax))
+            if low > 0 and high / low < 3.0:
+                return MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]).tick_values(low, high)
+            return super().tick_values(vmin, vmax)
+
+    axis.set_major_locator(ReadableLogLocator(subs=(1.0, 2.0, 5.0)))
     axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     axis.set_minor_formatter(NullFormatter())
 
@@ -91,14 +99,21 @@ class FigureSections(ReportData):
                 t = base.time_s.to_numpy(float)
                 measured = np.degrees(base.theta_measured_rad.to_numpy(float))
                 used = base.flag.isin(["fitted", "release_transient"]).to_numpy()
-                ax.plot(t[used], measured[used], ".", ms=2.2, color="0.25", label="measured", zorder=3)
+                # measured dots beneath the fitted curves (at 30–60 samples per second they hid them)
+                ax.plot(t[used], measured[used], ".", ms=2.2, color="0.6", label="measured", zorder=2)
                 bad = ~used & np.isfinite(measured)
                 if bad.any():
-                    ax.plot(t[bad], measured[bad], "x", ms=4, color="#C00000", label="outlier / flagged", zorder=4)
+                    ax.plot(t[bad], measured[bad], "x", ms=4, color="#C00000", label="outlier / flagged", zorder=5)
                 start = self.fits[(next(iter(curves)), trial)]["trials"][trial]["fit_start_s"]
                 for v, c in curves.items():
                     ax.plot(
-                        c.time_s, np.degrees(c.theta_fitted_rad), "-", lw=1.0, color=self.colour[v], label=f"{v} fit"
+                        c.time_s,
+                        np.degrees(c.theta_fitted_rad),
+                        "-",
+                        lw=1.0,
+                        color=self.colour[v],
+                        label=f"{v} fit",
+                        zorder=4,
                     )
                 ax.axvspan(min(0.0, float(np.nanmin(t))), start, color="0.85", lw=0, zorder=0)
                 ax.set_ylabel("θ (°)")

@@ -6,8 +6,10 @@ written by :mod:`pendulum.report_format`.
 
 from __future__ import annotations
 
+import math
+
 from pendulum.physics import Rig
-from pendulum.records import rig_tolerances
+from pendulum.records import WATER_KINEMATIC_VISCOSITY_M2_S, rig_tolerances
 from pendulum.report_data import (
     ReportData,
     failure_text,
@@ -54,6 +56,14 @@ def camera_rig_note(rigs: dict) -> str:
     )
 
 
+UNSTATED_RIG_DEFAULTS = {  # rig values the model takes when a rig does not state them (Rig's and records' defaults)
+    "displaced_volume_m3": Rig.__dataclass_fields__["displaced_volume_m3"].default,
+    "fluid_density_kg_m3": Rig.__dataclass_fields__["fluid_density_kg_m3"].default,
+    "gravity_m_s2": Rig.__dataclass_fields__["gravity_m_s2"].default,
+    "kinematic_viscosity_m2_s": WATER_KINEMATIC_VISCOSITY_M2_S,
+}
+
+
 class TableSections(ReportData):
     """Table 1 (rig values), Table 2 (RMS residuals) and Table 3 (coefficients) as HTML."""
 
@@ -67,6 +77,13 @@ class TableSections(ReportData):
                 values = self.rigs[rig]["values"]
                 stated = self.rigs[rig].get("tolerances") or {}
                 value = values.get(key)
+                if value is None and key in UNSTATED_RIG_DEFAULTS:  # what the model uses when not stated
+                    default = UNSTATED_RIG_DEFAULTS[key]
+                    cells += [
+                        td(esc(f"{fmt(default, 4)} (default)"), "num"),
+                        td("not stated; not in the error budget", "na"),
+                    ]
+                    continue
                 if value is None and key not in ("body_inertia_kg_m2", "characteristic_length_m"):
                     cells += [td("—", "na"), td("", "na")]
                     continue
@@ -92,7 +109,7 @@ class TableSections(ReportData):
             for rig in rigs:
                 value = self.rigs[rig]["values"].get(key)
                 text = (
-                    "not given: estimated from the marker paths"
+                    self.estimated_geometry_text(rig, key)
                     if value is None
                     else ", ".join(fmt(x, 5) for x in value)
                     if isinstance(value, list)
@@ -134,6 +151,24 @@ class TableSections(ReportData):
             "configuration takes the default fraction. They enter the fits' systematic error budget."
         )
         return table_html(header, rows, caption=caption, table_id="table1", note=note)
+
+    def estimated_geometry_text(self, rig: str, key: str) -> str:
+        """The pivot (± standard errors) or vertical a rig's angle records used when config gave none."""
+        for trial in self.rig_trials(rig):
+            angles = self.docs.get((trial, "angles"))
+            if not is_ok(angles) or angles.get(key) is None:
+                continue
+            if key == "vertical_deg":
+                return f"{fmt(angles[key], 3)} (estimated from the swings)"
+            covariance = angles.get("pivot_covariance_px2")
+            if covariance is None:
+                return ", ".join(fmt(x, 5) for x in angles[key]) + " (the trial's own)"
+            sigmas = [math.sqrt(max(float(covariance[i][i]), 0.0)) for i in (0, 1)]
+            return (
+                ", ".join(f"{fmt(x, 5)} ± {fmt(s, 2)}" for x, s in zip(angles[key], sigmas, strict=True))
+                + " (estimated from the marker paths)"
+            )
+        return "not given: estimated from the marker paths"
 
     def rms_table(self) -> str:
         """Table 2 (as the paper's): RMS residual per trial and variant in rad, degrees and arc millimetres."""

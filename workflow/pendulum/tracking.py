@@ -466,7 +466,13 @@ def unusable_reason(counts: dict, n_frames: int, video_report: dict | None = Non
     elif out >= hidden:
         cause = "the marker is out of view (outside the frame or behind something) in most frames"
     else:
-        cause = "the marker is partly hidden (occluded) or glaring in most frames"
+        cause = (
+            "in most frames the marker stands out from its surround much less (occluded) or more (glare) than "
+            "at the start: something covers it, or the background behind its path (stripes, edges) changes "
+            "what it is measured against; film it before a plain background, or if it is in full view "
+            "throughout, widen tracking min_signal_ratio/max_signal_ratio in config.yaml (frames so kept may "
+            "be biased)"
+        )
     flags = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()) if k != "ok")
     share = f"{100 * ok / max(n_frames, 1):.0f} %"
     return f"the marker is usable in only {ok} of {n_frames} frames ({share}; {flags}): {cause}"

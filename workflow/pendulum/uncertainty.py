@@ -245,11 +245,18 @@ def coefficient_entry(
     if not at_bound and rel > max_relative_stderr:
         entry["identifiable"] = False
         entry["reason"] = (
-            f"standard error {stderr_statistical:.3g} is {rel * 100:.0f} % of the estimate: this term's torque is "
+            f"standard error {stderr_statistical:.3g} is {_share_of_estimate(rel)}: this term's torque is "
             "too small against the noise and the other terms over this record (amplitude or duration too small)"
         )
-        warnings.append(f"{name} is not identifiable from this record ({rel * 100:.0f} % standard error)")
+        warnings.append(f"{name} is not identifiable from this record (standard error {_share_of_estimate(rel)})")
     return entry
+
+
+def _share_of_estimate(relative: float) -> str:
+    """A standard error relative to its estimate in words: '212 % of the estimate', '4.5e+04 times the estimate'."""
+    if not math.isfinite(relative):
+        return "finite while the estimate is 0"
+    return f"{relative * 100:.0f} % of the estimate" if relative < 10 else f"{relative:.2g} times the estimate"
 
 
 def drag_coefficient_entry(drag_area: dict, frontal_area_m2: float, frontal_area_sigma_m2: float) -> dict:

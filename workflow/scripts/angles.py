@@ -30,6 +30,7 @@ def read_json(path):
 
 
 def work():
+    warnings = []  # about the angle measurement (shown in the report's tracking-quality notes)
     if "table" in sm.input.keys():
         source = sm.input.table
         vertical = settings["vertical_deg"] if settings["vertical_deg"] is not None else 0.0
@@ -48,6 +49,7 @@ def work():
         notes = [ImageToPlane(calibration).describe()] if calibration else []
         if "geometry" in sm.input.keys():
             geometry = require_ok(read_json(sm.input.geometry), "geometry")
+            warnings += [f"rig geometry: {w}" for w in geometry.get("warnings", [])]
             if pivot is None:
                 problem = off_rig_circle(track, geometry)
                 if problem:
@@ -61,6 +63,7 @@ def work():
             for warning in own["warnings"]:
                 log.warning("trial %s: %s", trial, warning)
                 notes.append(warning)
+                warnings.append(warning)
         table, info = angles_from_track(
             track,
             pivot_px=pivot,
@@ -72,7 +75,8 @@ def work():
         info.notes = notes + info.notes
     log.info("trial %s: %s", trial, info)
     write_csv(table, sm.output.angles)
-    write_json({"trial": trial, "rig": settings["rig_name"], "status": "ok", **info.to_dict()}, sm.output.summary)
+    document = {"trial": trial, "rig": settings["rig_name"], "status": "ok", **info.to_dict()}
+    write_json({**document, "warnings": warnings}, sm.output.summary)
 
 
 def write_failed(document):
