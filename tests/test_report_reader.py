@@ -153,4 +153,34 @@ def test_table_1_shows_the_estimated_pivot_and_defaults_and_the_notes_carry_geom
     assert "300.07 ± 0.055, −42.317 ± 0.71 (estimated from the marker paths)" in table
     assert "0.0223 (estimated from the swings)" in table
     assert "1000 (default)" in table and "9.810 (default)" in table and "1.000×10⁻⁶ (default)" in table
+    assert "± 2.0 (0.20 %, default)" in table and "not in the error budget" in table  # ρ: 0.2 %; ν: none
     assert "poorly determined by the marker paths" in report.tracking_section()
+
+
+def test_own_data_and_config_do_not_dirty_the_tree_and_dirty_files_are_named():
+    """A new user moved the demo truth files out of data/truth (README 'Your own videos') and every summary box
+    said 'uncommitted changes' with the provenance table's bare 'yes'."""
+    from pendulum.provenance import NOT_CODE
+    from pendulum.report_checks import changes_text
+
+    assert {"data/raw", "data/truth", "config.yaml"} <= set(NOT_CODE)
+    assert "workflow" not in NOT_CODE and "notebooks" not in NOT_CODE
+    assert changes_text(False, []) == "no" and changes_text(None, None) == "unknown"
+    files = [f"workflow/pendulum/m{i}.py" for i in range(7)]
+    assert changes_text(True, files) == "yes: " + ", ".join(files[:5]) + " and 2 more"
+
+
+def test_a_baseline_that_is_not_white_is_not_called_free_of_structure():
+    """A new user's baseline at 3.5× the noise with Ljung–Box p < 10⁻¹⁰ read 'no structure left' beside the
+    linear damping discovery had just named."""
+    doc = _discovery_document()
+    doc["baseline"]["residual_check"].update(rms_over_noise=3.54, structured=False)
+    doc["baseline"]["residual_check"]["whiteness"] = {
+        "ljung_box_q": 81.6,
+        "dof": 12,
+        "p_value": 1e-12,
+        "spacing_s": 0.2,
+    }
+    html = residual_check_table(doc)
+    assert "not white, but within 5.0× the noise" in html
+    assert html.count("no structure left") == 1  # the final model's (p = 0.63, 1.0× the noise)

@@ -178,3 +178,26 @@ def test_a_huge_relative_standard_error_is_worded_as_a_factor_not_millions_of_pe
     assert warnings == [
         "linear_damping_nm_s is not identifiable from this record (standard error 212 % of the estimate)"
     ]
+
+
+def test_a_rig_that_does_not_state_the_fluid_density_takes_water_with_its_tolerance():
+    """A new user's sidecar rigs gave no ρ: the fit used 1000 kg/m³ with no entry in the error budget, although
+    the README gives water a default 1σ of 0.2 %. Now the budget carries it, the same as for a stated 1000."""
+    unstated = {k: v for k, v in RIG.items() if k not in ("fluid_density_kg_m3", "gravity_m_s2")}
+    data = table(20, seed=11)
+    record = load_record(data, "a", unstated, SETTINGS, tolerances={})
+    assert record.tolerances["fluid_density_kg_m3"] == pytest.approx(2.0)  # 0.2 % of 1000
+    assert record.rig.fluid_density_kg_m3 == 1000.0 and record.rig.gravity_m_s2 == 9.81
+    fit = fit_trials([record], TERMS, SETTINGS)
+    stated = fit_trials(
+        [
+            load_record(
+                data, "a", dict(unstated, fluid_density_kg_m3=1000.0, gravity_m_s2=9.81), SETTINGS, tolerances={}
+            )
+        ],
+        TERMS,
+        SETTINGS,
+    )
+    for name in PHYSICAL:
+        assert fit["parameters"][name]["error_budget"]["fluid_density_kg_m3"] != 0.0
+        assert fit["parameters"][name]["stderr"] == stated["parameters"][name]["stderr"]

@@ -40,8 +40,9 @@ def _listed(paths: list[str]) -> str:
 def check_request(tag, allow_dirty: bool, frozen_dir: str | Path, code_root: str | Path) -> dict:
     """Refuse a freeze before anything is built or touched; return the code's git state.
 
-    Refused: no tag or an unsafe one, a tag whose folder exists, a work tree whose code or
-    config differ from the commit (or no git work tree at all) unless ``allow_dirty``.
+    Refused: no tag or an unsafe one, a tag whose folder exists, a work tree whose code
+    differs from the commit (or no git work tree at all) unless ``allow_dirty``; data and
+    config.yaml may differ (``provenance.NOT_CODE``: the folder keeps the config as used).
     """
     if tag is None or tag == "":
         raise FreezeError("the freeze target needs a name: snakemake -c1 freeze --config freeze_tag=NAME")

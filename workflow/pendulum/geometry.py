@@ -113,15 +113,17 @@ def swing_centre_rad(theta: np.ndarray) -> tuple[float, int] | None:
         return None
     v = th[idx]
     sigma = noise_level(v)
-    ext = np.flatnonzero(np.isin(idx, swing_extrema(v)))
+    ext = swing_extrema(v)  # positions in v (the kept samples), as idx[ext] in frames
     values = []
     for k, i in enumerate(ext):
-        gaps = [i - ext[k - 1] if k > 0 else None, ext[k + 1] - i if k + 1 < ext.size else None]
-        half = max(2, min(g for g in gaps if g is not None) // 6) if any(gaps) else 2
-        lo, hi = max(0, i - half), min(v.size, i + half + 1)
+        # in frames, not in kept samples: flagged frames (NaN) leave gaps that must not close up
+        # (a passer hiding the marker near the bottom of each swing moved a vertical by 0.08°)
+        spacing = [idx[i] - idx[ext[k - 1]] if k > 0 else None, idx[ext[k + 1]] - idx[i] if k + 1 < ext.size else None]
+        half = max(2, min(g for g in spacing if g is not None) // 6) if any(spacing) else 2
+        near = np.flatnonzero(np.abs(idx - idx[i]) <= half)
         value = v[i]
-        if hi - lo >= 5:
-            a, b, c = np.polyfit(np.arange(lo, hi) - i, v[lo:hi], 2)
+        if near.size >= 5:
+            a, b, c = np.polyfit(idx[near] - idx[i], v[near], 2)
             if a != 0 and abs(b / (2 * a)) <= half:
                 value = c - b * b / (4 * a)
         values.append(value)

@@ -32,9 +32,11 @@ CORE_PACKAGES = (
     "pyyaml",
 )
 
-# Paths whose changes do not make a work tree "dirty": what the workflow writes
-# and the user's data (hashed separately when a result is frozen).
-NOT_CODE = ("results", "logs", ".snakemake", ".venv", "data/raw")
+# Paths whose changes do not make a work tree "dirty": what the workflow writes, the user's
+# data (hashed separately when a result is frozen; truth files of synthetic trials are data too)
+# and config.yaml (recorded as used, with its digest, in every report and frozen folder): a
+# researcher following README "Your own videos" edits these, not the code.
+NOT_CODE = ("results", "logs", ".snakemake", ".venv", "data/raw", "data/truth", "config.yaml")
 
 
 # Config keys that say what to do with finished results (freeze and cite them), not how

@@ -37,6 +37,17 @@ DEFAULT_RELATIVE_TOLERANCES = {
     "gravity_m_s2": 0.0,
 }
 WATER_KINEMATIC_VISCOSITY_M2_S = 1.0e-6  # 20 °C
+# Rig values the model takes when a rig does not state them (Rig's defaults): filled in before a fit, so
+# that their default tolerances (fluid density 0.2 %) enter the error budget as for a stated value.
+RIG_DEFAULTS = {
+    "fluid_density_kg_m3": Rig.__dataclass_fields__["fluid_density_kg_m3"].default,
+    "gravity_m_s2": Rig.__dataclass_fields__["gravity_m_s2"].default,
+}
+
+
+def with_rig_defaults(rig_values: dict) -> dict:
+    """``rig_values`` with :data:`RIG_DEFAULTS` for the ones not stated (or null)."""
+    return {**rig_values, **{k: v for k, v in RIG_DEFAULTS.items() if rig_values.get(k) is None}}
 
 
 def rig_tolerances(rig_values: dict, stated: dict | None = None) -> dict:
@@ -124,6 +135,7 @@ def load_record(
     release transient raises :class:`~pendulum.geometry.InputError` ("record too short").
     """
     where = f"{source} (trial {trial})" if source else f"trial {trial}"
+    rig_values = with_rig_defaults(rig_values)
     for column in ("time_s", "theta_rad"):
         if column not in table.columns:
             raise InputError(f"{where}: angle table lacks column {column!r}")

@@ -64,6 +64,18 @@ def frame_notes(frames: dict) -> list[str]:
     return notes
 
 
+def changes_text(dirty: bool | None, files: list | None, shown: int = 5) -> str:
+    """The provenance table's 'uncommitted changes': no, unknown, or yes with the files that differ."""
+    if dirty is None:
+        return "unknown"
+    if not dirty:
+        return "no"
+    if not files:
+        return "yes"
+    more = f" and {len(files) - shown} more" if len(files) > shown else ""
+    return "yes: " + ", ".join(files[:shown]) + more
+
+
 def failure_cell(document: dict | None, said: set[str], span: int = 1) -> str:
     """A failed stage's cell in a trial's row: its failure sentence, or "—" when the row says it already
     (a later stage that failed because an earlier one did carries the same sentence); adds it to ``said``."""
@@ -315,7 +327,7 @@ class CheckSections(ReportData):
             "stamps), the marker followed (polarity and radius; “detected” when config and sidecar left them to the "
             "marker detection, “given” otherwise), the tracker's flags by kind (flagged frames are never "
             "interpolated), the angle samples from "
-            "release to rest and how many of them are flagged, the angle record's noise (σ from the third "
+            "release to rest and how many of them are flagged, the angle record's noise (σ from the fifth "
             "differences of the whole record: Table 2's record noise), and the samples the "
             "recommended variant's fit used (after the release transient and outliers). fps: mean rate of the "
             "frames the decoder yields (“variable”: a variable-frame-rate file, every frame keeps its own time "
@@ -365,7 +377,7 @@ class CheckSections(ReportData):
         items = [
             ("commit", f"<code>{esc(str(p.get('commit') or 'not a git work tree'))}</code>"),
             ("commit time (UTC)", esc(str(p.get("commit_time_utc") or "—"))),
-            ("uncommitted changes", esc({True: "yes", False: "no"}.get(p.get("dirty"), "unknown"))),
+            ("uncommitted changes", esc(changes_text(p.get("dirty"), p.get("dirty_files")))),
             ("configuration SHA-256", f"<code>{esc(str(p.get('config_sha256') or '—'))}</code>"),
             ("Python", esc(str(p.get("python") or "—"))),
         ]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 from pendulum.physics import Rig
-from pendulum.records import WATER_KINEMATIC_VISCOSITY_M2_S, rig_tolerances
+from pendulum.records import RIG_DEFAULTS, WATER_KINEMATIC_VISCOSITY_M2_S, rig_tolerances, with_rig_defaults
 from pendulum.report_data import (
     ReportData,
     failure_text,
@@ -58,8 +58,7 @@ def camera_rig_note(rigs: dict) -> str:
 
 UNSTATED_RIG_DEFAULTS = {  # rig values the model takes when a rig does not state them (Rig's and records' defaults)
     "displaced_volume_m3": Rig.__dataclass_fields__["displaced_volume_m3"].default,
-    "fluid_density_kg_m3": Rig.__dataclass_fields__["fluid_density_kg_m3"].default,
-    "gravity_m_s2": Rig.__dataclass_fields__["gravity_m_s2"].default,
+    **RIG_DEFAULTS,
     "kinematic_viscosity_m2_s": WATER_KINEMATIC_VISCOSITY_M2_S,
 }
 
@@ -74,15 +73,20 @@ class TableSections(ReportData):
         for key, (label, unit) in RIG_LABELS.items():
             cells = []
             for rig in rigs:
-                values = self.rigs[rig]["values"]
+                values = with_rig_defaults(self.rigs[rig]["values"])  # as the fits take them
                 stated = self.rigs[rig].get("tolerances") or {}
                 value = values.get(key)
-                if value is None and key in UNSTATED_RIG_DEFAULTS:  # what the model uses when not stated
-                    default = UNSTATED_RIG_DEFAULTS[key]
-                    cells += [
-                        td(esc(f"{fmt(default, 4)} (default)"), "num"),
-                        td("not stated; not in the error budget", "na"),
-                    ]
+                if self.rigs[rig]["values"].get(key) is None and key in UNSTATED_RIG_DEFAULTS:
+                    default = UNSTATED_RIG_DEFAULTS[key]  # not stated: what the model uses
+                    tol = rig_tolerances(values, stated).get(key) if key in RIG_DEFAULTS else None
+                    tol_text = (
+                        "not in the error budget"
+                        if tol is None
+                        else "0 (exact)"
+                        if tol == 0
+                        else f"± {fmt(tol, 2)} ({fmt(100 * tol / abs(default), 2)} %, default)"
+                    )
+                    cells += [td(esc(f"{fmt(default, 4)} (default)"), "num"), td(esc(tol_text), "num")]
                     continue
                 if value is None and key not in ("body_inertia_kg_m2", "characteristic_length_m"):
                     cells += [td("—", "na"), td("", "na")]

@@ -436,6 +436,7 @@ def report_provenance():
         "commit": git["commit"],
         "commit_time_utc": git["commit_time_utc"],
         "dirty": git["dirty"],
+        "dirty_files": git["dirty_files"],
         "config_sha256": config_digest(config),
         "python": platform.python_version(),
         "packages": package_versions(),
