@@ -8,6 +8,7 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 import time
 
 import nbformat
@@ -260,6 +261,23 @@ def test_the_executed_notebook_keeps_no_timestamps_or_random_ids():
     text = nbformat.writes(nb)
     assert "2026" not in text and "duration" not in text and "input_path" not in text
     assert [c.id for c in nb.cells] == ["cell-00", "cell-01"]
+
+
+def test_the_report_kernel_runs_encrypted_without_the_plain_tcp_warning(tmp_path):
+    """build_report's kernel gets CurveZMQ keys: the page is built and the kernel's stderr carries
+    no "running over TCP without encryption" warning (it did on every build before)."""
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("print(6 * 7)")])
+    nbformat.write(nb, str(tmp_path / "in.ipynb"))
+    code = (
+        "import sys; sys.path.insert(0, sys.argv[1]);"
+        "from pendulum.report import build_report;"
+        "build_report('in.ipynb', 'out.html', 'out.ipynb', {})"
+    )
+    library = os.path.join(os.path.dirname(__file__), "..", "workflow")
+    done = subprocess.run([sys.executable, "-c", code, library], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "42" in (tmp_path / "out.html").read_text()
+    assert "without encryption" not in done.stderr, done.stderr
 
 
 def test_the_page_loads_nothing_from_outside():

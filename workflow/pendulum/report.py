@@ -155,9 +155,14 @@ def build_report(notebook, html_path, executed_path, parameters: dict, cwd=".", 
     import matplotlib.font_manager  # noqa: F401  (builds the font cache here, not in the notebook's output)
     import nbformat
     import papermill
+    from traitlets.config import Config
 
     from pendulum.io import write_text
 
+    # The kernel talks to papermill over local TCP; CurveZMQ keys provisioned by the kernel
+    # manager (when the kernel declares support, as ipykernel does) encrypt that traffic and
+    # spare every build the kernel's "running over TCP without encryption" warning.
+    kernel_config = Config({"KernelManager": {"transport_encryption": "auto"}})
     nb = papermill.execute_notebook(
         str(notebook),
         None,
@@ -167,6 +172,7 @@ def build_report(notebook, html_path, executed_path, parameters: dict, cwd=".", 
         progress_bar=False,
         log_output=False,
         request_save_on_cell_execute=False,
+        config=kernel_config,
     )
     for text in normalise_notebook(nb):
         if log:
