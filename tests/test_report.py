@@ -312,6 +312,28 @@ def test_the_report_is_byte_identical_when_built_again(report_project):
     assert digest(report, ("*.html", "*.ipynb")) == before
 
 
+def test_the_page_opens_with_links_to_every_section(report_project):
+    page = (report_project / "results/report/report.html").read_text()
+    nav = re.search(r'<nav class="contents">(.*?)</nav>', page, flags=re.S)
+    assert nav and page.index("</header>") < nav.start() < page.index("<h2"), "no contents line under the header"
+    links = re.findall(r'<a href="#([^"]+)">([^<]+)</a>', nav.group(1))
+    headings = re.findall(r'<h2 id="([^"]+)"', page)
+    assert [anchor for anchor, _ in links] == headings and len(headings) >= 12
+    assert ("summary", "Summary") in links and ("failed-trials", "Failed or skipped trials") in links
+
+
+def test_contents_are_taken_from_the_headings_with_their_anchor_marks_removed():
+    body = (
+        '<header><h1>T</h1></header>\n<h2 id="a">First <a class="anchor-link" href="#a">¶</a></h2><p>x</p>'
+        '<h2 id="b">B &amp; C</h2>'
+    )
+    page = R.with_contents(body)
+    assert (
+        '</header>\n<nav class="contents">Contents: <a href="#a">First</a> · <a href="#b">B &amp; C</a></nav>' in page
+    )
+    assert R.with_contents("<p>no sections</p>") == "<p>no sections</p>"
+
+
 def test_editing_plot_code_or_the_notebook_reruns_only_the_report(report_project):
     for path, edit in (
         ("workflow/pendulum/report_figures.py", "\nMPL_STYLE['lines.linewidth'] = 1.2  # a style edit\n"),

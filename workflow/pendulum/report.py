@@ -19,6 +19,8 @@ HTML pieces). This module puts them together and runs the notebook.
 
 from __future__ import annotations
 
+import re
+
 from pendulum.report_checks import CheckSections
 from pendulum.report_comparison import ComparisonSections
 from pendulum.report_discovery import DiscoverySections
@@ -55,6 +57,7 @@ h2 { font-size: 1.3rem; margin: 1.8em 0 0.5em; padding-bottom: 0.2em; border-bot
 h3 { font-size: 1.05rem; margin: 0.4em 0 0.5em; }
 p { margin: 0.45em 0; }
 .subtitle { color: var(--muted); margin: 0.2em 0; }
+nav.contents { font-size: 0.9rem; margin: 0.6em 0 0; color: var(--muted); }
 a.anchor-link { display: none; }
 code { font-size: 0.9em; }
 .warn { color: var(--warn); font-weight: 600; }
@@ -139,6 +142,19 @@ def normalise_notebook(nb) -> list[str]:
     return stderr
 
 
+def with_contents(body: str) -> str:
+    """The page body with a line of links to its sections (every ``<h2 id=…>``) after its header."""
+    sections = [
+        (anchor, re.sub(r"<[^>]+>|¶", "", title).strip())
+        for anchor, title in re.findall(r'<h2 id="([^"]+)"[^>]*>(.*?)</h2>', body, flags=re.S)
+    ]
+    if not sections:
+        return body
+    links = " · ".join(f'<a href="#{anchor}">{title}</a>' for anchor, title in sections)
+    nav = f'<nav class="contents">Contents: {links}</nav>'
+    return body.replace("</header>", "</header>\n" + nav, 1) if "</header>" in body else nav + "\n" + body
+
+
 def notebook_body(nb) -> str:
     """The notebook's outputs and markdown as HTML (code hidden), via nbconvert's basic template."""
     from nbconvert import HTMLExporter
@@ -179,4 +195,4 @@ def build_report(notebook, html_path, executed_path, parameters: dict, cwd=".", 
             log.warning("notebook stderr: %s", text.strip())
     write_text(nbformat.writes(nb) + "\n", executed_path)
     title = "Free-decay pendulum: added mass and drag coefficient"
-    write_text(page_html(notebook_body(nb), title), html_path)
+    write_text(page_html(with_contents(notebook_body(nb)), title), html_path)
