@@ -171,14 +171,17 @@ def build_report(notebook, html_path, executed_path, parameters: dict, cwd=".", 
     import matplotlib.font_manager  # noqa: F401  (builds the font cache here, not in the notebook's output)
     import nbformat
     import papermill
+    import zmq
     from traitlets.config import Config
 
     from pendulum.io import write_text
 
     # The kernel talks to papermill over local TCP; CurveZMQ keys provisioned by the kernel
     # manager (when the kernel declares support, as ipykernel does) encrypt that traffic and
-    # spare every build the kernel's "running over TCP without encryption" warning.
-    kernel_config = Config({"KernelManager": {"transport_encryption": "auto"}})
+    # spare every build the kernel's "running over TCP without encryption" warning. A libzmq
+    # built without CurveZMQ would refuse the setting, so there the default (plain TCP) stays.
+    encryption = "auto" if zmq.has("curve") else "disabled"
+    kernel_config = Config({"KernelManager": {"transport_encryption": encryption}})
     nb = papermill.execute_notebook(
         str(notebook),
         None,
