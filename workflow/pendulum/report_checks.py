@@ -26,6 +26,11 @@ _NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
 def marker_text(tracks: dict) -> str:
     """The marker the tracker followed (tracks JSON ``marker``): polarity and radius, and whether detection found
     them (``detection`` present: config and sidecar left polarity or radius to it) or they were given."""
+    method = tracks.get("method") or {}
+    if method.get("used") == "body":
+        radius = (tracks.get("body") or {}).get("radius_px")
+        size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
+        return f"body{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto")
     marker = tracks.get("marker") or {}
     if not marker:
         return "—"
@@ -291,6 +296,9 @@ class CheckSections(ReportData):
             fit = self.fits.get((variant_for[trial], trial)) if variant_for[trial] else None
             fitted = td(str(fit["n_samples"]), "num") if is_ok(fit) else td("—", "na")
             notes = [esc(n) for n in frame_notes(frames)] if kind == "video" and is_ok(frames) else []
+            method = (tracks or {}).get("method") or {}
+            if kind == "video" and is_ok(tracks) and method.get("used") == "body":
+                notes.append(esc(f"tracked the body: {method.get('reason', '')}"))
             notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
             problems = record_problems(fit) or self.trial_problems(trial)
             if problems:
@@ -304,7 +312,10 @@ class CheckSections(ReportData):
                 + [fitted, f'<td class="warncell notes" style="{NOTES_STYLE}">' + "<br>".join(notes) + "</td>"]
             )
             attrs.append({"data-trial": trial, **({"data-notes": str(len(notes))} if notes else {})})
-            sheet = self.files.get("trials", {}).get(trial, {}).get("contact_sheet")
+            files = self.files.get("trials", {}).get(trial, {})
+            # the track drawn over the key frames where the track exists, else the plain contact sheet
+            sheet = files.get("track_sheet") if is_ok(tracks) else None
+            sheet = sheet if sheet and Path(sheet).is_file() else files.get("contact_sheet")
             if sheet and Path(sheet).is_file():
                 sheets.append((trial, Path(sheet).read_bytes(), is_ok(frames)))
         header = [
@@ -325,7 +336,8 @@ class CheckSections(ReportData):
         caption = self.table_caption(
             "Tracking quality per trial: frames in the video (from the container: dropped frames and duplicate time "
             "stamps), the marker followed (polarity and radius; “detected” when config and sidecar left them to the "
-            "marker detection, “given” otherwise), the tracker's flags by kind (flagged frames are never "
+            "marker detection, “given” otherwise; “body”: the swinging object's silhouette was tracked, where no "
+            "marker disk is usable or `method: body` says so), the tracker's flags by kind (flagged frames are never "
             "interpolated), the angle samples from "
             "release to rest and how many of them are flagged, the angle record's noise (σ from the fifth "
             "differences of the whole record: Table 2's record noise), and the samples the "
@@ -340,7 +352,9 @@ class CheckSections(ReportData):
             out += self.calibration_table()
         if sheets:
             caption = self.figure_caption(
-                "Contact sheets: key frames of each video, for a visual check of the scene, marker and lighting."
+                "Contact sheets: key frames of each video with the track drawn over them (grey: the tracked path; "
+                "a green ring: the position tracked at that frame, red where flagged), for a visual check that the "
+                "track sits on the pendulum, and of the scene and lighting."
             )
             items = "".join(
                 f'<figure class="sheet"><img src="{png_data_uri(data)}" alt="contact sheet of {esc(t)}">'

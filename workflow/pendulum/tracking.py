@@ -94,8 +94,13 @@ class TrackerSettings:
     # magnification, vignetting, lighting falloff), fitted to the ok frames (see ArcReference);
     # False: the first frames' values everywhere.
     reference_along_arc: bool = True
+    # "marker": a marker disk; "body": the swinging object's silhouette (pendulum.body); "auto": the marker
+    # where a good one is found, else the body (pendulum.track_method)
+    method: str = "auto"
 
     def __post_init__(self):
+        if self.method not in ("auto", "marker", "body"):
+            raise ValueError(f"tracking method must be 'auto', 'marker' or 'body', got {self.method!r}")
         if self.polarity not in ("bright", "dark", "auto"):
             raise ValueError(f"marker polarity must be 'bright', 'dark' or 'auto', got {self.polarity!r}")
         if self.centroid not in ("linear", "threshold"):

@@ -27,7 +27,7 @@ RIG_KEYS = (
 )
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined in a sidecar must give these
-TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px")
+TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method")
 ANGLE_TABLE_EXTENSIONS = (".csv",)
 TRIAL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
 RESERVED_NAMES = ("joint", "summary")  # file names of the aggregate fits

@@ -454,11 +454,17 @@ def _keyframe_lumas(path: Path, wanted_pts: set, origin_pts: int) -> list[tuple[
     return found
 
 
-def contact_sheet(path: Path, n_tiles: int = 12, tile_width_px: int = 320, timeline=None) -> np.ndarray:
+def contact_sheet(
+    path: Path, n_tiles: int = 12, tile_width_px: int = 320, timeline=None, track: pd.DataFrame | None = None
+) -> np.ndarray:
     """A grid of evenly spaced tiles labelled with their time: the first shown frame, then key frames.
 
     ``timeline`` (from :func:`frame_timeline`; computed when None) says which frames are shown and
     where the key frames are; only the first frame and the picked key frames are kept in memory.
+    With a ``track`` (``time_s``, ``x_px``, ``y_px``, ``flag``) the sheet is in colour and shows
+    the tracked path in every tile (grey) and the position tracked at the tile's time (a green
+    ring where ``ok``, red where flagged, a red cross where lost): the visual check that the track
+    sits on the pendulum.
     """
     import cv2
 
@@ -478,10 +484,33 @@ def contact_sheet(path: Path, n_tiles: int = 12, tile_width_px: int = 320, timel
     tile_h = int(round(tile_width_px * h / w))
     cols = min(4, len(frames))
     rows = math.ceil(len(frames) / cols)
-    sheet = np.zeros((rows * tile_h, cols * tile_width_px), np.uint8)
+    colour = track is not None
+    sheet = np.zeros((rows * tile_h, cols * tile_width_px) + ((3,) if colour else ()), np.uint8)
     for k, (t, y) in enumerate(frames):
         tile = cv2.resize(y, (tile_width_px, tile_h), interpolation=cv2.INTER_AREA)
-        cv2.putText(tile, f"{t:6.2f} s", (6, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 255, 2, cv2.LINE_AA)
+        if colour:
+            tile = _draw_track(cv2.cvtColor(tile, cv2.COLOR_GRAY2BGR), track, t, tile_width_px / w)
+        cv2.putText(tile, f"{t:6.2f} s", (6, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255,) * 3, 2, cv2.LINE_AA)
         r, c = divmod(k, cols)
         sheet[r * tile_h : (r + 1) * tile_h, c * tile_width_px : (c + 1) * tile_width_px] = tile
     return sheet
+
+
+def _draw_track(tile: np.ndarray, track: pd.DataFrame, time_s: float, scale: float) -> np.ndarray:
+    """The tracked path (grey) and the position at ``time_s`` (green ring: ok; red: flagged; red cross: lost)."""
+    import cv2
+
+    ok = (track.flag == "ok").to_numpy() & track.x_px.notna().to_numpy()
+    points = np.round(track.loc[ok, ["x_px", "y_px"]].to_numpy(float) * scale * 4).astype(np.int32)
+    if len(points) > 1:
+        cv2.polylines(tile, [points.reshape(-1, 1, 2)], False, (160, 160, 160), 1, cv2.LINE_AA, shift=2)
+    if track.empty:
+        return tile
+    row = track.iloc[int(np.argmin(np.abs(track.time_s.to_numpy(float) - time_s)))]
+    if not (np.isfinite(row.x_px) and np.isfinite(row.y_px)):
+        cv2.drawMarker(tile, (12, tile.shape[0] - 12), (0, 0, 255), cv2.MARKER_TILTED_CROSS, 14, 2)
+        return tile
+    centre = (int(round(row.x_px * scale * 4)), int(round(row.y_px * scale * 4)))
+    good = row.flag == "ok"
+    cv2.circle(tile, centre, 4 * 7, (0, 200, 0) if good else (0, 0, 255), 1 if good else 2, cv2.LINE_AA, shift=2)
+    return tile

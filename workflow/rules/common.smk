@@ -342,6 +342,7 @@ def report_files():
             entry["frames"] = f"results/frames/{name}/summary.json"
             entry["tracks"] = f"results/tracks/{name}.json"
             entry["contact_sheet"] = f"results/frames/{name}/contact_sheet.png"
+            entry["track_sheet"] = f"results/tracks/{name}.sheet.png"
         if truth_dir and (Path(truth_dir) / f"{name}.yaml").is_file():
             entry["truth"] = str(Path(truth_dir) / f"{name}.yaml")
         trials[name] = entry

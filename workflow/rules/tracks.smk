@@ -1,11 +1,13 @@
 rule tracks:
-    """Sub-pixel marker centre and quality flag per frame (one decode pass)."""
+    """Sub-pixel marker (or body) centre and quality flag per frame; the track drawn over a contact sheet."""
     input:
         video=raw_video,
+        timeline="results/frames/{trial}/timeline.csv",
         code=script_code("tracks.py"),
     output:
         track="results/tracks/{trial}.csv",
         summary="results/tracks/{trial}.json",
+        sheet="results/tracks/{trial}.sheet.png",
     log:
         "logs/tracks/{trial}.log",
     threads: 1  # the decoder's threads (video.iter_luma); `--set-threads tracks=2` for long 1080p clips
@@ -14,5 +16,6 @@ rule tracks:
         runtime=60,
     params:
         tracking=tracking_settings,
+        tiles=config["frames"]["contact_sheet_tiles"],
     script:
         "../scripts/tracks.py"

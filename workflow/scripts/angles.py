@@ -30,6 +30,7 @@ def read_json(path):
 
 
 def work():
+    track_summary, path = None, None
     warnings = []  # about the angle measurement (shown in the report's tracking-quality notes)
     if "table" in sm.input.keys():
         source = sm.input.table
@@ -38,7 +39,10 @@ def work():
             read_tracker_csv(source), vertical_deg=vertical, length_m=length_m, source=source
         )
     else:
-        require_ok(read_json(sm.input.track_summary), "tracks")
+        track_summary = require_ok(read_json(sm.input.track_summary), "tracks")
+        path = track_summary.get("path") or {}
+        if path.get("corrected") or path.get("departs"):
+            warnings.append(f"path: {path['verdict']}")
         source = sm.input.track
         calibration = None
         if "calibration" in sm.input.keys():
@@ -76,6 +80,9 @@ def work():
     log.info("trial %s: %s", trial, info)
     write_csv(table, sm.output.angles)
     document = {"trial": trial, "rig": settings["rig_name"], "status": "ok", **info.to_dict()}
+    if track_summary is not None:
+        document["method"] = (track_summary.get("method") or {}).get("used", "marker")
+        document["path"] = path
     write_json({**document, "warnings": warnings}, sm.output.summary)
 
 

@@ -1,4 +1,4 @@
-"""Snakemake adapter: marker track of one video.
+"""Snakemake adapter: marker (or body) track of one video, its path's departure from one circle measured.
 
 A video that cannot be tracked gives an empty track whose summary states the
 error (status "failed"), so that the other trials of the rig still pool their
@@ -7,10 +7,15 @@ geometry; the later stages of that trial pass the failure on.
 
 import time
 
+import pandas as pd
+
 import _setup  # noqa: F401
-from pendulum.io import script_logger, write_csv, write_json
-from pendulum.status import empty_table, run_stage
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.io import script_logger, write_csv, write_json, write_png
+from pendulum.path_shape import path_departure
+from pendulum.status import empty_table, failure_image, run_stage
+from pendulum.track_method import track_trial
+from pendulum.tracking import TrackerSettings
+from pendulum.video import VideoError, contact_sheet
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "tracks")
@@ -21,20 +26,32 @@ started = time.perf_counter()
 
 
 def work():
-    track = track_video(video, settings, progress=log.info)
+    track = track_trial(video, settings, progress=log.info)
+    method = track.attrs.get("method", {})
+    log.info("%s: tracked the %s (%s)", video, method.get("used"), method.get("reason"))
+    track, path = path_departure(track)
+    log.info("%s: %s", video, path["verdict"])
+    if path.get("not_a_pendulum"):
+        raise VideoError(f"{video}: {path['verdict']}; no angle record is made from it")
     flags = track.flag.value_counts().to_dict()
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
     write_csv(track, sm.output.track)
+    timeline = pd.read_csv(sm.input.timeline)
+    in_image = track.assign(x_px=track.get("x_image_px", track.x_px), y_px=track.get("y_image_px", track.y_px))
+    write_png(contact_sheet(video, n_tiles=sm.params.tiles, timeline=timeline, track=in_image), sm.output.sheet)
     write_json(
         {
             "video": video,
             "status": "ok",
             "n_frames": int(len(track)),
             "flags": {k: int(v) for k, v in sorted(flags.items())},
+            "method": method,  # marker or body, why, and what each tried gave
+            "path": path,  # departure from one circle, a creeping pivot (corrected), what is left
             "exposure_fraction": track.attrs.get("exposure_fraction"),
             "marker": track.attrs.get("marker"),  # polarity, radius and start used (given or detected)
             "detection": track.attrs.get("detection"),  # what detection found (None: all given)
+            "body": track.attrs.get("body"),  # the body tracker's scene facts (None: a marker was tracked)
             "decoder": track.attrs.get("video", {}),
             "settings": settings.__dict__,
         },
@@ -44,6 +61,7 @@ def work():
 
 def write_failed(document):
     write_csv(empty_table(TRACK_COLUMNS), sm.output.track)
+    write_png(failure_image(document["error"]), sm.output.sheet)
     write_json({"video": video, **document, "settings": settings.__dict__}, sm.output.summary)
 
 

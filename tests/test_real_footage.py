@@ -1,0 +1,115 @@
+"""Real phone footage (../shared/data/real-video, MIT licence): the tracker's test against reality.
+
+`redapple_480p.mov`: a red apple on a thin string before a plain light wall, 640×360 at 60 fps,
+21.7 s, already swinging in the first frame, the pivot ~330 px above the frame, soft shadows
+beside it, the phone creeping on its stand. Its period, 2.078 s, was measured independently (a
+colour-threshold track of the apple and a damped cosine fitted to its horizontal position; the
+clip's README). `star_480p.mov`: a paper star spinning and twisting on its thread, not a rigid
+pendulum about a fixed pivot: it must end in a clear message, never a silently wrong record.
+
+Config defaults, no hints: exactly what a new user gets.
+"""
+
+import math
+
+import numpy as np
+import pytest
+import yaml
+
+from conftest import ROOT, SHARED
+
+pytestmark = pytest.mark.slow
+REAL = SHARED / "data" / "real-video"
+APPLE = REAL / "redapple_480p.mov"
+STAR = REAL / "star_480p.mov"
+APPLE_PERIOD_S = 2.078  # measured independently (the clip's README)
+
+
+def default_settings():
+    from pendulum.tracking import TrackerSettings
+
+    config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
+    return TrackerSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in config.items()})
+
+
+def zero_crossing_period(time_s: np.ndarray, theta: np.ndarray) -> float:
+    """Mean period from upward crossings of the median angle (linear interpolation), by a line through them."""
+    ok = np.isfinite(theta)
+    centred = theta - np.median(theta[ok])
+    i = np.flatnonzero((centred[:-1] < 0) & (centred[1:] >= 0) & ok[:-1] & ok[1:])
+    crossings = time_s[i] - centred[i] * (time_s[i + 1] - time_s[i]) / (centred[i + 1] - centred[i])
+    return float(np.polyfit(np.arange(crossings.size), crossings, 1)[0])
+
+
+@pytest.fixture(scope="module")
+def apple():
+    if not APPLE.is_file():
+        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    from pendulum.geometry import angles_from_track, estimate_rig_geometry
+    from pendulum.path_shape import path_departure
+    from pendulum.track_method import track_trial
+
+    track = track_trial(APPLE, default_settings())
+    corrected, path = path_departure(track)
+    geometry = estimate_rig_geometry({"apple": corrected}, vertical_deg=0.0)
+    table, info = angles_from_track(
+        corrected, pivot_px=geometry["pivot_px"], vertical_deg=0.0, length_m=1.0, source=str(APPLE)
+    )
+    return track, path, table, info
+
+
+def test_apple_is_tracked_by_its_body_in_nearly_every_frame(apple):
+    track, _, _, _ = apple
+    assert track.attrs["method"]["used"] == "body"
+    assert "marker" in track.attrs["method"]["tried"]  # the marker was tried first, and why it was not kept is said
+    ok = (track.flag == "ok").mean()
+    assert ok >= 0.95, track.flag.value_counts().to_dict()
+    # the silhouette is the apple: about 20 px in radius (measured on the frames by eye: 38–42 px across)
+    assert 17 <= track.attrs["body"]["radius_px"] <= 23
+
+
+def test_apple_angle_record_has_the_measured_period_and_low_noise(apple):
+    _, _, table, info = apple
+    assert not info.release_detected  # already swinging in the first frame: the record starts there
+    period = zero_crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
+    assert abs(period / APPLE_PERIOD_S - 1) <= 0.003, period
+    assert info.noise_deg <= 0.03
+    assert (table.flag == "ok").mean() >= 0.95
+
+
+def test_apple_camera_creep_is_measured_said_and_corrected(apple):
+    track, path, _, _ = apple
+    # Off one fixed circle by ~3 px RMS (the README's figure), which a pivot creeping in the image
+    # explains to well under 1 px; the rest is reported, not hidden.
+    assert 2.5 <= path["circle_rms_px"] <= 4.0
+    assert path["corrected"] and path["creep"]["degree"] >= 1
+    assert path["creep"]["rms_after_px"] < 0.3 * path["circle_rms_px"]
+    dx, dy = path["creep"]["start_to_end_px"]
+    # The wall's own marks (left of the frame) move by about (+8, −8) px from the first to the last
+    # seconds (phase correlation of the scene, see the issue's notes): the same creep.
+    assert 4 <= dx <= 12 and -14 <= dy <= -5, (dx, dy)
+    assert "creeping" in path["verdict"]
+    assert not path["not_a_pendulum"]
+
+
+def test_spinning_star_is_not_taken_for_a_pendulum():
+    if not STAR.is_file():
+        pytest.skip(f"{STAR} not found")
+    from pendulum.path_shape import path_departure
+    from pendulum.track_method import track_trial
+    from pendulum.video import VideoError
+
+    try:
+        track = track_trial(STAR, default_settings())
+    except VideoError as error:  # a clear refusal is as good as a flagged record
+        assert str(STAR) in str(error)
+        return
+    _, path = path_departure(track)
+    assert path["not_a_pendulum"], path
+    assert "not a rigid pendulum" in path["verdict"]
+
+
+def test_zero_crossing_period_is_exact_on_a_cosine():
+    t = np.arange(0, 20, 1 / 60)
+    theta = 0.3 * np.cos(2 * math.pi * t / 2.078 + 0.4) + 0.01
+    assert zero_crossing_period(t, theta) == pytest.approx(2.078, rel=1e-5)

@@ -1,0 +1,358 @@
+"""Body tracking: the swinging object itself, where there is no marker disk to measure.
+
+What a Tracker (Open Source Physics) user does by hand, made precise for real footage
+(an apple on a string, a two-tone ball, a bauble, a vehicle on its rod):
+
+1. **Scene.** The per-pixel median of ≤ :data:`SCENE_SAMPLES` frames spread over the clip,
+   then again with each sample's moving pixels left out (a body that swings little or rests
+   for most of the clip is not taken into the scene). Static shadows, wall gradients and
+   stripes are part of it; the frame-to-scene noise σ is the MAD of I − B over the frame.
+2. **Body.** In a window around the predicted position, the difference
+   D = |I − B − o| (o: the window's median offset, which follows slow exposure drift)
+   above T = max(5σ, ¼ C), C the body's contrast, opened by a disk of about a third of the
+   body's inner radius (a string, a thin rod or a thread is cut off; a soft shadow is below
+   T), and the connected component nearest the prediction. The first frame's body is the
+   moving object that the samples show (or the one at ``start_px``).
+3. **Position.** The soft-silhouette centroid x̂ = Σ w x / Σ w with
+   w = min(D / (½ C_f), 1) over the component grown by 2 px: every covered pixel counts
+   once whatever its texture or shading, an edge pixel by its coverage (no pixel locking).
+   Any point fixed to a rigid pendulum turns about the pivot with it, so its angle about the
+   pivot is θ up to a constant (the vertical); a string-hung body that also turns about its
+   string keeps its silhouette's centre where a template's rotation would not.
+
+Flags from the measurement's own evidence (never thresholds fitted to renders):
+``edge`` (the body touches the frame's border: part of it is not seen), ``occluded`` (its
+covered area departs from its own running median by more than 6 robust σ of that series
+and 10 %, or the soft and the binary silhouette's centroids disagree by more than 6 robust
+σ of their own difference and 0.3 px: something joined or hid part of it), ``jump``
+(leave-one-out cubic, as for the marker) and ``lost`` (no body near the prediction).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+import pandas as pd
+from scipy.ndimage import median_filter
+
+from pendulum.track_checks import flag_jumps
+from pendulum.tracking import TrackerSettings
+from pendulum.video import VideoError, iter_luma
+
+log = logging.getLogger(__name__)
+
+SCENE_SAMPLES = 60  # frames spread over the clip for the static scene
+MIN_BODY_AREA_PX = 12  # a moving component smaller than this is noise
+NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
+CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft shadow stays below)
+AREA_SIGMAS = 6.0
+MIN_AREA_CHANGE = 0.10  # the covered area must also change by this fraction to be a fault
+CENTROID_SIGMAS = 6.0
+MIN_CENTROID_DISAGREEMENT_PX = 0.3
+TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D) in most samples: ambiguous
+
+
+class BodyError(VideoError):
+    """No single moving body can be followed; the message says what was seen and what settles it."""
+
+
+@dataclass(frozen=True)
+class BodyScene:
+    """The static scene and the body as the sampled frames show them."""
+
+    background: np.ndarray  # float32, the scene without the body (full resolution)
+    noise_grey: float  # σ of I − B over static pixels
+    start_px: tuple[float, float]  # the body's soft-silhouette centre in the first frame
+    radius_px: float  # √(area / π) of the body's silhouette in the first frame
+    inner_radius_px: float  # largest inscribed radius (distance transform) of the silhouette
+    contrast_grey: float  # 90th percentile of D inside the body in the first frame
+    moving_samples: int  # samples in which a moving object was seen
+    n_samples: int
+
+    def to_dict(self) -> dict:
+        return {
+            "start_px": [round(self.start_px[0], 3), round(self.start_px[1], 3)],
+            "radius_px": round(self.radius_px, 2),
+            "inner_radius_px": round(self.inner_radius_px, 2),
+            "contrast_grey": round(self.contrast_grey, 1),
+            "noise_grey": round(self.noise_grey, 2),
+            "moving_samples": self.moving_samples,
+            "n_samples": self.n_samples,
+        }
+
+
+def _samples(path, n_samples: int) -> list[tuple[int, np.ndarray]]:
+    """Every k-th decoded frame (k doubling as needed): between n and 2n frames over the whole clip, frame 0 first."""
+    kept, stride = [], 1
+    for index, _t, image in iter_luma(path):
+        if index % stride == 0:
+            kept.append((index, image.copy()))
+            if len(kept) >= 2 * n_samples:
+                kept, stride = kept[::2], stride * 2
+    if not kept:
+        raise VideoError(f"{path}: no frame could be decoded")
+    return kept
+
+
+def _components(diff: np.ndarray, threshold: float, open_px: int):
+    """Connected components of ``diff > threshold`` after an opening: (labels, stats, masses)."""
+    mask = (diff > threshold).astype(np.uint8)
+    if open_px > 1:
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px, open_px))
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    masses = np.zeros(n)
+    if n > 1:
+        masses = np.bincount(labels.ravel(), weights=diff.ravel(), minlength=n)
+        masses[0] = 0.0
+    return labels, stats, masses
+
+
+def _noise_sigma(samples: list[np.ndarray], background: np.ndarray) -> float:
+    """Robust σ of I − B over a few samples (most pixels show the static scene)."""
+    picks = samples[:: max(1, len(samples) // 8)]
+    values = np.concatenate([(s.astype(np.float32) - background)[::2, ::2].ravel() for s in picks])
+    return max(float(1.4826 * np.median(np.abs(values - np.median(values)))), 0.5)
+
+
+def _open_size(inner_radius_px: float) -> int:
+    """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
+    return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
+
+
+def _soft_centroid(diff: np.ndarray, component: np.ndarray, contrast: float):
+    """Soft-silhouette centroid of ``component`` grown by 2 px: (x, y, Σw, binary x, binary y)."""
+    grown = cv2.dilate(component.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))) > 0
+    w = np.where(grown, np.minimum(diff / (0.5 * contrast), 1.0), 0.0)
+    total = float(w.sum())
+    ys, xs = np.nonzero(component)
+    if total <= 0 or xs.size == 0:
+        return math.nan, math.nan, 0.0, math.nan, math.nan
+    yy, xx = np.nonzero(grown)
+    ww = w[yy, xx]
+    return (
+        float(ww @ xx / total),
+        float(ww @ yy / total),
+        total,
+        float(xs.mean()),
+        float(ys.mean()),
+    )
+
+
+def _body_in(diff: np.ndarray, threshold: float, open_px: int, near=None, min_mass: float = 0.0):
+    """The component of the moving pixels to take for the body: nearest ``near`` (else the heaviest)."""
+    labels, stats, masses = _components(diff, threshold, open_px)
+    ids = [i for i in range(1, len(masses)) if stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX and masses[i] > min_mass]
+    if not ids:
+        return None, labels, stats, masses
+    if near is None:
+        return max(ids, key=lambda i: masses[i]), labels, stats, masses
+    nx, ny = near
+
+    def distance(i):
+        x0, y0, w, h = stats[i, :4]
+        dx = max(x0 - nx, 0, nx - (x0 + w - 1))
+        dy = max(y0 - ny, 0, ny - (y0 + h - 1))
+        return math.hypot(dx, dy), -masses[i]
+
+    return min(ids, key=distance), labels, stats, masses
+
+
+def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
+    """The static scene and the swinging body in the first frame (see the module docstring).
+
+    Raises :class:`BodyError` when nothing moves, or when two objects of similar weight move in
+    most samples and ``start_px`` does not say which one is the pendulum.
+    """
+    samples = _samples(path, n_samples)
+    images = [s for _, s in samples]
+    stack = np.stack(images)
+    first_pass = np.median(stack, axis=0).astype(np.float32)
+    sigma = _noise_sigma(images, first_pass)
+    threshold = max(NOISE_SIGMAS * sigma, 4.0)
+    # Per sample, the moving objects (heavier ones first); their pixels leave the scene's second pass.
+    excluded = np.zeros(stack.shape, bool)
+    moving, two_objects, seen = 0, 0, []
+    grow = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
+    for k, image in enumerate(images):
+        diff = np.abs(image.astype(np.float32) - first_pass)
+        labels, stats, masses = _components(diff, threshold, 3)
+        order = [i for i in np.argsort(masses)[::-1] if i > 0 and stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
+        if not order:
+            continue
+        moving += 1
+        heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]]
+        excluded[k] = cv2.dilate(np.isin(labels, heavy).astype(np.uint8), grow) > 0
+        if len(order) > 1 and masses[order[1]] >= TWO_OBJECTS_MASS_RATIO * masses[order[0]]:
+            a, b = order[0], order[1]
+            (ax, ay), (bx, by) = (stats[a, :2] + stats[a, 2:4] / 2), (stats[b, :2] + stats[b, 2:4] / 2)
+            if math.hypot(ax - bx, ay - by) > 2 * math.sqrt(stats[a, cv2.CC_STAT_AREA] + stats[b, cv2.CC_STAT_AREA]):
+                two_objects += 1
+                seen.append(((ax, ay), (bx, by)))
+    if moving < max(3, len(images) // 4):
+        raise BodyError(
+            f"{path}: nothing moves against the static scene in {len(images) - moving} of {len(images)} sampled "
+            f"frames (noise {sigma:.1f} grey levels): no swinging body to track"
+        )
+    if start_px is None and two_objects > moving // 2:
+        (ax, ay), (bx, by) = seen[0]
+        raise BodyError(
+            f"{path}: two moving objects of similar size in {two_objects} of {moving} sampled frames (e.g. near "
+            f"({ax:.0f}, {ay:.0f}) and ({bx:.0f}, {by:.0f}) px): give start_px of the pendulum to follow in the "
+            "trial's sidecar"
+        )
+    background = first_pass.copy()
+    union = excluded.any(axis=0)
+    if union.any():
+        column = stack[:, union].astype(np.float32)
+        column[excluded[:, union]] = np.nan
+        valid = np.isfinite(column).sum(axis=0)
+        with np.errstate(all="ignore"):
+            second = np.nanmedian(np.where(valid[None] > 0, column, 0.0), axis=0)
+        enough = valid >= max(5, len(images) // 10)
+        background[union] = np.where(enough, second, first_pass[union])
+    # The body in the first frame.
+    diff = np.abs(images[0].astype(np.float32) - background)
+    near = None if start_px is None else (float(start_px[0]), float(start_px[1]))
+    body, labels, stats, masses = _body_in(diff, threshold, 3, near=near)
+    if body is None:
+        raise BodyError(
+            f"{path}: no moving body in the first frame (nothing differs from the static scene by more than "
+            f"{threshold:.0f} grey levels)" + ("" if near is None else f" near start_px ({near[0]:.0f}, {near[1]:.0f})")
+        )
+    component = labels == body
+    inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
+    open_px = _open_size(inner)
+    body, labels, stats, masses = _body_in(diff, threshold, open_px, near=near or _centre(component))
+    if body is None:
+        raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
+    component = labels == body
+    contrast = float(np.percentile(diff[component], 90))
+    threshold = max(threshold, CONTRAST_FRACTION * contrast)
+    body, labels, stats, masses = _body_in(diff, threshold, open_px, near=_centre(component))
+    component = labels == body
+    inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
+    x, y, _, _, _ = _soft_centroid(diff, component, contrast)
+    return BodyScene(
+        background=background,
+        noise_grey=sigma,
+        start_px=(x, y),
+        radius_px=math.sqrt(component.sum() / math.pi),
+        inner_radius_px=inner,
+        contrast_grey=contrast,
+        moving_samples=moving,
+        n_samples=len(images),
+    )
+
+
+def _centre(component: np.ndarray) -> tuple[float, float]:
+    ys, xs = np.nonzero(component)
+    return float(xs.mean()), float(ys.mean())
+
+
+def _robust_outliers(values: np.ndarray, usable: np.ndarray, window: int, sigmas: float, floor: float) -> np.ndarray:
+    """Samples that depart from their running median by more than ``sigmas`` robust σ of the series and ``floor``."""
+    out = np.zeros(values.size, bool)
+    if usable.sum() < 10:
+        return out
+    idx = np.flatnonzero(usable)
+    filled = np.interp(np.arange(values.size), idx, values[idx])
+    running = median_filter(filled, size=window, mode="nearest")
+    dev = values - running
+    spread = 1.4826 * np.median(np.abs(dev[usable]))
+    return usable & (np.abs(dev) > max(sigmas * spread, floor))
+
+
+def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene | None = None) -> pd.DataFrame:
+    """Follow the body through the whole video in one decode pass (columns as :func:`pendulum.tracking.track_video`).
+
+    ``quality`` and ``signal_ratio`` are the body's covered area relative to its median.
+    ``attrs["body"]``: the scene's facts (:meth:`BodyScene.to_dict`). Raises
+    :class:`~pendulum.video.VideoError` when fewer than ``min_usable_fraction`` of the frames are usable.
+    """
+    if scene is None:
+        scene = find_body(path, settings.start_px)
+    background = scene.background
+    height, width = background.shape
+    contrast = scene.contrast_grey
+    threshold = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * contrast)
+    open_px = _open_size(scene.inner_radius_px)
+    reach = 2.5 * scene.radius_px + 12
+    rows = []
+    x_prev, y_prev = scene.start_px
+    vx = vy = 0.0
+    lost_run = 0
+    binary = []
+    report: dict = {}
+    for index, time_s, image in iter_luma(path, report=report):
+        half = reach + 2.0 * math.hypot(vx, vy) + 6 * lost_run
+        px, py = x_prev + vx, y_prev + vy
+        x0, x1 = max(int(px - half), 0), min(int(px + half) + 1, width)
+        y0, y1 = max(int(py - half), 0), min(int(py + half) + 1, height)
+        flag, x, y, mass, bx, by = "lost", math.nan, math.nan, 0.0, math.nan, math.nan
+        if x1 - x0 > 4 and y1 - y0 > 4:
+            signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
+            border = np.concatenate([signed[0], signed[-1], signed[:, 0], signed[:, -1]])
+            diff = np.abs(signed - np.median(border))
+            body, labels, stats, masses = _body_in(diff, threshold, open_px, near=(px - x0, py - y0), min_mass=0.0)
+            if body is not None:
+                component = labels == body
+                sx, sy, mass, bx, by = _soft_centroid(diff, component, contrast)
+                if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
+                    x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
+                    bx0, by0, bw, bh = stats[body, :4]
+                    touches = (
+                        (bx0 + x0 <= 1 and x0 == 0)
+                        or (by0 + y0 <= 1 and y0 == 0)
+                        or (bx0 + bw + x0 >= width - 1 and x1 == width)
+                        or (by0 + bh + y0 >= height - 1 and y1 == height)
+                    )
+                    flag = "edge" if touches else "ok"
+        if math.isfinite(x):
+            if lost_run == 0 and rows and rows[-1][6] != "lost":
+                vx, vy = x - x_prev, y - y_prev
+            x_prev, y_prev, lost_run = x, y, 0
+        else:
+            lost_run += 1
+        rows.append([index, float(time_s), x, y, mass, mass, flag])
+        binary.append((bx, by))
+        if progress and index and index % 500 == 0:
+            progress(f"{path}: body tracked through frame {index}")
+    table = pd.DataFrame(rows, columns=["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"])
+    if table.empty:
+        raise VideoError(f"{path}: no frame could be decoded")
+    flags = table.flag.to_numpy(object)
+    x = table.x_px.to_numpy(float)
+    y = table.y_px.to_numpy(float)
+    mass = table.quality.to_numpy(float)
+    usable = flags == "ok"
+    reference = float(np.median(mass[usable])) if usable.any() else 1.0
+    table["quality"] = table["signal_ratio"] = np.where(np.isfinite(x), mass / reference, 0.0)
+    window = max(5, int(round(len(table) / max(table.time_s.iloc[-1], 1e-9))) | 1)  # about one second
+    area_fault = _robust_outliers(mass / reference, usable, window, AREA_SIGMAS, MIN_AREA_CHANGE)
+    bxy = np.asarray(binary, float)
+    disagreement = np.hypot(x - bxy[:, 0], y - bxy[:, 1])
+    centroid_fault = _robust_outliers(
+        disagreement, usable & np.isfinite(disagreement), window, CENTROID_SIGMAS, MIN_CENTROID_DISAGREEMENT_PX
+    )
+    flags[area_fault | centroid_fault] = "occluded"
+    usable = flags == "ok"
+    jumps = flag_jumps(x, y, usable, settings)
+    flags[jumps & usable] = "jump"
+    table["flag"] = flags
+    counts = table.flag.value_counts().to_dict()
+    n_ok = int(counts.get("ok", 0))
+    table.attrs["video"] = report
+    table.attrs["body"] = scene.to_dict()
+    table.attrs["marker"] = None
+    if n_ok < settings.min_usable_fraction * len(table):
+        faults = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()) if k != "ok")
+        raise VideoError(
+            f"{path}: the body is usable in only {n_ok} of {len(table)} frames "
+            f"({100 * n_ok / len(table):.0f} %; {faults}): the video cannot give an angle record"
+        )
+    return table
