@@ -82,6 +82,7 @@ class BodyScene:
     contrast_grey: float  # 90th percentile of D inside the body in the first frame
     moving_samples: int  # samples in which a moving object was seen
     n_samples: int
+    silhouette_fraction: float = STRONG_FRACTION  # share of the body's contrast a silhouette pixel needs
 
     def to_dict(self) -> dict:
         return {
@@ -92,6 +93,7 @@ class BodyScene:
             "noise_grey": round(self.noise_grey, 2),
             "moving_samples": self.moving_samples,
             "n_samples": self.n_samples,
+            "silhouette_fraction": round(self.silhouette_fraction, 3),
         }
 
 
@@ -136,16 +138,43 @@ def _noise_sigma(samples: list[np.ndarray], background: np.ndarray) -> float:
 
 
 def _open_size(inner_radius_px: float) -> int:
-    """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
+    """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius
+    (no more than the closing width: a print's patches must survive it one by one)."""
     return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
 
 
-def _silhouette(diff: np.ndarray, component: np.ndarray) -> tuple[np.ndarray | None, float]:
+def silhouette_fraction(values: np.ndarray) -> float:
+    """The share of the body's contrast C above which a pixel counts for its silhouette, fixed for the clip.
+
+    :data:`STRONG_FRACTION` unless the body's differences from the wall fall in two well-separated groups
+    (a dark half and a half of nearly the wall's grey: Otsu's split explains ≥ 75 % of their variance and
+    the lower group's mean is under 45 % of the upper's); then the split itself, so the faint part is left
+    out in every frame instead of flickering in and out with its texture.
+    """
+    values = np.asarray(values, float)
+    top = float(np.percentile(values, 90)) if values.size else 0.0
+    if values.size < 30 or top <= 0:
+        return STRONG_FRACTION
+    scaled = np.clip(values / top * 200, 0, 255).astype(np.uint8).reshape(-1, 1)
+    split, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    cut = split / 200 * top
+    low, high = values[values <= cut], values[values > cut]
+    if low.size < 0.1 * values.size or high.size < 0.3 * values.size:
+        return STRONG_FRACTION
+    between = low.size * high.size / values.size**2 * (high.mean() - low.mean()) ** 2
+    if between < 0.75 * values.var() or low.mean() > 0.45 * high.mean():
+        return STRONG_FRACTION
+    return max(STRONG_FRACTION, cut / top)
+
+
+def _silhouette(
+    diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION
+) -> tuple[np.ndarray | None, float]:
     """The body's silhouette: its strong pixels (D > ½ C_f, C_f the component's 90th percentile of D) filled to
     their convex hull, and C_f. A part that hardly differs from the wall (a bright half before a bright
     wall, the light squares of a print) is left out or filled in the same way in every frame."""
     contrast = float(np.percentile(diff[component], 90))
-    strong = cv2.findNonZero((component & (diff > STRONG_FRACTION * contrast)).astype(np.uint8))
+    strong = cv2.findNonZero((component & (diff > fraction * contrast)).astype(np.uint8))
     if strong is None or len(strong) < 3:
         return None, contrast
     filled = np.zeros(diff.shape, np.uint8)
@@ -153,18 +182,26 @@ def _silhouette(diff: np.ndarray, component: np.ndarray) -> tuple[np.ndarray | N
     return filled > 0, contrast
 
 
-def _soft_centroid(diff: np.ndarray, component: np.ndarray):
+def _soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION):
     """Soft-silhouette centroid: (x, y, Σw, the filled silhouette's plain centroid x, y).
 
-    w = 1 inside :func:`_silhouette`, min(D / (½ C_f), 1) in the 2 px beyond it (an edge pixel counts
-    by its coverage).
+    w = 1 in the silhouette's core (:func:`_silhouette` less its outer 2 px); in the 2 px on either side
+    of its outline, the pixel's coverage D / C_local, C_local the largest D of the core within 3 px (an
+    edge pixel of a body of contrast C covering a fraction f of it differs by f·C): no pixel locking.
     """
-    inside, contrast = _silhouette(diff, component)
+    inside, contrast = _silhouette(diff, component, fraction)
     if inside is None:
         return math.nan, math.nan, 0.0, math.nan, math.nan
-    grown = cv2.dilate(inside.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))) > 0
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+    hull = inside.astype(np.uint8)
+    core = cv2.erode(hull, disk)
+    grown = cv2.dilate(hull, disk) > 0
+    if core.sum() < 5:  # a body a few pixels across: the whole silhouette is its edge
+        core = hull
+    local = cv2.dilate(np.where(core > 0, diff, 0).astype(np.float32), np.ones((7, 7), np.uint8))
     yy, xx = np.nonzero(grown)
-    ww = np.where(inside[yy, xx], 1.0, np.minimum(diff[yy, xx] / (0.5 * contrast), 1.0))
+    edge = np.minimum(diff[yy, xx] / np.maximum(local[yy, xx], 1e-6), 1.0)
+    ww = np.where(core[yy, xx] > 0, 1.0, np.where(local[yy, xx] > 0, edge, 0.0))
     total = float(ww.sum())
     ys, xs = np.nonzero(inside)
     return float(ww @ xx / total), float(ww @ yy / total), total, float(xs.mean()), float(ys.mean())
@@ -230,6 +267,10 @@ def _same_exposure(images: list[np.ndarray]) -> list[np.ndarray]:
     return out
 
 
+def _reduced(image: np.ndarray, scale: int) -> np.ndarray:
+    return cv2.resize(image, (image.shape[1] // scale, image.shape[0] // scale), interpolation=cv2.INTER_AREA)
+
+
 def _moving_objects(images: list, background: np.ndarray, threshold: float):
     """Per sample, the pixels of its heavier moving objects (grown by 4 px); how many samples show one; how many
     show two far-apart objects of similar weight, and where."""
@@ -266,9 +307,11 @@ def _masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray
     if union.any():
         column = stack[:, union].astype(np.float32)
         column[excluded[:, union]] = np.nan
+        column.sort(axis=0)  # NaN last: the median of the first `valid` values of each pixel
         valid = np.isfinite(column).sum(axis=0)
-        with np.errstate(all="ignore"):
-            second = np.nanmedian(np.where(valid[None] > 0, column, 0.0), axis=0)
+        lower = np.take_along_axis(column, np.maximum((valid - 1) // 2, 0)[None], axis=0)[0]
+        upper = np.take_along_axis(column, np.maximum(valid // 2, 0)[None], axis=0)[0]
+        second = 0.5 * (lower + upper)
         enough = valid >= max(5, len(stack) // 10)
         background[union] = np.where(enough, second, fallback[union])
     return background
@@ -288,15 +331,26 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
     threshold = max(NOISE_SIGMAS * sigma, 4.0)
     # Each sample's moving objects leave the scene; again against the new scene, as a body that overlaps
     # itself over many samples (large, slow near its turning points) is only partly seen moving at first.
-    background = first_pass
-    excluded = np.zeros(stack.shape, bool)
+    # Found on samples reduced to ≤ ~640 px (the masks then enlarged): the scene itself at full resolution.
+    scale = max(1, int(round(max(first_pass.shape) / 640)))
+    small = [_reduced(im, scale) for im in images] if scale > 1 else images
+    small_stack = np.stack(small) if scale > 1 else stack
+    small_first = _reduced(first_pass, scale) if scale > 1 else first_pass
+    small_threshold = max(NOISE_SIGMAS * _noise_sigma(small, small_first), 4.0) if scale > 1 else threshold
+    small_background = small_first
+    excluded = np.zeros(small_stack.shape, bool)
     for _ in range(SCENE_PASSES):
-        found, moving, two_objects, seen = _moving_objects(images, background, threshold)
+        found, moving, two_objects, seen = _moving_objects(small, small_background, small_threshold)
         grown = excluded | found
         if grown.sum() <= 1.02 * excluded.sum():
             break
         excluded = grown
-        background = _masked_median(stack, excluded, first_pass)
+        small_background = _masked_median(small_stack, excluded, small_first)
+    seen = [((ax * scale, ay * scale), (bx * scale, by * scale)) for (ax, ay), (bx, by) in seen]
+    if scale > 1:
+        size = (first_pass.shape[1], first_pass.shape[0])
+        excluded = np.stack([cv2.resize(e.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 for e in excluded])
+    background = _masked_median(stack, excluded, first_pass) if excluded.any() else first_pass
     if moving < max(3, len(images) // 4):
         raise BodyError(
             f"{path}: nothing moves against the static scene in {len(images) - moving} of {len(images)} sampled "
@@ -320,7 +374,7 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
             f"{threshold:.0f} grey levels)" + ("" if near is None else f" near start_px ({near[0]:.0f}, {near[1]:.0f})")
         )
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
-    open_px = _open_size(inner)
+    open_px = min(_open_size(inner), close_px)
     component, _ = _body_in(diff, threshold, open_px, close_px, near=near or _centre(component))
     if component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
@@ -329,7 +383,8 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
     strong, _ = _body_in(diff, threshold, open_px, close_px, near=_centre(component))
     component = component if strong is None else strong
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
-    x, y, _, _, _ = _soft_centroid(diff, component)
+    fraction = silhouette_fraction(diff[component])
+    x, y, _, _, _ = _soft_centroid(diff, component, fraction)
     return BodyScene(
         background=background,
         noise_grey=sigma,
@@ -339,6 +394,7 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
         contrast_grey=contrast,
         moving_samples=moving,
         n_samples=len(images),
+        silhouette_fraction=fraction,
     )
 
 
@@ -373,7 +429,7 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
     height, width = background.shape
     contrast = scene.contrast_grey
     threshold = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * contrast)
-    open_px = _open_size(scene.inner_radius_px)
+    open_px = min(_open_size(scene.inner_radius_px), _close_size(background.shape))
     close_px = _close_size(background.shape)
     reach = 2.5 * scene.radius_px + 12
     rows = []
@@ -394,7 +450,7 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
             diff = np.abs(signed - np.median(border))
             component, box = _body_in(diff, threshold, open_px, close_px, near=(px - x0, py - y0))
             if component is not None:
-                sx, sy, mass, bx, by = _soft_centroid(diff, component)
+                sx, sy, mass, bx, by = _soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
                     bx0, by0, bw, bh = box

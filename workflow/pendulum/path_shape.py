@@ -35,7 +35,7 @@ MIN_DEPARTURE_PX = 0.25  # ... and this: reported as a departure
 # spread along the path (a clean swing: 0.1–0.3 %; a paper star spinning on its thread: 4.6 %), more than
 # NOT_CIRCLE_NOISE_RATIO × the noise and more than 1 px
 NOT_CIRCLE_SWING_FRACTION = 0.02
-NOT_CIRCLE_NOISE_RATIO = 10.0
+NOT_CIRCLE_NOISE_RATIO = 3.0
 
 
 def _design(t: np.ndarray, degree: int) -> tuple[np.ndarray, float, float]:
