@@ -373,15 +373,17 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
             f"{path}: no moving body in the first frame (nothing differs from the static scene by more than "
             f"{threshold:.0f} grey levels)" + ("" if near is None else f" near start_px ({near[0]:.0f}, {near[1]:.0f})")
         )
+    # Again above a quarter of its own contrast (a soft shadow beside it falls away), still the heaviest
+    # object (or the one at start_px), then opened to cut its thread.
+    contrast = float(np.percentile(diff[component], 90))
+    threshold = max(threshold, CONTRAST_FRACTION * contrast)
+    strong, _ = _body_in(diff, threshold, 3, close_px, near=near)
+    component = component if strong is None else strong
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
     open_px = min(_open_size(inner), close_px)
     component, _ = _body_in(diff, threshold, open_px, close_px, near=near or _centre(component))
     if component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
-    contrast = float(np.percentile(diff[component], 90))
-    threshold = max(threshold, CONTRAST_FRACTION * contrast)
-    strong, _ = _body_in(diff, threshold, open_px, close_px, near=_centre(component))
-    component = component if strong is None else strong
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
     fraction = silhouette_fraction(diff[component])
     x, y, _, _, _ = _soft_centroid(diff, component, fraction)

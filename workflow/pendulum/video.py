@@ -454,20 +454,36 @@ def _keyframe_lumas(path: Path, wanted_pts: set, origin_pts: int) -> list[tuple[
     return found
 
 
-def contact_sheet(
-    path: Path, n_tiles: int = 12, tile_width_px: int = 320, timeline=None, track: pd.DataFrame | None = None
-) -> np.ndarray:
+def contact_sheet(path: Path, n_tiles: int = 12, tile_width_px: int = 320, timeline=None) -> np.ndarray:
     """A grid of evenly spaced tiles labelled with their time: the first shown frame, then key frames.
 
     ``timeline`` (from :func:`frame_timeline`; computed when None) says which frames are shown and
     where the key frames are; only the first frame and the picked key frames are kept in memory.
-    With a ``track`` (``time_s``, ``x_px``, ``y_px``, ``flag``) the sheet is in colour and shows
-    the tracked path in every tile (grey) and the position tracked at the tile's time (a green
-    ring where ``ok``, red where flagged, a red cross where lost): the visual check that the track
-    sits on the pendulum.
     """
+    return contact_sheet_with_times(path, n_tiles, tile_width_px, timeline)[0]
+
+
+def contact_sheet_with_times(
+    path: Path, n_tiles: int = 12, tile_width_px: int = 320, timeline=None
+) -> tuple[np.ndarray, list[float]]:
+    """:func:`contact_sheet` and its tiles' times (s), in tile order."""
     import cv2
 
+    frames = _sheet_frames(path, n_tiles, timeline)
+    h, w = frames[0][1].shape
+    tile_h = int(round(tile_width_px * h / w))
+    cols = min(4, len(frames))
+    rows = math.ceil(len(frames) / cols)
+    sheet = np.zeros((rows * tile_h, cols * tile_width_px), np.uint8)
+    for k, (t, y) in enumerate(frames):
+        tile = cv2.resize(y, (tile_width_px, tile_h), interpolation=cv2.INTER_AREA)
+        cv2.putText(tile, f"{t:6.2f} s", (6, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 255, 2, cv2.LINE_AA)
+        r, c = divmod(k, cols)
+        sheet[r * tile_h : (r + 1) * tile_h, c * tile_width_px : (c + 1) * tile_width_px] = tile
+    return sheet, [float(t) for t, _ in frames]
+
+
+def _sheet_frames(path: Path, n_tiles: int, timeline) -> list[tuple[float, np.ndarray]]:
     if timeline is None:
         _, timeline = frame_timeline(path)
     decoded = iter_luma(path)
@@ -479,24 +495,31 @@ def contact_sheet(
     keys = timeline[timeline.keyframe & (timeline.frame > 0)]
     pick = np.linspace(0, len(keys), min(n_tiles, len(keys) + 1)).round().astype(int)[1:] - 1
     wanted = {int(p) for p in keys.pts.iloc[np.unique(pick)]} if len(keys) else set()
-    frames = [first, *_keyframe_lumas(path, wanted, int(timeline.pts.iloc[0]))]
-    h, w = frames[0][1].shape
-    tile_h = int(round(tile_width_px * h / w))
-    cols = min(4, len(frames))
-    rows = math.ceil(len(frames) / cols)
-    colour = track is not None
-    sheet = np.zeros((rows * tile_h, cols * tile_width_px) + ((3,) if colour else ()), np.uint8)
-    for k, (t, y) in enumerate(frames):
-        tile = cv2.resize(y, (tile_width_px, tile_h), interpolation=cv2.INTER_AREA)
-        if colour:
-            tile = _draw_track(cv2.cvtColor(tile, cv2.COLOR_GRAY2BGR), track, t, tile_width_px / w)
-        cv2.putText(tile, f"{t:6.2f} s", (6, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255,) * 3, 2, cv2.LINE_AA)
+    return [first, *_keyframe_lumas(path, wanted, int(timeline.pts.iloc[0]))]
+
+
+def track_over_sheet(
+    sheet: np.ndarray, times_s: list[float], frame_width_px: int, track: pd.DataFrame, tile_width_px: int = 320
+) -> np.ndarray:
+    """The contact sheet (grey, from :func:`contact_sheet`) in colour with the track drawn in every tile.
+
+    Per tile: the tracked path (grey) and the position tracked at the tile's time (a green ring where
+    ``ok``, red where flagged, a red cross where lost): the visual check that the track sits on the
+    pendulum. No frame is decoded again.
+    """
+    import cv2
+
+    out = cv2.cvtColor(sheet, cv2.COLOR_GRAY2BGR)
+    cols = min(4, len(times_s))
+    tile_h = sheet.shape[0] // max(1, math.ceil(len(times_s) / cols))
+    for k, t in enumerate(times_s):
         r, c = divmod(k, cols)
-        sheet[r * tile_h : (r + 1) * tile_h, c * tile_width_px : (c + 1) * tile_width_px] = tile
-    return sheet
+        tile = out[r * tile_h : (r + 1) * tile_h, c * tile_width_px : (c + 1) * tile_width_px]
+        _draw_track(tile, track, t, tile_width_px / frame_width_px)
+    return out
 
 
-def _draw_track(tile: np.ndarray, track: pd.DataFrame, time_s: float, scale: float) -> np.ndarray:
+def _draw_track(tile: np.ndarray, track: pd.DataFrame, time_s: float, scale: float) -> None:
     """The tracked path (grey) and the position at ``time_s`` (green ring: ok; red: flagged; red cross: lost)."""
     import cv2
 
@@ -505,12 +528,11 @@ def _draw_track(tile: np.ndarray, track: pd.DataFrame, time_s: float, scale: flo
     if len(points) > 1:
         cv2.polylines(tile, [points.reshape(-1, 1, 2)], False, (160, 160, 160), 1, cv2.LINE_AA, shift=2)
     if track.empty:
-        return tile
+        return
     row = track.iloc[int(np.argmin(np.abs(track.time_s.to_numpy(float) - time_s)))]
     if not (np.isfinite(row.x_px) and np.isfinite(row.y_px)):
         cv2.drawMarker(tile, (12, tile.shape[0] - 12), (0, 0, 255), cv2.MARKER_TILTED_CROSS, 14, 2)
-        return tile
+        return
     centre = (int(round(row.x_px * scale * 4)), int(round(row.y_px * scale * 4)))
     good = row.flag == "ok"
     cv2.circle(tile, centre, 4 * 7, (0, 200, 0) if good else (0, 0, 255), 1 if good else 2, cv2.LINE_AA, shift=2)
-    return tile

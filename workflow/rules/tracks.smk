@@ -2,7 +2,8 @@ rule tracks:
     """Sub-pixel marker (or body) centre and quality flag per frame; the track drawn over a contact sheet."""
     input:
         video=raw_video,
-        timeline="results/frames/{trial}/timeline.csv",
+        frames_summary="results/frames/{trial}/summary.json",
+        contact_sheet="results/frames/{trial}/contact_sheet.png",
         code=script_code("tracks.py"),
     output:
         track="results/tracks/{trial}.csv",
@@ -16,6 +17,5 @@ rule tracks:
         runtime=60,
     params:
         tracking=tracking_settings,
-        tiles=config["frames"]["contact_sheet_tiles"],
     script:
         "../scripts/tracks.py"

@@ -3,7 +3,7 @@
 import _setup  # noqa: F401
 from pendulum.io import script_logger, write_csv, write_json, write_png
 from pendulum.status import empty_table, failure_image, run_stage
-from pendulum.video import contact_sheet, frame_timeline
+from pendulum.video import contact_sheet_with_times, frame_timeline
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "frames")
@@ -56,7 +56,8 @@ def work():
             summary["dropped_frames"],
             summary["duplicate_timestamps"],
         )
-    sheet = contact_sheet(video, n_tiles=sm.params.tiles, timeline=timeline)
+    sheet, times = contact_sheet_with_times(video, n_tiles=sm.params.tiles, timeline=timeline)
+    summary["contact_sheet_times_s"] = times  # the tiles' times: the tracks stage draws the track on them
     write_csv(timeline, sm.output.timeline)
     write_png(sheet, sm.output.contact_sheet)
     write_json(summary, sm.output.summary)

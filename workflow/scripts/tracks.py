@@ -5,9 +5,11 @@ error (status "failed"), so that the other trials of the rig still pool their
 geometry; the later stages of that trial pass the failure on.
 """
 
+import json
 import time
+from pathlib import Path
 
-import pandas as pd
+import cv2
 
 import _setup  # noqa: F401
 from pendulum.io import script_logger, write_csv, write_json, write_png
@@ -15,7 +17,7 @@ from pendulum.path_shape import path_departure
 from pendulum.status import empty_table, failure_image, run_stage
 from pendulum.track_method import track_trial
 from pendulum.tracking import TrackerSettings
-from pendulum.video import VideoError, contact_sheet
+from pendulum.video import VideoError, track_over_sheet
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "tracks")
@@ -37,9 +39,15 @@ def work():
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
     write_csv(track, sm.output.track)
-    timeline = pd.read_csv(sm.input.timeline)
+    # the track over the frames stage's contact sheet (no frame decoded again), in image coordinates
+    frames = json.loads(Path(sm.input.frames_summary).read_text())
     in_image = track.assign(x_px=track.get("x_image_px", track.x_px), y_px=track.get("y_image_px", track.y_px))
-    write_png(contact_sheet(video, n_tiles=sm.params.tiles, timeline=timeline, track=in_image), sm.output.sheet)
+    sheet = cv2.imread(sm.input.contact_sheet, cv2.IMREAD_GRAYSCALE)
+    times = frames.get("contact_sheet_times_s") or []
+    drawn = sheet
+    if sheet is not None and times and frames.get("width_px"):
+        drawn = track_over_sheet(sheet, times, frames["width_px"], in_image)
+    write_png(drawn if drawn is not None else failure_image("no contact sheet"), sm.output.sheet)
     write_json(
         {
             "video": video,
