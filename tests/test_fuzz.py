@@ -170,7 +170,7 @@ def test_sidecar_reader_never_crashes(text):
             return
     # accepted: the merged values make a pendulum and a tracker
     Rig.from_mapping(settings_["rig"])
-    TrackerSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in settings_["tracking"].items()})
+    TrackerSettings.from_config(settings_["tracking"])
 
 
 @FUZZ
@@ -229,7 +229,7 @@ def test_config_validation_never_crashes_and_what_it_accepts_works(config):
         return
     for values in config["rigs"].values():
         Rig.from_mapping(values)
-    TrackerSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in config["tracking"].items()})
+    TrackerSettings.from_config(config["tracking"])
     FitSettings(**config["fitting"])
 
 

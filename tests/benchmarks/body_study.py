@@ -47,7 +47,7 @@ def default_settings():
     from pendulum.tracking import TrackerSettings
 
     config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
-    return TrackerSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in config.items()})
+    return TrackerSettings.from_config(config)
 
 
 def demo_physics():

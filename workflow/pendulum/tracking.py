@@ -110,6 +110,11 @@ class TrackerSettings:
         if not 0 < self.min_acquire_score < 1:
             raise ValueError("min_acquire_score must be between 0 and 1")
 
+    @classmethod
+    def from_config(cls, values: dict) -> TrackerSettings:
+        """Settings from config.yaml's ``tracking`` block (or a trial's merged settings): lists become tuples."""
+        return cls(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in values.items()})
+
     @property
     def needs_detection(self) -> bool:
         return self.polarity == "auto" or self.marker_radius_px is None

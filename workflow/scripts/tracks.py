@@ -22,7 +22,7 @@ from pendulum.video import VideoError, track_over_sheet
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "tracks")
 video = sm.input.video
-settings = TrackerSettings(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in sm.params.tracking.items()})
+settings = TrackerSettings.from_config(sm.params.tracking)
 TRACK_COLUMNS = ["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"]
 started = time.perf_counter()
 
