@@ -52,6 +52,7 @@ from pendulum.video import VideoError, iter_luma
 log = logging.getLogger(__name__)
 
 SCENE_SAMPLES = 60  # frames spread over the clip for the static scene
+CORE_REACH = 3.0  # the body: what lies within this many inner radii of its thickest point (a rod is cut)
 SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the previous one showed
 # closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
 CLOSE_FRACTION = 1 / 72
@@ -247,6 +248,18 @@ def _body_in(diff: np.ndarray, threshold: float, open_px: int, close_px: int, ne
     return mask, tuple(box)
 
 
+def _core(component: np.ndarray, reach_px: float):
+    """The body without what sticks out of it: the component's pixels within ``reach_px`` of its thickest
+    point (the maximum of its distance transform). A rod or thread leaving the window is cut at a fixed
+    distance from the body, so what is kept turns with it: ``(mask, (x, y, w, h))``."""
+    dist = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 3)
+    cy, cx = np.unravel_index(int(np.argmax(dist)), dist.shape)
+    yy, xx = np.ogrid[: component.shape[0], : component.shape[1]]
+    kept = component & ((xx - cx) ** 2 + (yy - cy) ** 2 <= reach_px**2)
+    ys, xs = np.nonzero(kept)
+    return kept, (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
+
+
 def _same_exposure(images: list[np.ndarray]) -> list[np.ndarray]:
     """The samples brought to one exposure: each mapped by the gain and offset that best take it to the
     samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD: the body)."""
@@ -385,6 +398,7 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
     if component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
+    component, _ = _core(component, CORE_REACH * inner + 2)
     fraction = silhouette_fraction(diff[component])
     x, y, _, _, _ = _soft_centroid(diff, component, fraction)
     return BodyScene(
@@ -433,6 +447,8 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
     threshold = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * contrast)
     open_px = min(_open_size(scene.inner_radius_px), _close_size(background.shape))
     close_px = _close_size(background.shape)
+    core_px = CORE_REACH * scene.inner_radius_px + 2
+    edge_px = 1.2 * scene.inner_radius_px + 2
     reach = 2.5 * scene.radius_px + 12
     rows = []
     x_prev, y_prev = scene.start_px
@@ -452,6 +468,8 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
             diff = np.abs(signed - np.median(border))
             component, box = _body_in(diff, threshold, open_px, close_px, near=(px - x0, py - y0))
             if component is not None:
+                component, _ = _core(component, core_px)
+                _, box = _core(component, edge_px)  # in view or not: the body itself, without its rod
                 sx, sy, mass, bx, by = _soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0

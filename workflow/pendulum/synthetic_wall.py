@@ -61,7 +61,8 @@ class Wall:
     shadows: tuple = ((27.0, 58.0), (75.0, 58.0))  # offsets (px) of soft shadows that follow the body
     shadow_depth: float = 12.0
     shadow_blur_px: float = 8.0
-    thread_depth: float = 40.0  # the thread this much darker than the wall (1 px wide)
+    thread_depth: float = 40.0  # the thread (or rod) this much darker than the wall ...
+    thread_width_px: int = 1  # ... and this wide
     exposure_drift: float = 0.0  # auto-exposure gain swinging by ± this fraction ...
     exposure_drift_period_s: float = 9.0  # ... over this period
     defocus_px: float = 0.0  # Gaussian σ of the whole picture
@@ -222,7 +223,7 @@ def render_wall_trial(trial: WallTrial, progress=None) -> tuple[list, pd.DataFra
                     (int(round(px[i, j] * 16)), int(round(py[i, j] * 16))),
                     (int(round(end[0] * 16)), int(round(end[1] * 16))),
                     1.0,
-                    1,
+                    wall.thread_width_px,
                     cv2.LINE_AA,
                     4,
                 )
