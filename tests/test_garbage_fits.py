@@ -149,3 +149,19 @@ def test_an_unreliable_trial_is_left_out_of_the_joint_fit_and_discovery_with_its
     )
     assert names == ["good"]
     assert excluded["garbage"].startswith("unreliable record: trial t: fitted rest angle +24.0° from the vertical")
+
+
+def test_a_period_the_rig_values_cannot_give_is_named():
+    """Another rig's values (a new user's first clip): the record swings faster than the rig can at the
+    least added mass. T_min = 2π √(m L² / ((m − ρV) g L)) for the paper's point-mass rig: 3.238 s."""
+    from pendulum.record_checks import rig_period_problem
+
+    rig = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
+    t = np.arange(0, 20, 1 / 60)
+    frame = pd.DataFrame({"time_s": t, "theta_rad": 0.3 * np.cos(2 * math.pi * t / 2.06), "flag": "ok"})
+    record = load_record(frame, "apple", rig, FitSettings())
+    fastest = 2 * math.pi * math.sqrt(3.53 * 0.76**2 / ((3.53 - 1000 * 0.0025) * 9.81 * 0.76))
+    assert fastest == pytest.approx(3.238, abs=1e-3)
+    message = rig_period_problem(record, 2.06, 0.0)
+    assert message and "2.06 s" in message and "3.238 s" in message and "not this pendulum's" in message
+    assert rig_period_problem(record, 3.3, 0.0) is None

@@ -41,11 +41,12 @@ from pendulum.physics import (
     ADDED_MASS,
     TERMS,
     PendulumModel,
+    SimulationDiverged,
     keulegan_carpenter_number,
     lower_bound,
     simulate,
 )
-from pendulum.record_checks import misfit_warning, record_checks, rig_checks
+from pendulum.record_checks import misfit_warning, record_checks, rig_checks, rig_period_problem
 from pendulum.records import AngleRecord, FitSettings
 from pendulum.uncertainty import (
     Z95,
@@ -183,10 +184,27 @@ def _phys_start(model, starts):
 
 
 def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None = None) -> dict:
-    """Fit one model variant to one or more trials (shared coefficients, per-trial nuisance)."""
+    """Fit one model variant to one or more trials (shared coefficients, per-trial nuisance).
+
+    A simulation that diverges during the fit says, besides its start state, when the rig values cannot
+    give the record's period (the usual cause on a new user's first clip: another rig's values).
+    """
     settings = settings or FitSettings()
     if not records:
         raise ValueError("no trials to fit")
+    try:
+        return _fit_trials(records, terms, settings)
+    except SimulationDiverged as exc:
+        model_for = _model_factory(terms)
+        lower = _added_mass_lower_kg(records, settings)
+        hints = [rig_period_problem(r, decay_analysis(model_for(r.rig), r)["period_s"], lower) for r in records]
+        hints = [h for h in hints if h]
+        if not hints:
+            raise
+        raise SimulationDiverged(f"{exc}. More likely: {'; '.join(hints)}") from exc
+
+
+def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dict:
     model_for = _model_factory(terms)
     model = model_for(records[0].rig)
     names = model.parameter_names

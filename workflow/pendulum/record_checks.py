@@ -146,6 +146,25 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
     return out
 
 
+def rig_period_problem(record: AngleRecord, period_s: float, added_mass_lower_kg: float) -> str | None:
+    """A sentence when the record's small-amplitude period lies outside what the rig values allow, else None.
+
+    With the added mass at its lower bound the rig swings fastest: T_min = 2π √((I_p + m_a,min L²) / τ_g),
+    τ_g = (m g − ρ V g) L; a shorter measured period, or no restoring torque at all, means the rig values
+    (length, mass, volume, fluid) are not this pendulum's.
+    """
+    rig = record.rig
+    inertia = rig.pivot_inertia_kg_m2 + added_mass_lower_kg * rig.length_m**2
+    fastest = 2 * math.pi * math.sqrt(max(inertia, 1e-12) / rig.restoring_torque_nm)
+    if not math.isfinite(period_s) or period_s >= 0.98 * fastest:
+        return None
+    return (
+        f"trial {record.trial}: its period {period_s:.4g} s is shorter than its rig values allow "
+        f"({fastest:.4g} s at the least added mass): its values (length_m, mass_kg, displaced_volume_m3, "
+        "fluid_density_kg_m3) are not this pendulum's; give the trial's rig in config or its sidecar"
+    )
+
+
 MISFIT_RATIO = 5.0  # residual RMS over the record's sample-to-sample noise above which the model is called wrong
 
 
