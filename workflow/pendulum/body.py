@@ -52,7 +52,7 @@ from pendulum.video import VideoError, iter_luma
 log = logging.getLogger(__name__)
 
 SCENE_SAMPLES = 60  # frames spread over the clip for the static scene
-CORE_REACH = 3.0  # the body: what lies within this many inner radii of its thickest point (a rod is cut)
+EDGE_REACH = 1.2  # in view or not: what lies within this many inner radii of its thickest point (not its rod)
 SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the previous one showed
 # closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
 CLOSE_FRACTION = 1 / 72
@@ -138,9 +138,14 @@ def _noise_sigma(samples: list[np.ndarray], background: np.ndarray) -> float:
     return max(float(1.4826 * np.median(np.abs(values - np.median(values)))), 0.5)
 
 
+def _body_close_size(inner_radius_px: float) -> int:
+    """Closing disk (odd, px) for a body of this inner radius: ~½ of it, so a print's dark patches (a third
+    of the radius apart) are one object before the opening."""
+    return 2 * int(round(inner_radius_px / 4)) + 1
+
+
 def _open_size(inner_radius_px: float) -> int:
-    """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius
-    (no more than the closing width: a print's patches must survive it one by one)."""
+    """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
     return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
 
 
@@ -250,8 +255,8 @@ def _body_in(diff: np.ndarray, threshold: float, open_px: int, close_px: int, ne
 
 def _core(component: np.ndarray, reach_px: float):
     """The body without what sticks out of it: the component's pixels within ``reach_px`` of its thickest
-    point (the maximum of its distance transform). A rod or thread leaving the window is cut at a fixed
-    distance from the body, so what is kept turns with it: ``(mask, (x, y, w, h))``."""
+    point (the maximum of its distance transform), and their box ``(x, y, w, h)``: whether the body itself
+    touches the frame's border, not a rod or thread leaving it."""
     dist = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 3)
     cy, cx = np.unravel_index(int(np.argmax(dist)), dist.shape)
     yy, xx = np.ogrid[: component.shape[0], : component.shape[1]]
@@ -393,12 +398,12 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
     strong, _ = _body_in(diff, threshold, 3, close_px, near=near)
     component = component if strong is None else strong
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
-    open_px = min(_open_size(inner), close_px)
+    close_px = max(close_px, _body_close_size(inner))
+    open_px = _open_size(inner)
     component, _ = _body_in(diff, threshold, open_px, close_px, near=near or _centre(component))
     if component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
-    component, _ = _core(component, CORE_REACH * inner + 2)
     fraction = silhouette_fraction(diff[component])
     x, y, _, _, _ = _soft_centroid(diff, component, fraction)
     return BodyScene(
@@ -445,10 +450,9 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
     height, width = background.shape
     contrast = scene.contrast_grey
     threshold = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * contrast)
-    open_px = min(_open_size(scene.inner_radius_px), _close_size(background.shape))
-    close_px = _close_size(background.shape)
-    core_px = CORE_REACH * scene.inner_radius_px + 2
-    edge_px = 1.2 * scene.inner_radius_px + 2
+    open_px = _open_size(scene.inner_radius_px)
+    close_px = max(_close_size(background.shape), _body_close_size(scene.inner_radius_px))
+    edge_px = EDGE_REACH * scene.inner_radius_px + 2
     reach = 2.5 * scene.radius_px + 12
     rows = []
     x_prev, y_prev = scene.start_px
@@ -468,7 +472,6 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
             diff = np.abs(signed - np.median(border))
             component, box = _body_in(diff, threshold, open_px, close_px, near=(px - x0, py - y0))
             if component is not None:
-                component, _ = _core(component, core_px)
                 _, box = _core(component, edge_px)  # in view or not: the body itself, without its rod
                 sx, sy, mass, bx, by = _soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
