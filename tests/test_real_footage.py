@@ -63,7 +63,8 @@ def test_apple_is_tracked_by_its_body_in_nearly_every_frame(apple):
     assert track.attrs["method"]["used"] == "body"
     assert "marker" in track.attrs["method"]["tried"]  # the marker was tried first, and why it was not kept is said
     ok = (track.flag == "ok").mean()
-    assert ok >= 0.95, track.flag.value_counts().to_dict()
+    assert ok >= 0.95, track.flag.value_counts().to_dict()  # the acceptance
+    assert ok >= 0.99, track.flag.value_counts().to_dict()  # measured 99.7 % (97.8 % with the stem in)
     # the silhouette is the apple: about 20 px in radius (measured on the frames by eye: 38–42 px across)
     assert 17 <= track.attrs["body"]["radius_px"] <= 23
 
@@ -83,7 +84,8 @@ def test_apple_camera_creep_is_measured_said_and_corrected(apple):
     # explains to well under 1 px; the rest is reported, not hidden.
     assert 2.5 <= path["circle_rms_px"] <= 4.0
     assert path["corrected"] and path["creep"]["degree"] >= 1
-    assert path["creep"]["rms_after_px"] < 0.3 * path["circle_rms_px"]
+    # 0.44 px measured (0.045° on the arm); 0.85 px when the apple's stem and string crept into its silhouette
+    assert path["creep"]["rms_after_px"] < 0.6
     dx, dy = path["creep"]["start_to_end_px"]
     # The wall's own marks (left of the frame) move by about (+8, −8) px from the first to the last
     # seconds (phase correlation of the scene, see the notes): the same creep.
