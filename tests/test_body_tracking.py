@@ -190,8 +190,9 @@ def test_wall_render_puts_the_body_where_its_truth_says():
 
 def test_a_body_on_a_thick_rod_is_tracked_without_the_rod(render_dir):
     """A dark rod (16 px wide: more than the opening removes; as dark as the body) from a pivot above the
-    frame, the body swinging 60 px below the frame's top: the rod leaves the window and the frame, but what
-    is measured (and judged in view or not) is the body, cut at a fixed reach from its thickest point."""
+    frame, the body swinging 60 px below the frame's top: the rod leaves the frame, but whether the body is
+    in view is judged on the body itself (within 1.2 inner radii of its thickest point): every frame is
+    ``edge`` when the rod counts."""
     from pendulum.geometry import angles_from_track
     from pendulum.synthetic_wall import Wall, WallBody
     from pendulum.track_method import track_trial

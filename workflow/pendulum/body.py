@@ -10,19 +10,22 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    stripes are part of the scene; the frame-to-scene noise σ is the MAD of I − B.
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
    window's median offset, which follows slow exposure drift) above T = max(5σ, ¼ C), C the body's
-   contrast, closed (a print's dark patches are one object) and opened by a disk of about a third of
-   the body's inner radius (a string, a thin rod or a thread is cut off; a soft shadow is below T);
-   the connected component nearest the prediction. The first frame's body is the moving object the
-   samples show, or the one at ``start_px`` (two pendulums in view).
-3. **Position.** The silhouette: the component's pixels that differ by more than
-   :data:`STRONG_FRACTION` of its contrast C_f, filled to their convex hull (a part that hardly
-   differs from the wall, a bright half before a bright wall, is left out or filled the same way in
-   every frame); its soft-edged centroid x̂ = Σ w x / Σ w, w = 1 inside, min(D / (½ C_f), 1) in the
-   2 px beyond (an edge pixel by its coverage). Any point fixed to a rigid pendulum turns about the
-   pivot with it, so its angle about the pivot is θ up to a constant (the vertical).
+   contrast, closed by a disk of about half the body's inner radius (a print's dark patches are one
+   object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
+   soft shadow is below T); the connected component nearest the prediction, with every component
+   within two closing widths of it. The first frame's body is the heaviest moving object above a
+   quarter of its own contrast, or the one at ``start_px`` (two pendulums in view).
+3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
+   contrast C_f fixed for the clip (:func:`silhouette_fraction`: ¼, or the Otsu split of a two-tone
+   body), filled to their convex hull (a part that hardly differs from the wall, a bright half before
+   a bright wall, is left out the same way in every frame); its soft-edged centroid x̂ = Σ w x / Σ w,
+   w = 1 in the hull's core, the pixel's coverage D / C_local within 2 px of its outline (no pixel
+   locking). Any point fixed to a rigid pendulum turns about the pivot with it, so its angle about the
+   pivot is θ up to a constant (the vertical).
 
 Flags from the measurement's own evidence (never thresholds fitted to renders):
-``edge`` (the body touches the frame's border: part of it is not seen), ``occluded`` (its
+``edge`` (the body itself, within 1.2 inner radii of its thickest point, not a rod or thread leaving
+the frame, touches the frame's border: part of it is not seen), ``occluded`` (its
 covered area departs from its own running median by more than 6 robust σ of that series
 and 10 %, or the soft and the plain silhouette's centroids disagree by more than 6 robust
 σ of their own difference and 0.3 px: something joined or hid part of it), ``jump``
