@@ -273,6 +273,8 @@ def _same_exposure(images: list[np.ndarray]) -> list[np.ndarray]:
     samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD: the body)."""
     grid = np.stack([im[::4, ::4] for im in images]).astype(np.float32)
     reference = np.median(grid, axis=0).ravel()
+    if np.ptp(reference) < 4:  # a flat picture: its gain is not defined, nothing to match
+        return images
     out = []
     for image, small in zip(images, grid, strict=True):
         values = small.ravel()
