@@ -5,6 +5,7 @@ import shutil
 import subprocess
 import sys
 
+import pandas as pd
 import pytest
 import yaml
 
@@ -93,23 +94,27 @@ def test_curve_cycles_and_joint_files_for_every_trial_variant_and_rig(project):
 
 
 def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
+    """... under a lab's file name (spaces, brackets) and with numbers as people write them (1.5e-2, 1E-5)."""
     from conftest import SHARED
 
     work = tmp_path / "p"
     shutil.copytree(project, work, ignore=shutil.ignore_patterns(".snakemake", "logs"))
-    shutil.copy(SHARED / "data/real-air-pendulum/wooden_bob.csv", work / "data/raw/wooden_bob.csv")
-    (work / "data/raw/wooden_bob.yaml").write_text("rig: air_wooden\n")
+    shutil.copy(SHARED / "data/real-air-pendulum/wooden_bob.csv", work / "data/raw/wooden bob (run 1).csv")
+    # YAML 1.1 (PyYAML) reads 1.5e-2 as a float but 15e-3 and 1E-5 as text: both are numbers here
+    (work / "data/raw/wooden bob (run 1).yaml").write_text("rig: air_wooden\nkinematic_viscosity_m2_s: 15e-6\n")
     config = yaml.safe_load((work / "config.yaml").read_text())
     d = 0.03805
     config["rigs"]["air_wooden"] = {
         "mass_kg": 0.015,
         "length_m": 0.315 + d / 2,
         "frontal_area_m2": 3.1416 * d**2 / 4,
-        "fluid_density_kg_m3": 1.2,
+        "fluid_density_kg_m3": "12e-1",
         "characteristic_length_m": d,
     }
-    (work / "config.yaml").write_text(yaml.safe_dump(config))
-    dry_run = run(["-n"], work).stdout
+    text = yaml.safe_dump(config)
+    assert "fluid_density_kg_m3: 12e-1\n" in text  # unquoted, as a person writes it
+    (work / "config.yaml").write_text(text)
+    dry_run = run(["-n"], work).stdout.replace("wooden_bob_run_1", "wooden_bob")
     jobs = {
         (rule, name) for rule, name in planned_jobs(dry_run) if rule in ("frames", "tracks", "rig_geometry", "angles")
     }
@@ -120,14 +125,21 @@ def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
     fitted = {w["trial"] for rule, w in planned_wildcards(dry_run) if rule == "fit_trial"}
     assert fitted == {"wooden_bob"}
     run(["-c2"], work)
-    assert (work / "results/angles/wooden_bob.csv").read_text().count("\n") == 918
+    name = "wooden_bob_run_1"  # the trial's name: its file's, spaces and brackets made _
+    assert (work / f"results/angles/{name}.csv").read_text().count("\n") == 918
     joint = json.loads((work / "results/fits/quadratic/joint/air_wooden.json").read_text())
-    assert joint["rig"]["name"] == "air_wooden" and sorted(joint["trials"]) == ["wooden_bob"]
+    assert joint["rig"]["name"] == "air_wooden" and sorted(joint["trials"]) == [name]
     assert joint["consistency"]["verdict"] == "not testable"  # one trial
-    assert (work / "results/fits/quadratic/wooden_bob.cycles.csv").is_file()
+    assert (work / f"results/fits/quadratic/{name}.cycles.csv").is_file()
     assert json.loads((work / "results/fits/quadratic/joint/paper_rig.json").read_text())["rig"]["name"] == "paper_rig"
-    fit = json.loads((work / "results/fits/quadratic/wooden_bob.json").read_text())
+    fit = json.loads((work / f"results/fits/quadratic/{name}.json").read_text())
     assert 0.2 < fit["parameters"]["drag_coefficient"]["value"] < 1.5
+    assert fit["rig"]["values"]["fluid_density_kg_m3"] == 1.2
+    assert fit["rig"]["values"]["kinematic_viscosity_m2_s"] == 1.5e-5
+    # the status table and the report show the file as the lab named it
+    status = pd.read_csv(work / "results/status/trials.csv").set_index("trial")
+    assert status.loc[name, "source"] == "data/raw/wooden bob (run 1).csv"
+    assert "wooden bob (run 1).csv" in (work / "results/report/report.html").read_text()
 
 
 @pytest.mark.parametrize(

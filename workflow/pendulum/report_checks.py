@@ -369,7 +369,10 @@ class CheckSections(ReportData):
         failed = self.failed_trials()
         n = len(self.trials)
         if failed.empty:
-            return f"<p>All {n} trial(s) succeeded at every stage (<code>results/status/trials.csv</code>).</p>"
+            return (
+                f"<p>All {n} trial(s) succeeded at every stage (<code>results/status/trials.csv</code>).</p>"
+                + self.renamed_note()
+            )
         rows = [
             [
                 td(esc(str(r.trial))),
@@ -383,7 +386,25 @@ class CheckSections(ReportData):
             f"{len(failed)} of {n} trial(s) failed and are missing from the tables and the joint fits above: the "
             "stage where each failed, the reason and the log to read."
         )
-        return table_html(["trial", "stage", "reason", "log"], rows, caption=caption, table_id="failed-table")
+        return (
+            table_html(["trial", "stage", "reason", "log"], rows, caption=caption, table_id="failed-table")
+            + self.renamed_note()
+        )
+
+    def renamed_note(self) -> str:
+        """The files whose names are not their trials' names (spaces, brackets, accents made ``_``)."""
+        renamed = []
+        for trial, info in sorted(self.trials.items()):
+            source = str((info or {}).get("source") or "")
+            stem = source.rsplit("/", 1)[-1].rsplit(".", 1)[0]
+            if source and stem != trial:
+                renamed.append(f"<code>{esc(source.rsplit('/', 1)[-1])}</code> → <code>{esc(trial)}</code>")
+        if not renamed:
+            return ""
+        return (
+            "<p>Trials named after files whose names hold spaces, brackets or other signs (each run of them is "
+            "<code>_</code> in a trial's name and its results' file names): " + "; ".join(renamed) + ".</p>"
+        )
 
     def provenance_section(self) -> str:
         """Commit, configuration digest, fit settings and package versions."""

@@ -16,6 +16,8 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
+from pendulum.io import write_failure
+
 STAGE_ORDER = ("frames", "tracks", "geometry", "angles", "fit", "curve")
 STATUS_COLUMNS = ["trial", "source", "rig", "status", "stage", "reason", "log"]
 
@@ -93,6 +95,8 @@ def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_f
         log.error("not run: %s", exc)
         write_failed(failed(exc.stage, exc.error))
     except Exception as exc:
+        if write_failure(exc) is not None:
+            raise  # no room or no rights to write: not this trial's fault; the job fails and a rerun resumes
         reason = describe(exc)
         if reason.startswith("internal error"):
             log.exception("%s", reason)

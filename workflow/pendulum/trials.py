@@ -30,6 +30,9 @@ REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined 
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method")
 ANGLE_TABLE_EXTENSIONS = (".csv",)
 TRIAL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
+NOT_IN_A_NAME = re.compile(r"[^A-Za-z0-9_.+-]+")  # spaces, brackets, accents, …: each run becomes one _
+# a number as YAML 1.2 (and a person) writes it; PyYAML (YAML 1.1) leaves 5e-05 or 1e3 as text
+NUMBER_TEXT = re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$")
 RESERVED_NAMES = ("joint", "summary")  # file names of the aggregate fits
 
 
@@ -62,7 +65,7 @@ def _short(value, limit: int = 60) -> str:
 
 def _schema_problem(err: jsonschema.ValidationError) -> str:
     """One schema error in words: where, what is wrong and, for a misspelt key, the likely key."""
-    where = "/".join(str(p) for p in err.absolute_path)
+    where = "/".join(str(p) if str(p).isprintable() else repr(p) for p in err.absolute_path)  # a key '\n' on one line
     at = f" in {where}" if where else ""
     kind, value = err.validator, err.instance
     if kind == "additionalProperties" and isinstance(value, dict):
@@ -88,11 +91,71 @@ def _schema_problem(err: jsonschema.ValidationError) -> str:
     return f"{where or 'the document'}: {err.message}"
 
 
+def _as_number(value, expected: list):
+    """``value`` as the number a person meant where the schema wants one (``expected``: its types), or None.
+
+    Text that YAML 1.2 reads as a number (``5e-05``, ``1E3``, ``+2.5``: PyYAML's YAML 1.1 leaves exponents
+    without a dot as text) becomes a float, or an int where only a whole number is wanted and it is one;
+    a whole float (``60.0``) where a whole number is wanted becomes an int.
+    """
+    wants_number, wants_integer = "number" in expected, "integer" in expected
+    if isinstance(value, str) and (wants_number or wants_integer) and NUMBER_TEXT.match(value.strip()):
+        number = float(value)
+        if wants_number:
+            return number
+        return int(number) if math.isfinite(number) and number.is_integer() else None
+    if isinstance(value, float) and wants_integer and math.isfinite(value) and value.is_integer():
+        return int(value)
+    return None
+
+
+def _set_at(document, path, value) -> None:
+    *parents, last = list(path)
+    for key in parents:
+        document = document[key]
+    document[last] = value
+
+
+def _with_context(errors):
+    """Schema errors and, under oneOf/anyOf, the errors of each alternative."""
+    for err in errors:
+        yield err
+        yield from _with_context(err.context or ())
+
+
+def _numbers_as_written(document, validator) -> None:
+    """Numbers written as people write them, read as numbers in place (:func:`_as_number`)."""
+    for _ in range(1000):
+        changed = False
+        for err in _with_context(validator.iter_errors(document)):
+            if err.validator != "type" or not err.absolute_path:
+                continue
+            expected = err.validator_value if isinstance(err.validator_value, list) else [err.validator_value]
+            number = _as_number(err.instance, expected)
+            if number is not None:
+                _set_at(document, err.absolute_path, number)
+                changed = True
+                break
+        if not changed:
+            return
+
+
+# JSON Schema counts 16.0 as an integer; here a whole float is made an int (:func:`_as_number`), so code
+# given a whole number gets an int
+STRICT_INTEGERS = jsonschema.validators.extend(
+    jsonschema.Draft202012Validator,
+    type_checker=jsonschema.Draft202012Validator.TYPE_CHECKER.redefine(
+        "integer", lambda _checker, value: isinstance(value, int) and not isinstance(value, bool)
+    ),
+)
+
+
 def _validate(document, schema_name: str, source: str) -> None:
     if not isinstance(document, dict):
         raise ConfigError(f"{source}: must be a mapping of keys to values, not {type(document).__name__}")
     schema = yaml.safe_load((SCHEMA_DIR / schema_name).read_text())
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = STRICT_INTEGERS(schema)
+    _numbers_as_written(document, validator)
     errors = sorted(validator.iter_errors(document), key=lambda e: [str(p) for p in e.absolute_path])
     if errors:
         problems = list(dict.fromkeys(_schema_problem(e) for e in errors))
@@ -178,8 +241,25 @@ class Trial:
     sidecar_path: str | None = None
 
 
+def trial_name(stem: str) -> str:
+    """The trial's name from its file's stem: every run of characters other than letters, digits and
+    ``_ . + -`` becomes one ``_``, and ``_ . + -`` at either end are dropped (``run 7 (left)`` →
+    ``run_7_left``, ``VID 2026-11-25 14.03`` → ``VID_2026-11-25_14.03``); a stem with no letter or digit
+    at all gets ``trial_`` and the first 8 hex digits of its SHA-1. The name is used in results/ paths;
+    the file keeps its own name (the status table and report show it)."""
+    import unicodedata
+
+    plain = "".join(c for c in unicodedata.normalize("NFKD", stem) if not unicodedata.combining(c))  # é → e
+    name = NOT_IN_A_NAME.sub("_", plain).strip("_.+-")
+    if not name:
+        import hashlib
+
+        name = "trial_" + hashlib.sha1(stem.encode("utf-8", "surrogateescape")).hexdigest()[:8]
+    return name
+
+
 def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
-    """Every video (.mp4/.avi/.mov) and angle table (.csv) in ``raw_dir``, by file stem."""
+    """Every video (.mp4/.avi/.mov) and angle table (.csv) in ``raw_dir``, by trial name (:func:`trial_name`)."""
     raw_dir = Path(raw_dir)
     trials: dict[str, Trial] = {}
     if not raw_dir.is_dir():
@@ -188,13 +268,14 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         suffix = path.suffix.lower()
         if not path.is_file() or suffix not in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS:
             continue
-        name = path.stem
-        if not TRIAL_NAME.match(name):
-            raise ConfigError(f"{path}: trial names may hold letters, digits and _ . + - only")
+        name = trial_name(path.stem)
         if name in RESERVED_NAMES:
             raise ConfigError(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
         if name in trials:
-            raise ConfigError(f"{path}: trial {name!r} also comes from {trials[name].path}; rename one")
+            raise ConfigError(
+                f"{path} and {trials[name].path} both give trial {name!r} (a trial's name is its file name with "
+                "spaces, brackets and other signs made _); rename one of them"
+            )
         kind = "video" if suffix in VIDEO_EXTENSIONS else "angles"
         trial = Trial(name, kind, str(path))
         sidecar = path.with_suffix(".yaml")

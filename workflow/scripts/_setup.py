@@ -35,5 +35,59 @@ def set_thread_environment(threads: int | None) -> None:
             os.environ[name] = str(threads)
 
 
+def job_log() -> str | None:
+    """The running Snakemake job's first log file (None outside a Snakemake script)."""
+    job = getattr(sys.modules.get("__main__"), "snakemake", None)
+    logs = list(getattr(job, "log", None) or [])
+    return str(logs[0]) if logs else None
+
+
+def _written_failure(exc: BaseException):
+    """The :class:`pendulum.io.WriteFailure` behind an exception (its cause or context, or an error of the
+    report's notebook kernel), else None."""
+    import re
+
+    from pendulum.io import write_failure
+
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        failure = write_failure(exc)
+        if failure is None and getattr(exc, "ename", None):  # papermill: the kernel's error by name and text
+            text = str(getattr(exc, "evalue", ""))
+            if exc.ename == "WriteFailure":
+                return text
+            code = re.search(r"\[Errno (\d+)\] ([^:]+)", text)
+            failure = write_failure(OSError(int(code.group(1)), code.group(2))) if code else None
+        if failure is not None:
+            return str(failure)
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def report_write_failures(kind, exc, tb) -> None:
+    """``sys.excepthook``: a write that failed for want of room or rights (disk full, read-only folder, quota)
+    is one sentence on the screen, naming the file and how to resume; its traceback goes to the job's log.
+    Any other error is shown as Python shows it."""
+    try:
+        sentence = _written_failure(exc)
+    except Exception:  # noqa: BLE001 - never hide the original error behind one of this hook
+        sentence = None
+    if sentence is None:
+        sys.__excepthook__(kind, exc, tb)
+        return
+    log = job_log()
+    if log:
+        try:
+            import traceback
+
+            with open(log, "a", encoding="utf-8") as fh:
+                traceback.print_exception(kind, exc, tb, file=fh)
+        except OSError:
+            pass  # the log is on the same full disk
+    sys.stderr.write(f"error: {sentence}\n")
+
+
 set_thread_environment(job_threads())
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.excepthook = report_write_failures

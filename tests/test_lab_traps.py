@@ -1,0 +1,196 @@
+"""Three traps a lab walks into: file names with spaces, numbers as people write them, a full disk."""
+
+import copy
+import errno
+import logging
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from conftest import ROOT
+from pendulum import io
+from pendulum.status import run_stage
+from pendulum.trials import ConfigError, discover_trials, trial_name, trial_settings, validate_config
+
+CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
+
+# --- file names: any the operating system allows ------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "stem,name",
+    [
+        ("run 7 (left)", "run_7_left"),
+        ("VID 2026-11-25 14.03", "VID_2026-11-25_14.03"),
+        ("Versuch 3 – Kugel, 20°", "Versuch_3_Kugel_20"),
+        ("été [2]", "ete_2"),
+        ("_take-1_", "take-1"),
+        ("demo_p05", "demo_p05"),  # a name that was already fine stays as it is
+    ],
+)
+def test_a_trial_is_named_after_its_file_with_spaces_and_signs_made_underscores(stem, name):
+    assert trial_name(stem) == name
+
+
+def test_a_file_name_of_signs_only_still_gives_a_usable_trial_name():
+    name = trial_name("(( ))")
+    assert name.startswith("trial_") and len(name) == 14 and name == trial_name("(( ))")
+    assert name != trial_name("[ ]")
+
+
+def test_files_with_spaces_and_brackets_are_trials_and_keep_their_own_names(tmp_path):
+    for file in ("run 7 (left).mp4", "VID 2026-11-25 14.03.MOV", "demo_p05.mp4", "table (exported).csv"):
+        (tmp_path / file).write_bytes(b"")
+    (tmp_path / "run 7 (left).yaml").write_text("mass_kg: 3.6\n")
+    trials = discover_trials(tmp_path)
+    assert sorted(trials) == ["VID_2026-11-25_14.03", "demo_p05", "run_7_left", "table_exported"]
+    assert trials["run_7_left"].path == str(tmp_path / "run 7 (left).mp4")
+    assert trials["run_7_left"].sidecar == {"mass_kg": 3.6}  # its sidecar: the same file name, .yaml
+    assert trials["table_exported"].kind == "angles"
+
+
+def test_two_files_giving_one_trial_name_are_refused_naming_both(tmp_path):
+    (tmp_path / "run 7.mp4").write_bytes(b"")
+    (tmp_path / "run_7.mp4").write_bytes(b"")
+    with pytest.raises(ConfigError, match=r"run_7\.mp4 and .*run 7\.mp4 both give trial 'run_7'.*rename one"):
+        discover_trials(tmp_path)
+
+
+# --- numbers as people write them ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "text,key,value",
+    [
+        ("displaced_volume_m3: 5e-05\n", "displaced_volume_m3", 5e-05),  # YAML 1.1: text; YAML 1.2: a number
+        ("displaced_volume_m3: 5E-5\n", "displaced_volume_m3", 5e-05),
+        ("kinematic_viscosity_m2_s: 1e-6\n", "kinematic_viscosity_m2_s", 1e-06),
+        ("mass_kg: 3\n", "mass_kg", 3),  # a whole number for a float
+        ("mass_kg: +3.5\n", "mass_kg", 3.5),
+        ("pivot_px: [3e2, -1.2e3]\n", "pivot_px", [300.0, -1200.0]),
+    ],
+)
+def test_sidecar_numbers_as_people_write_them(tmp_path, text, key, value):
+    (tmp_path / "trial.mp4").write_bytes(b"")
+    (tmp_path / "trial.yaml").write_text(text)
+    trials = discover_trials(tmp_path)
+    assert trials["trial"].sidecar[key] == value
+    settings = trial_settings(CONFIG, trials["trial"])
+    if key in settings["rig"]:
+        assert settings["rig"][key] == value and isinstance(settings["rig"][key], (int, float))
+
+
+def test_config_numbers_as_people_write_them():
+    text = (ROOT / "config.yaml").read_text()
+    config = yaml.safe_load(text)
+    rig = config["rigs"][config["default_rig"]]
+    rig["displaced_volume_m3"], rig["frontal_area_m2"] = "25e-4", "3.22E-2"
+    config["frames"]["contact_sheet_tiles"] = 16.0  # a whole float where a whole number is wanted
+    assert yaml.safe_load("v: 5e-05")["v"] == "5e-05"  # what PyYAML (and Snakemake's config) gives
+    validate_config(config)
+    assert rig["displaced_volume_m3"] == 0.0025 and rig["frontal_area_m2"] == 0.0322
+    assert config["frames"]["contact_sheet_tiles"] == 16 and isinstance(config["frames"]["contact_sheet_tiles"], int)
+
+
+@pytest.mark.parametrize(
+    "change,message",
+    [
+        (lambda c: c["rigs"]["paper_rig"].update(mass_kg="3.5 kg"), r"mass_kg is '3.5 kg', not a number"),
+        (lambda c: c["rigs"]["paper_rig"].update(mass_kg="3,5"), r"mass_kg is '3,5', not a number"),
+        (lambda c: c["frames"].update(contact_sheet_tiles=16.5), r"contact_sheet_tiles is 16.5, not a whole number"),
+        (lambda c: c["frames"].update(contact_sheet_tiles="1e1.5"), r"contact_sheet_tiles is '1e1.5'"),
+    ],
+)
+def test_what_is_not_a_number_is_still_refused(change, message):
+    config = copy.deepcopy(CONFIG)
+    change(config)
+    with pytest.raises(ConfigError, match=message):
+        validate_config(config)
+
+
+# --- a full disk, a read-only folder, a quota ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "code,words",
+    [
+        (errno.ENOSPC, "the disk is full"),
+        (errno.EROFS, "the file system is read-only"),
+        (errno.EDQUOT, "the disk quota is exceeded"),
+    ],
+)
+def test_a_write_that_fails_names_the_file_and_how_to_resume(tmp_path, monkeypatch, code, words):
+    out = tmp_path / "results" / "fits" / "x.json"
+    io.write_json({"a": 1}, out)
+
+    def full(self, *args, **kwargs):
+        raise OSError(code, os.strerror(code), str(self))
+
+    monkeypatch.setattr(Path, "write_text", full)
+    with pytest.raises(io.WriteFailure) as caught:
+        io.write_json({"a": 2}, out)
+    message = str(caught.value)
+    assert message.startswith(f"{out} could not be written: {words}")
+    assert "--rerun-incomplete" in message and "\n" not in message
+    monkeypatch.undo()
+    assert io.read_json(out) == {"a": 1}  # the old file whole, no temporary left
+    assert sorted(p.name for p in out.parent.iterdir()) == ["x.json"]
+
+
+def test_a_full_disk_is_not_the_trials_fault(tmp_path):
+    """A stage that cannot write fails the job (a rerun resumes) instead of marking the trial failed."""
+    written = []
+
+    def work():
+        raise io.write_failure(OSError(errno.ENOSPC, "No space left on device", "results/x/.t.csv.tmp12"))
+
+    with pytest.raises(io.WriteFailure, match=r"results/x/t\.csv could not be written: the disk is full"):
+        run_stage("tracks", logging.getLogger("t"), work, written.append)
+    assert written == []
+
+
+SCRIPT = """
+import errno, sys, types
+sys.path.insert(0, {scripts!r})
+__main__ = sys.modules["__main__"]
+__main__.snakemake = types.SimpleNamespace(threads=1, log=[{log!r}])
+import _setup
+{raise_}
+"""
+
+
+@pytest.mark.parametrize(
+    "raise_,expected",
+    [
+        (
+            "raise OSError(errno.ENOSPC, 'No space left on device', 'results/report/.report.html.tmp4242')",
+            "error: results/report/report.html could not be written: the disk is full (No space left on device)",
+        ),
+        (  # the report's notebook kernel: papermill re-raises the kernel's error by name and text
+            "class PapermillExecutionError(Exception):\n"
+            "    ename, evalue = 'OSError', '[Errno 28] No space left on device: results/report/fig.png'\n"
+            "raise PapermillExecutionError('cell 3')",
+            "error: an output could not be written: the disk is full (No space left on device)",
+        ),
+    ],
+)
+def test_a_script_that_cannot_write_says_one_sentence_and_keeps_the_traceback_in_its_log(tmp_path, raise_, expected):
+    log = tmp_path / "job.log"
+    code = SCRIPT.format(scripts=str(ROOT / "workflow" / "scripts"), log=str(log), raise_=raise_)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 1
+    assert proc.stderr.startswith(expected) and proc.stderr.count("\n") == 1, proc.stderr
+    assert "Traceback" not in proc.stderr and "snakemake -c2 --rerun-incomplete" in proc.stderr
+    assert "Traceback" in log.read_text()
+
+
+def test_any_other_error_of_a_script_keeps_its_traceback(tmp_path):
+    code = SCRIPT.format(
+        scripts=str(ROOT / "workflow" / "scripts"), log=str(tmp_path / "job.log"), raise_="raise KeyError('x')"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 1 and "Traceback" in proc.stderr and "KeyError: 'x'" in proc.stderr
