@@ -1,5 +1,9 @@
 """Free-decay pendulum identification: raw videos → frames → tracks → angles → fits."""
 
+from snakemake.utils import min_version
+
+min_version("9.27")
+
 
 configfile: "config.yaml"
 

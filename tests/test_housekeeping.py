@@ -1,0 +1,37 @@
+"""The habits of a well-kept workflow: licence, citation, pinned style hooks, the catalog entry."""
+
+import re
+
+import yaml
+
+from conftest import ROOT
+
+
+def locked(package: str) -> str:
+    match = re.search(rf"^{package}==([^\s\\]+)", (ROOT / "environment-lock.txt").read_text(), re.M)
+    assert match, f"{package} is not in environment-lock.txt"
+    return match.group(1)
+
+
+def test_the_code_has_a_licence_and_the_citation_names_it():
+    licence = (ROOT / "LICENSE").read_text()
+    assert licence.startswith("MIT License") and "Permission is hereby granted, free of charge" in licence
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    assert citation["cff-version"] == "1.2.0" and citation["type"] == "software" and citation["license"] == "MIT"
+    assert citation["authors"] and citation["title"] and citation["message"]
+
+
+def test_the_style_hooks_run_the_locked_versions():
+    hooks = yaml.safe_load((ROOT / ".pre-commit-config.yaml").read_text())["repos"]
+    revs = {repo["repo"].rsplit("/", 1)[-1]: repo["rev"] for repo in hooks}
+    assert revs == {"ruff-pre-commit": f"v{locked('ruff')}", "snakefmt": f"v{locked('snakefmt')}"}
+
+
+def test_the_snakefile_states_the_snakemake_it_needs_and_the_catalog_entry_is_honest():
+    version = re.search(r'min_version\("([\d.]+)"\)', (ROOT / "Snakefile").read_text())
+    assert version, "no min_version in the Snakefile"
+    needed = tuple(int(p) for p in version.group(1).split("."))
+    assert tuple(int(p) for p in locked("snakemake").split(".")[: len(needed)]) >= needed
+    usage = yaml.safe_load((ROOT / ".snakemake-workflow-catalog.yml").read_text())["usage"]
+    assert set(usage) == {"mandatory-flags", "software-stack-deployment", "report"}
+    assert not any(usage["software-stack-deployment"].values())  # pip from the lock file, not conda/containers
