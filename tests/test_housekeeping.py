@@ -35,3 +35,17 @@ def test_the_snakefile_states_the_snakemake_it_needs_and_the_catalog_entry_is_ho
     usage = yaml.safe_load((ROOT / ".snakemake-workflow-catalog.yml").read_text())["usage"]
     assert set(usage) == {"mandatory-flags", "software-stack-deployment", "report"}
     assert not any(usage["software-stack-deployment"].values())  # pip from the lock file, not conda/containers
+
+
+def test_every_rule_records_its_time_and_memory_where_snakemake_users_look():
+    """Snakemake's own ``benchmark:`` on every rule that runs a job (``all`` only gathers targets)."""
+    rules = {}
+    for path in sorted((ROOT / "workflow" / "rules").glob("*.smk")):
+        for block in re.split(r"^rule ", path.read_text(), flags=re.M)[1:]:
+            name = block.split(":", 1)[0]
+            bench = re.search(r'^    benchmark:\n\s+f?"(benchmarks/jobs/[^"]+\.tsv)"', block, re.M)
+            rules[name] = bench.group(1) if bench else None
+    assert len(rules) >= 15
+    assert [name for name, bench in rules.items() if bench is None] == []
+    assert len(set(rules.values())) == len(rules)  # one file per job, no two rules sharing one
+    assert "benchmarks/jobs/" in (ROOT / ".gitignore").read_text().splitlines()

@@ -7,6 +7,8 @@ rule rig_geometry:
         geometry="results/geometry/{rig}.json",
     log:
         "logs/geometry/{rig}.log",
+    benchmark:
+        "benchmarks/jobs/geometry/{rig}.tsv"
     threads: 1
     resources:
         mem_mb=1000,
@@ -28,6 +30,8 @@ rule angles:
         summary="results/angles/{trial}.json",
     log:
         "logs/angles/{trial}.log",
+    benchmark:
+        "benchmarks/jobs/angles/{trial}.tsv"
     threads: 1
     resources:
         mem_mb=500,

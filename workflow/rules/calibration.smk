@@ -7,6 +7,8 @@ rule calibrate_camera:
         calibration="results/calibration/{camera}.json",
     log:
         "logs/calibration/{camera}.log",
+    benchmark:
+        "benchmarks/jobs/calibration/{camera}.tsv"
     wildcard_constraints:
         camera=r"[A-Za-z0-9_.+-]+",
     threads: 1

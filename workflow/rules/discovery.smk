@@ -35,6 +35,8 @@ rule discovery:
         extinction="results/discovery/{group}.extinction.csv",
     log:
         "logs/discovery/{group}.log",
+    benchmark:
+        "benchmarks/jobs/discovery/{group}.tsv"
     wildcard_constraints:
         group=r"[A-Za-z0-9_.+-]+",
     priority: 3  # the longest job: started as soon as the baseline's fits are in

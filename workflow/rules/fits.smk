@@ -10,6 +10,8 @@ rule fit_trial:
         cycles="results/fits/{variant}/{trial}.cycles.csv",
     log:
         "logs/fits/{variant}/{trial}.log",
+    benchmark:
+        "benchmarks/jobs/fits/{variant}/{trial}.tsv"
     priority: 1  # before more videos' frames and tracks: the joint fits and discovery (the long tail) start sooner
     threads: 1
     resources:
@@ -39,6 +41,8 @@ rule fit_joint:
         joint="results/fits/{variant}/joint/{rig}.json",
     log:
         "logs/fits/{variant}/joint/{rig}.log",
+    benchmark:
+        "benchmarks/jobs/fits/{variant}/joint/{rig}.tsv"
     priority: 2
     threads: 1
     resources:
@@ -62,6 +66,8 @@ rule fit_summary:
         table="results/fits/summary.csv",
     log:
         "logs/fits/summary.log",
+    benchmark:
+        "benchmarks/jobs/fits/summary.tsv"
     threads: 1
     resources:
         mem_mb=500,
@@ -86,6 +92,8 @@ rule fit_body:
         body="results/fits/{variant}/body/{body}.json",
     log:
         "logs/fits/{variant}/body/{body}.log",
+    benchmark:
+        "benchmarks/jobs/fits/{variant}/body/{body}.tsv"
     wildcard_constraints:
         body=r"[A-Za-z0-9_.+-]+",
     threads: 1

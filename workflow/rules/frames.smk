@@ -9,6 +9,8 @@ rule frames:
         contact_sheet="results/frames/{trial}/contact_sheet.png",
     log:
         "logs/frames/{trial}.log",
+    benchmark:
+        "benchmarks/jobs/frames/{trial}.tsv"
     threads: 1
     resources:
         mem_mb=500,
@@ -28,6 +30,8 @@ rule frame_images:
         images=directory("results/frames/{trial}/images"),
     log:
         "logs/frame_images/{trial}.log",
+    benchmark:
+        "benchmarks/jobs/frame_images/{trial}.tsv"
     threads: 1
     resources:
         mem_mb=1000,

@@ -38,6 +38,8 @@ rule freeze:
         code=script_code("freeze.py"),
     log:
         f"logs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.log",
+    benchmark:
+        f"benchmarks/jobs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.tsv"
     threads: 1
     resources:
         mem_mb=500,

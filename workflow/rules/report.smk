@@ -9,6 +9,8 @@ rule report:
         notebook="results/report/report.ipynb",
     log:
         "logs/report/report.log",
+    benchmark:
+        "benchmarks/jobs/report/report.tsv"
     threads: 1
     resources:
         mem_mb=800,

@@ -7,6 +7,8 @@ rule status_table:
         table="results/status/trials.csv",
     log:
         "logs/status/trials.log",
+    benchmark:
+        "benchmarks/jobs/status/trials.tsv"
     threads: 1
     resources:
         mem_mb=500,
@@ -29,6 +31,8 @@ rule check_trials:
         done="results/status/all_trials_ok.txt",
     log:
         "logs/status/check.log",
+    benchmark:
+        "benchmarks/jobs/status/check.tsv"
     threads: 1
     resources:
         mem_mb=200,

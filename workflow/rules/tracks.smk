@@ -11,6 +11,8 @@ rule tracks:
         sheet="results/tracks/{trial}.sheet.png",
     log:
         "logs/tracks/{trial}.log",
+    benchmark:
+        "benchmarks/jobs/tracks/{trial}.tsv"
     threads: 1  # the decoder's threads (video.iter_luma); `--set-threads tracks=2` for long 1080p clips
     resources:
         mem_mb=2000,  # marker detection holds ~50 sampled frames: ~0.6 GB at 720p, ~1 GB at 1080p
