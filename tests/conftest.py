@@ -15,6 +15,40 @@ DEMO_RAW = ROOT / "data" / "raw"
 DEMO_TRUTH = ROOT / "data" / "truth"
 
 
+# Fixtures that render videos, run the workflow or fit many records (seconds to minutes, once per session or
+# module): a test that uses one is in the slow tier. `pytest -m "not slow"` is the fast tier a developer
+# runs on every change; the full suite (what CI runs) is every test.
+SLOW_FIXTURES = {
+    "demo_project",  # the README's build of the demo videos
+    "hard_videos",
+    "project",
+    "repo",
+    "frozen",
+    "report_project",
+    "demo",  # tests/test_angles.py: the demo videos tracked
+    "demo_tracks",
+    "fast_video",
+    "render_dir",
+    "optics_dir",
+    "barrel_calibration",
+    "two_movers",
+    "rendered",
+    "graded_clip",
+    "apple",
+    "results",  # tests/test_discovery_statistics.py: discovery over seeds
+    "recovery_fits",
+    "coverage_fits",
+    "fitted",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand)."""
+    for item in items:
+        if SLOW_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)
+
+
 def demo_trials():
     from pendulum.synthetic import load_specs
 

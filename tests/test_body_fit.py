@@ -49,6 +49,7 @@ def truths():
     }
 
 
+@pytest.mark.slow
 def test_noise_free_body_fit_returns_the_body_and_each_rigs_bearing():
     doc = body_fit(None)
     assert doc["rigs"] == ["long", "short"] and doc["converged"]

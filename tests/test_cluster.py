@@ -2,6 +2,8 @@
 
 import shutil
 
+import pytest
+
 from conftest import DEMO_RAW
 from workflow_run import copy_project, digest, one_variant, run
 
@@ -11,6 +13,7 @@ def small_project(work):
     return one_variant(copy_project(work, raw_files=[DEMO_RAW / "demo_p20.mp4"]))
 
 
+@pytest.mark.slow
 def test_local_cluster_profile_gives_the_local_runs_bytes(tmp_path):
     local = small_project(tmp_path / "local")
     cluster = small_project(tmp_path / "cluster")
@@ -22,6 +25,7 @@ def test_local_cluster_profile_gives_the_local_runs_bytes(tmp_path):
     shutil.rmtree(cluster / ".snakemake", ignore_errors=True)
 
 
+@pytest.mark.slow
 def test_slurm_profile_plans_the_workflow(tmp_path):
     work = small_project(tmp_path / "slurm")
     proc = run(["--profile", "profiles/slurm", "-n"], work)

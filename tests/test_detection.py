@@ -116,6 +116,7 @@ def test_a_wrong_given_polarity_is_named_with_what_detection_found(two_movers):
     assert "the polarity given (bright, in config tracking or the trial's sidecar) looks wrong" in message
 
 
+@pytest.mark.slow
 def test_two_swinging_objects_give_a_clear_error(tmp_path):
     path = tmp_path / "two_pendulums.mp4"
     _scene(path, marker={**DARK_BALL, "pivot": (150.3, -40.0), "arm": 250.0}, second_pivot=(340.0, -30.0))
@@ -123,6 +124,7 @@ def test_two_swinging_objects_give_a_clear_error(tmp_path):
         detect_marker(path)
 
 
+@pytest.mark.slow
 def test_nothing_swinging_gives_a_clear_error(tmp_path):
     path = tmp_path / "still.mp4"
     wall = np.clip(_wall(3, 120.0, True), 0, 255).astype(np.uint8)
@@ -355,6 +357,7 @@ def test_a_marker_held_still_from_the_start_gives_the_start_when_the_first_spot_
     assert _held_from_the_start(blobs, {k: k for k in range(5, 7)} | {1: 1}, 1.5) is None  # 1, 5, 6: not still
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("trial", ["demo_m05", "demo_p05"])
 def test_a_small_swing_on_a_long_arm_is_found_though_a_line_fits_its_arc(trial):
     """The shipped demo's ±5° trials (arm 560 px: the arc bows 2 px, a straight line fits it as well at the
@@ -376,6 +379,7 @@ def test_a_small_swing_on_a_long_arm_is_found_though_a_line_fits_its_arc(trial):
     assert math.dist(found.pivot_px, camera["pivot_px"]) <= 20.0  # measured 9.2 and 5.8 px (a 5° chord)
 
 
+@pytest.mark.slow
 def test_a_spot_dropped_from_the_marker_track_is_not_taken_for_the_start(tmp_path):
     """A 5° swing on a 440 px arm (flat at the search's scale) whose first samples hide in the scene's median
     (it starts at its turning point), beside a larger disk of its grey moving on a vertical line. Neither

@@ -109,6 +109,7 @@ def tracker_table(rig, truth, release_deg, seed):
     )
 
 
+@pytest.mark.slow
 def test_one_body_on_two_rigs_names_the_history_force_and_leaves_out_a_failed_trial(tmp_path):
     """The paper's body swung on its 0.76 m arm and on a 0.40 m one (config `bodies`): the history force, hidden in
     both, is named (two swing frequencies); a table that cannot be read is left out and listed."""
@@ -164,6 +165,7 @@ def air_record(name, diameter_m, mass_kg):
     return table, info, rig
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("lower_kg", [0.0, -0.05])
 def test_discovery_runs_to_the_end_on_the_real_wooden_bob(lower_kg):
     """The Tracker record of a wooden sphere swinging in air (56° → 30° in 31 s, noise 0.46°), as the workflow's

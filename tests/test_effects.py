@@ -145,6 +145,7 @@ def test_restoring_correction_is_indistinguishable_from_inertia_and_damping_on_o
     assert np.abs(a - b).max() < 1e-11
 
 
+@pytest.mark.slow
 def test_fitter_accepts_a_restoring_correction_and_flags_it_unidentifiable_on_one_rig():
     truth = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "restoring_torque_correction": 0.03}
     settings = FitSettings()

@@ -104,6 +104,7 @@ def test_real_wooden_bob_in_air_fits_sensibly():
     assert any("shorter than the rig values allow" in w for w in strict["warnings"])
 
 
+@pytest.mark.slow
 def test_real_steel_bob_period_contradicts_its_stated_rig_and_the_fit_says_so():
     """The steel-bob record swings with a ~7 s period; a 0.32 m pendulum swings in 1.14 s."""
     rec = real_record("steel_bob", 0.019, 0.029, SETTINGS)
@@ -111,6 +112,7 @@ def test_real_steel_bob_period_contradicts_its_stated_rig_and_the_fit_says_so():
     assert any("time base" in w for w in fit["warnings"]), fit["warnings"]
 
 
+@pytest.mark.slow
 def test_a_model_that_misses_physics_says_so_and_the_right_one_does_not():
     """Friction truth with tracking-like noise: the paper's model leaves smooth residuals ≫ the noise.
 

@@ -173,6 +173,7 @@ def test_interval_coverage_is_at_least_90_percent(coverage_fits, name):
 # --- other claims
 
 
+@pytest.mark.slow
 def test_white_noise_intervals_would_be_too_narrow():
     """The AR correction matters: on coloured noise (ρ = 0.9) the sandwich errors exceed the white-noise ones.
 
@@ -192,6 +193,7 @@ def test_white_noise_intervals_would_be_too_narrow():
     assert np.all(np.median(ratios, axis=0) > 1.5), np.median(ratios, axis=0)
 
 
+@pytest.mark.slow
 def test_parameter_at_its_bound_is_flagged_and_printed_as_the_bound(tmp_path):
     """No linear damping in the truth: the fitted c often wants to go negative and stops at 0.
 
@@ -220,6 +222,7 @@ def test_parameter_at_its_bound_is_flagged_and_printed_as_the_bound(tmp_path):
     assert covered >= min_hits(n, 0.95, ALPHA / 2), covered
 
 
+@pytest.mark.slow
 def test_drag_at_a_small_release_with_paper_like_noise_is_usually_not_identifiable():
     """5° release, 0.2° white noise (paper: RMS 0.08–0.4°), 12 s: the drag is lost in the noise.
 
@@ -261,6 +264,7 @@ def test_decay_analysis_gives_starting_values_near_the_truth():
             assert 0.3 * TRUTH[name] < start["physical"][name] < 3 * TRUTH[name], (seed, name)
 
 
+@pytest.mark.slow
 def test_joint_fit_and_consistency_on_the_true_and_the_paper_model():
     """Friction truth, 8 sets of 4 trials (75°, 20°, −15°, 5°; seeds 4s … 4s+3, s = 0…7).
 

@@ -89,6 +89,7 @@ def angle_csv_text(draw):
     return "\n".join(lines) + draw(st.sampled_from(["", "\n", "\n\n", "\n,,,\n"]))
 
 
+@pytest.mark.slow
 @FUZZ
 @given(text=angle_csv_text())
 def test_angle_csv_reader_never_crashes(text):
@@ -108,6 +109,7 @@ def test_angle_csv_reader_never_crashes(text):
     assert np.isfinite(table.theta_rad[ok]).all() and table.theta_rad[~ok].isna().all()
 
 
+@pytest.mark.slow
 @FUZZ
 @given(
     columns=st.dictionaries(
@@ -154,6 +156,7 @@ def sidecar_text(draw):
     return draw(st.text(max_size=60))
 
 
+@pytest.mark.slow
 @FUZZ
 @given(text=sidecar_text())
 def test_sidecar_reader_never_crashes(text):
@@ -219,6 +222,7 @@ def mutated_config(draw):
     return config
 
 
+@pytest.mark.slow
 @FUZZ
 @given(config=mutated_config())
 def test_config_validation_never_crashes_and_what_it_accepts_works(config):
@@ -282,6 +286,7 @@ pivots = st.one_of(
 )
 
 
+@pytest.mark.slow
 @FUZZ
 @given(track=tracks(), pivot=pivots, vertical=st.floats(-45, 45), length=st.floats(1e-3, 10))
 def test_track_to_angles_never_crashes(track, pivot, vertical, length):

@@ -61,6 +61,7 @@ def test_history_integral_matches_fresnel_closed_forms(omega, step_s):
     assert err_cos.max() < 3e-4, err_cos.max()
 
 
+@pytest.mark.slow
 def test_history_integral_of_a_step_is_two_root_t():
     """θ̈ = 1 from τ = 0: H = ∫₀ᵗ dτ/√(t−τ) = 2√t. From 0.1 s to 1000 s to 1e-3 relative (measured 6e-4)."""
     t = np.concatenate([[0.0], np.geomspace(0.1, 1000.0, 60)])
@@ -207,6 +208,7 @@ def measured_period_and_decay_rate(t, theta):
     return period, rate
 
 
+@pytest.mark.slow
 def test_history_force_at_one_frequency_is_added_mass_plus_linear_damping():
     """Decay rate and period of a small swing with the history force, against two closed forms.
 
@@ -240,6 +242,7 @@ def test_history_force_at_one_frequency_is_added_mass_plus_linear_damping():
     assert rate == pytest.approx(sigma, rel=3e-2)
 
 
+@pytest.mark.slow
 def test_fitter_recovers_a_hidden_history_coefficient():
     """[quadratic_drag, history_force] fitted to a noise-free record made with K_h = 0.3 kg/√s, C_d = 0.8, m_a = 2.5 kg.
 

@@ -263,6 +263,7 @@ def test_the_executed_notebook_keeps_no_timestamps_or_random_ids():
     assert [c.id for c in nb.cells] == ["cell-00", "cell-01"]
 
 
+@pytest.mark.slow
 def test_the_report_kernel_runs_encrypted_without_the_plain_tcp_warning(tmp_path):
     """build_report's kernel gets CurveZMQ keys: the page is built and the kernel's stderr carries
     no "running over TCP without encryption" warning (it did on every build before)."""

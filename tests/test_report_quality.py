@@ -254,6 +254,7 @@ def test_the_tracking_table_keeps_a_clean_trial_quiet_and_notes_a_phone_file(gar
     assert phone.count("<br>") == 5  # one note a line, the fit's verdict first
 
 
+@pytest.mark.slow
 def test_the_consistency_figure_leaves_out_fits_on_unreliable_records_and_says_which(garbage, tmp_path):
     html = garbage.consistency_figure()
     assert "Not plotted: the fits of t10 (unreliable records, Table 3)." in html

@@ -122,6 +122,7 @@ def test_editing_a_library_module_reruns_the_stages_that_import_it(demo_project,
     assert not rules & untouched, rules & untouched
 
 
+@pytest.mark.slow
 def test_a_truncated_and_a_fake_video_cost_nothing_else(tmp_path):
     good = ["demo_m05", "demo_p20"]
     work = one_variant(copy_project(tmp_path / "p", raw_files=[DEMO_RAW / f"{name}.mp4" for name in good]))

@@ -4,6 +4,7 @@ import hashlib
 
 import numpy as np
 import pandas as pd
+import pytest
 import yaml
 
 from conftest import DEMO_RAW, DEMO_SPEC, DEMO_TRUTH
@@ -14,6 +15,7 @@ def sha(path):
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+@pytest.mark.slow
 def test_demo_trial_regenerates_byte_identically(tmp_path):
     spec = {s.name: s for s in load_specs(DEMO_SPEC)}["demo_p05"]
     generate_trial(spec, tmp_path, tmp_path, progress=None)

@@ -32,6 +32,7 @@ def test_interval_is_two_sided_inside_and_one_sided_at_the_bound():
     assert low == 0.0 and high == pytest.approx(stats.norm.ppf(0.95) * 0.1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key", ["length_m", "mass_kg", "displaced_volume_m3", "fluid_density_kg_m3"])
 def test_budget_predicts_the_shift_of_a_refit_with_a_wrong_rig_value(key):
     """Stating a rig value 1σ off moves every coefficient by its budget entry (linearised refit vs real refit)."""
@@ -87,6 +88,7 @@ def test_pivot_budget_predicts_the_shift_from_a_wrong_pivot():
         )
 
 
+@pytest.mark.slow
 def test_combined_interval_covers_when_the_stated_rig_is_off_by_its_tolerance():
     """The study a user's lab is: rig values measured with the stated 1σ, records with tracking-like noise.
 
@@ -180,6 +182,7 @@ def test_a_huge_relative_standard_error_is_worded_as_a_factor_not_millions_of_pe
     ]
 
 
+@pytest.mark.slow
 def test_a_rig_that_does_not_state_the_fluid_density_takes_water_with_its_tolerance():
     """A new user's sidecar rigs gave no ρ: the fit used 1000 kg/m³ with no entry in the error budget, although
     the README gives water a default 1σ of 0.2 %. Now the budget carries it, the same as for a stated 1000."""
