@@ -204,3 +204,22 @@ def test_a_rig_that_does_not_state_the_fluid_density_takes_water_with_its_tolera
     for name in PHYSICAL:
         assert fit["parameters"][name]["error_budget"]["fluid_density_kg_m3"] != 0.0
         assert fit["parameters"][name]["stderr"] == stated["parameters"][name]["stderr"]
+
+
+def test_the_ar_recursion_and_the_normal_and_chi2_constants_match_scipy_signal_and_stats():
+    """The fit's own AR filter and quantiles (no scipy.signal/scipy.stats import in a fit job) against the
+    references they replace."""
+    from scipy import signal, special, stats
+
+    from pendulum.uncertainty import Z95, Z95_ONE_SIDED, all_pole
+
+    rng = np.random.default_rng(7)
+    for order in (0, 1, 2, 5, 10):
+        phi = rng.uniform(-0.9, 0.9, order) / max(order, 1)
+        x = rng.standard_normal((900, 6))
+        reference = signal.lfilter([1.0], np.concatenate([[1.0], -phi]), x, axis=0)
+        assert np.allclose(all_pole(phi, x), reference, rtol=0, atol=1e-12)
+        assert np.allclose(all_pole(phi, x[:, 0]), reference[:, 0], rtol=0, atol=1e-12)
+    assert Z95 == stats.norm.ppf(0.975) and Z95_ONE_SIDED == stats.norm.ppf(0.95)
+    for chi2, dof in ((0.5, 1), (3.2, 4), (50.0, 4), (120.0, 80)):  # the consistency test's p-value
+        assert special.chdtrc(dof, chi2) == stats.chi2.sf(chi2, dof)
