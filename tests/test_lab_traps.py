@@ -30,6 +30,7 @@ CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
         ("été [2]", "ete_2"),
         ("_take-1_", "take-1"),
         ("demo_p05", "demo_p05"),  # a name that was already fine stays as it is
+        ("Pendel groß – Prüfung", "Pendel_gross_Prufung"),
     ],
 )
 def test_a_trial_is_named_after_its_file_with_spaces_and_signs_made_underscores(stem, name):
@@ -40,6 +41,41 @@ def test_a_file_name_of_signs_only_still_gives_a_usable_trial_name():
     name = trial_name("(( ))")
     assert name.startswith("trial_") and len(name) == 14 and name == trial_name("(( ))")
     assert name != trial_name("[ ]")
+
+
+def test_names_in_another_script_stay_apart():
+    """Letters outside Latin script cannot be kept in a results/ path here; a digest of the whole name keeps
+    `опыт 1` and `опыт 2` (and `(1)`) apart instead of all becoming `1`."""
+    names = {stem: trial_name(stem) for stem in ("опыт 1", "опыт 2", "(1)", "振り子")}
+    assert names["(1)"] == "1" and names["опыт 1"].startswith("1_") and names["опыт 2"].startswith("2_")
+    assert len(set(names.values())) == 4 and names["振り子"].startswith("trial_")
+
+
+def test_a_sidecar_may_be_named_after_the_file_or_the_trial_but_never_silently_ignored(tmp_path):
+    (tmp_path / "run 7 (left).mp4").write_bytes(b"")
+    (tmp_path / "run_7_left.yml").write_text("mass_kg: 3.6\n")  # the trial's name, .yml
+    assert discover_trials(tmp_path)["run_7_left"].sidecar == {"mass_kg": 3.6}
+    (tmp_path / "run 7 (left).yaml").write_text("mass_kg: 3.7\n")
+    with pytest.raises(ConfigError, match=r"are both sidecars of .*run 7 \(left\)\.mp4 \(trial 'run_7_left'\)"):
+        discover_trials(tmp_path)
+    (tmp_path / "run_7_left.yml").unlink()
+    (tmp_path / "run 8.yaml").write_text("mass_kg: 3.5\n")  # a typo'd or orphaned sidecar
+    with pytest.raises(ConfigError, match=r"run 8\.yaml: a sidecar of no trial .* would be ignored"):
+        discover_trials(tmp_path)
+
+
+def test_hidden_files_are_not_trials_and_names_differing_in_case_are_refused(tmp_path):
+    (tmp_path / "run 9.mp4").write_bytes(b"")
+    (tmp_path / "._run 9.mp4").write_bytes(b"\x00\x05\x16\x07")  # macOS's AppleDouble copy on a USB stick
+    (tmp_path / ".DS_Store").write_bytes(b"")
+    assert sorted(discover_trials(tmp_path)) == ["run_9"]
+    (tmp_path / "Run 9.mov").write_bytes(b"")
+    with pytest.raises(ConfigError, match=r"both give trial .*differ only in case.*rename one of them"):
+        discover_trials(tmp_path)
+    (tmp_path / "Run 9.mov").unlink()
+    (tmp_path / "Joint.mp4").write_bytes(b"")
+    with pytest.raises(ConfigError, match=r"'Joint' is reserved for the aggregate fits"):
+        discover_trials(tmp_path)
 
 
 def test_files_with_spaces_and_brackets_are_trials_and_keep_their_own_names(tmp_path):
