@@ -56,12 +56,11 @@ def write_failure(exc: BaseException, path=None) -> WriteFailure | None:
         hidden = re.fullmatch(r"\.(.+)\.tmp\d+", name.name)
         path = name.with_name(hidden.group(1)) if hidden else name
     target = f"{path} could not be written" if path is not None else "an output could not be written"
-    failure = WriteFailure(
+    return WriteFailure(
         exc.errno,
         f"{target}: {what} ({exc.strerror or exc}); nothing was half-written: {todo}, then run the same command "
         f"again with --rerun-incomplete (e.g. {RESUME}): finished outputs are kept",
     )
-    return failure
 
 
 def _atomic(path: Path, write) -> None:

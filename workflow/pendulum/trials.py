@@ -29,7 +29,6 @@ GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined in a sidecar must give these
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method")
 ANGLE_TABLE_EXTENSIONS = (".csv",)
-TRIAL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
 NOT_IN_A_NAME = re.compile(r"[^A-Za-z0-9_.+-]+")  # spaces, brackets, accents, …: each run becomes one _
 # a number as YAML 1.2 (and a person) writes it; PyYAML (YAML 1.1) leaves 5e-05 or 1e3 as text
 NUMBER_TEXT = re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$")
@@ -124,8 +123,10 @@ def _with_context(errors):
 
 
 def _numbers_as_written(document, validator) -> None:
-    """Numbers written as people write them, read as numbers in place (:func:`_as_number`)."""
-    for _ in range(1000):
+    """Numbers written as people write them, read as numbers in place (:func:`_as_number`); again until none is
+    left (a fix can uncover another error under oneOf)."""
+    changed = True
+    while changed:
         changed = False
         for err in _with_context(validator.iter_errors(document)):
             if err.validator != "type" or not err.absolute_path:
@@ -135,9 +136,6 @@ def _numbers_as_written(document, validator) -> None:
             if number is not None:
                 _set_at(document, err.absolute_path, number)
                 changed = True
-                break
-        if not changed:
-            return
 
 
 # JSON Schema counts 16.0 as an integer; here a whole float is made an int (:func:`_as_number`), so code

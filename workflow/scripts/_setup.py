@@ -21,10 +21,14 @@ THREAD_VARIABLES = (
 )
 
 
+def _job():
+    """The running Snakemake job's ``snakemake`` object (None outside a Snakemake script)."""
+    return getattr(sys.modules.get("__main__"), "snakemake", None)
+
+
 def job_threads() -> int | None:
     """The running Snakemake job's `threads` (None outside a Snakemake script)."""
-    job = getattr(sys.modules.get("__main__"), "snakemake", None)
-    threads = getattr(job, "threads", None)
+    threads = getattr(_job(), "threads", None)
     return max(1, int(threads)) if threads is not None else None
 
 
@@ -37,8 +41,7 @@ def set_thread_environment(threads: int | None) -> None:
 
 def job_log() -> str | None:
     """The running Snakemake job's first log file (None outside a Snakemake script)."""
-    job = getattr(sys.modules.get("__main__"), "snakemake", None)
-    logs = list(getattr(job, "log", None) or [])
+    logs = list(getattr(_job(), "log", None) or [])
     return str(logs[0]) if logs else None
 
 
