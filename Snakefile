@@ -8,7 +8,14 @@ min_version("9.27")
 configfile: "config.yaml"
 
 
-include: "workflow/rules/common.smk"
+# What the rules share: the trials and validated config, the code and provenance inputs, the
+# target lists and the input functions (defined before the stages that use them).
+include: "workflow/rules/trials.smk"
+include: "workflow/rules/provenance.smk"
+include: "workflow/rules/targets.smk"
+include: "workflow/rules/inputs.smk"
+include: "workflow/rules/report_inputs.smk"
+# The stages, in pipeline order.
 include: "workflow/rules/frames.smk"
 include: "workflow/rules/tracks.smk"
 include: "workflow/rules/calibration.smk"

@@ -1,0 +1,159 @@
+# Inputs and settings of one job, by stage: the input functions and params of the rules in
+# frames.smk, tracks.smk, calibration.smk, angles.smk, fits.smk and status.smk.
+import json
+
+
+def raw_video(wildcards):
+    trial = TRIALS[wildcards.trial]
+    if trial.kind != "video":
+        raise ValueError(f"{trial.path} is not a video")
+    return trial.path
+
+
+def tracking_settings(wildcards):
+    return trial_settings(config, TRIALS[wildcards.trial])["tracking"]
+
+
+def geometry_trials(wildcards):
+    """The trials whose tracks estimate a rig's pivot and vertical.
+
+    Once estimated, a rig's geometry is kept: the trials it was estimated from
+    stay its inputs, so adding a video does not re-estimate it (nor rebuild every
+    other trial's angles and fits). `--config reestimate_geometry=true` pools
+    every current trial of the rig instead (a deliberate re-estimate).
+    """
+    current = pooled_trials(config, TRIALS, wildcards.rig)
+    path = Path(f"results/geometry/{wildcards.rig}.json")
+    if config.get("reestimate_geometry") or not path.is_file():
+        return current
+    try:
+        kept = json.loads(path.read_text()).get("input_trials")
+    except (OSError, ValueError):
+        return current
+    if not kept or not set(kept) <= set(current):
+        return current
+    return sorted(kept)
+
+
+def geometry_inputs(wildcards):
+    names = geometry_trials(wildcards)
+    inputs = {
+        "tracks": [f"results/tracks/{name}.csv" for name in names],
+        "summaries": [f"results/tracks/{name}.json" for name in names],
+    }
+    camera = config["rigs"][wildcards.rig].get("camera")
+    if camera:
+        inputs["calibration"] = f"results/calibration/{camera}.json"
+    return inputs
+
+
+def camera_setup(wildcards):
+    """A camera setup's settings (config `cameras`), with the defaults filled in."""
+    setup = (config.get("cameras") or {}).get(wildcards.camera)
+    if setup is None:
+        raise ValueError(f"camera setup {wildcards.camera!r} is not in config cameras")
+    return {
+        "pattern_inner_corners": list(setup.get("pattern_inner_corners", [9, 6])),
+        "square_size_m": setup["square_size_m"],
+        "plane_frame": int(setup.get("plane_frame", 0)),
+    }
+
+
+def calibration_inputs(wildcards):
+    """The checkerboard clips of a camera setup (lens and/or swing plane)."""
+    setup = (config.get("cameras") or {}).get(wildcards.camera) or {}
+    return {
+        key: setup[key]
+        for key in ("calibration_video", "plane_video")
+        if setup.get(key)
+    }
+
+
+def angles_inputs(wildcards):
+    trial = TRIALS[wildcards.trial]
+    if trial.kind == "angles":
+        inputs = {"table": trial.path}
+    else:
+        inputs = {
+            "track": f"results/tracks/{trial.name}.csv",
+            "track_summary": f"results/tracks/{trial.name}.json",
+        }
+        if needs_rig_geometry(config, trial):
+            inputs["geometry"] = f"results/geometry/{rig_name(config, trial)}.json"
+        camera = trial_settings(config, trial)["camera"]
+        if camera:
+            inputs["calibration"] = f"results/calibration/{camera}.json"
+    return inputs
+
+
+def angles_settings(wildcards):
+    """Only what the angles stage uses, so that changing a mass or a tolerance reruns the fits, not the angles."""
+    s = trial_settings(config, TRIALS[wildcards.trial])
+    settings = {
+        "rig_name": s["rig_name"],
+        "length_m": s["rig"]["length_m"],
+        "pivot_px": s["pivot_px"],
+        "vertical_deg": s["vertical_deg"],
+    }
+    # (absent without a camera: the params of existing trials stay as they were)
+    if s["camera"]:
+        settings["camera"] = s["camera"]
+    return settings
+
+
+def variant_terms(wildcards):
+    if wildcards.variant not in config["variants"]:
+        raise ValueError(
+            f"model variant {wildcards.variant!r} is not in config variants"
+        )
+    return list(config["variants"][wildcards.variant])
+
+
+def fit_rig(wildcards):
+    settings = trial_settings(config, TRIALS[wildcards.trial])
+    return {"name": settings["rig_name"], "values": settings["rig"]}
+
+
+def fit_tolerances(wildcards):
+    return trial_settings(config, TRIALS[wildcards.trial])["tolerances"]
+
+
+def body_trials(wildcards):
+    """Trials of a body's rigs (the inputs of its body fit)."""
+    return group_trials(config, TRIALS, BODIES, wildcards.body)
+
+
+def joint_trials(wildcards):
+    """Trials of the rig of a joint fit (only these are its inputs)."""
+    names = rig_trials(config, TRIALS).get(wildcards.rig)
+    if not names:
+        raise ValueError(f"rig {wildcards.rig!r} has no trials in {config['raw_dir']}")
+    return names
+
+
+def joint_trial_rigs(wildcards):
+    """Trial → its rig values (sidecars may override rig values) for one rig's joint fit."""
+    return {
+        name: trial_settings(config, TRIALS[name])["rig"]
+        for name in joint_trials(wildcards)
+    }
+
+
+def joint_tolerances(wildcards):
+    """Trial → the rig's stated 1σ tolerances, for one rig's joint fit."""
+    return {
+        name: trial_settings(config, TRIALS[name])["tolerances"]
+        for name in joint_trials(wildcards)
+    }
+
+
+def status_trials():
+    """Trial → source file, rig and its stage documents (the status table's params)."""
+    return {
+        name: {
+            "source": TRIALS[name].path,
+            "rig": rig_name(config, TRIALS[name]),
+            "documents": trial_documents(name),
+        }
+        for name in sorted(TRIALS)
+    }

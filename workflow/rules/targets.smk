@@ -1,0 +1,84 @@
+# Targets: what the workflow builds for the trials found (rule all, the aggregates'
+# per-trial inputs, the documents the status table and a freeze read).
+
+
+def all_targets():
+    """Every result the workflow builds for the trials found in the raw folder."""
+    targets = []
+    for name in VIDEO_TRIALS:
+        targets += [
+            f"results/frames/{name}/timeline.csv",
+            f"results/frames/{name}/contact_sheet.png",
+            f"results/tracks/{name}.csv",
+        ]
+        if config["frames"]["keep_images"]:
+            targets.append(f"results/frames/{name}/images")
+    targets += [f"results/angles/{name}.csv" for name in sorted(TRIALS)]
+    if TRIALS:
+        targets += ["results/status/trials.csv", "results/status/all_trials_ok.txt"]
+    for variant in sorted(config["variants"]):
+        for name in sorted(TRIALS):
+            targets += [
+                f"results/fits/{variant}/{name}.curve.csv",
+                f"results/fits/{variant}/{name}.cycles.csv",
+            ]
+        targets += joint_fits(variant)
+        targets += body_fits(variant)
+    if TRIALS:
+        targets.append("results/fits/summary.csv")
+    targets += DISCOVERY_TARGETS  # workflow/rules/discovery.smk
+    return targets
+
+
+def joint_fits(variant):
+    """The per-rig joint fits of one variant: one file per rig that has trials."""
+    return [
+        f"results/fits/{variant}/joint/{rig}.json"
+        for rig in sorted(rig_trials(config, TRIALS))
+    ]
+
+
+def body_fits(variant):
+    """The joint body fits of one variant: one file per body of config `bodies` with trials."""
+    return [f"results/fits/{variant}/body/{body}.json" for body in sorted(BODIES)]
+
+
+def summary_inputs(wildcards):
+    return [
+        path
+        for variant in sorted(config["variants"])
+        for path in [f"results/fits/{variant}/{name}.json" for name in sorted(TRIALS)]
+        + joint_fits(variant)
+    ]
+
+
+def trial_documents(name):
+    """(stage, JSON document, log) of one trial's per-trial outputs, in pipeline order."""
+    docs = []
+    if TRIALS[name].kind == "video":
+        docs += [
+            (
+                "frames",
+                f"results/frames/{name}/summary.json",
+                f"logs/frames/{name}.log",
+            ),
+            ("tracks", f"results/tracks/{name}.json", f"logs/tracks/{name}.log"),
+        ]
+    docs.append(("angles", f"results/angles/{name}.json", f"logs/angles/{name}.log"))
+    for variant in sorted(config["variants"]):
+        docs.append(
+            (
+                f"fit:{variant}",
+                f"results/fits/{variant}/{name}.json",
+                f"logs/fits/{variant}/{name}.log",
+            )
+        )
+    return docs
+
+
+def status_documents(wildcards):
+    return [path for name in sorted(TRIALS) for _, path, _ in trial_documents(name)]
+
+
+def report_targets():
+    return ["results/report/report.html"] if TRIALS else []

@@ -1,0 +1,48 @@
+# Trials: the raw folder's trials found and named, the configuration and sidecars validated
+# before any job runs, the rigs and bodies they belong to, and the wildcards' patterns.
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(workflow.basedir) / "workflow"))
+
+from pendulum.bodies import body_groups, group_trial_rigs, group_trials  # noqa: E402
+from pendulum.trials import (  # noqa: E402
+    GEOMETRY_KEYS,
+    RIG_KEYS,
+    add_sidecar_rigs,
+    discover_trials,
+    needs_rig_geometry,
+    pooled_trials,
+    rig_name,
+    rig_trials,
+    trial_settings,
+    validate_config,
+)
+
+# `--config key=true` arrives as the string "true": make it the boolean it means.
+for key, value in list(config.items()):
+    if isinstance(value, str) and value.lower() in ("true", "false"):
+        config[key] = value.lower() == "true"
+
+validate_config(
+    config, source="the configuration (config.yaml and any --configfile/--config)"
+)
+
+TRIALS = discover_trials(config["raw_dir"])
+# rigs defined in sidecars join config["rigs"]
+SIDECAR_RIGS = add_sidecar_rigs(config, TRIALS)
+VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
+BODIES = body_groups(config, TRIALS)  # body → its rigs with trials (config `bodies`)
+RIGS_NEEDING_GEOMETRY = sorted(
+    {
+        rig_name(config, TRIALS[n])
+        for n in VIDEO_TRIALS
+        if needs_rig_geometry(config, TRIALS[n])
+    }
+)
+
+
+wildcard_constraints:
+    trial=r"(?!(?:joint|summary)$)[A-Za-z0-9][A-Za-z0-9_.+-]*",
+    rig=r"[A-Za-z0-9_.+-]+",
+    variant=r"[A-Za-z0-9_.+-]+",
