@@ -12,7 +12,7 @@ Error rates (pass rules from the binomial distribution, α = 0.001 per claim, as
 tests/test_fitting_statistics.py): a false naming rate ≤ 5 % (the issue's "at most 1 of
 20"), a naming rate ≥ 95 % for each single hidden effect ("at least 19 of 20"). The
 suite runs a small sample of seeds; the issue's 20-seed studies are this file run as a
-script (counts in the README):
+script (counts in docs/discovery.md):
 
     .venv/bin/python tests/test_discovery_statistics.py --seeds 20
 

@@ -185,7 +185,7 @@ def test_a_huge_relative_standard_error_is_worded_as_a_factor_not_millions_of_pe
 @pytest.mark.slow
 def test_a_rig_that_does_not_state_the_fluid_density_takes_water_with_its_tolerance():
     """A new user's sidecar rigs gave no ρ: the fit used 1000 kg/m³ with no entry in the error budget, although
-    the README gives water a default 1σ of 0.2 %. Now the budget carries it, the same as for a stated 1000."""
+    docs/method.md gives water a default 1σ of 0.2 %. Now the budget carries it, the same as for a stated 1000."""
     unstated = {k: v for k, v in RIG.items() if k not in ("fluid_density_kg_m3", "gravity_m_s2")}
     data = table(20, seed=11)
     record = load_record(data, "a", unstated, SETTINGS, tolerances={})

@@ -448,7 +448,7 @@ def render(figures: dict, quick: bool) -> str:
     lines = [
         "# Performance record" + (" (quick run: not a record)" if quick else ""),
         "",
-        "Written by `.venv/bin/python tests/benchmarks/record.py` (see the README's *Benchmarks*); compare a change",
+        "Written by `.venv/bin/python tests/benchmarks/record.py` (see docs/benchmarks.md); compare a change",
         "with the record committed before it. All figures from one run on the machine below.",
         "",
         f"* **Date**: {m['date_utc']}; run took {figures['run_s'] / 60:.1f} min",
