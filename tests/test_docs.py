@@ -10,7 +10,7 @@ from conftest import ROOT
 README_LIMIT_BYTES = 12_000
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
-LINK = re.compile(r"(?<!!)\[(?:[^\]\[]|\[[^\]]*\])*\]\(([^()\s]+)(?:\s+\"[^\"]*\")?\)")
+LINK = re.compile(r"\[(?:[^\]\[]|\[[^\]]*\])*\]\(([^()\s]+)(?:\s+\"[^\"]*\")?\)")
 CODE_SPAN = re.compile(r"(`+)(.+?)\1")
 # Named paths under these are outputs of a build (or local state), not files of the repository.
 GENERATED = ("results/", "logs/", "benchmarks/jobs/", ".snakemake/", ".venv/")
