@@ -123,8 +123,9 @@ def test_one_body_on_two_rigs_names_the_history_force_and_leaves_out_a_failed_tr
     config = yaml.safe_load((work / "config.yaml").read_text())
     config["rigs"]["short_arm"] = {**config["rigs"]["paper_rig"], "length_m": 0.40}
     config["bodies"] = {"rov": ["paper_rig", "short_arm"]}
+    config["design"] = {**config["design"], "rigs": {"mid_arm": {"length_m": 0.58}}, "releases_deg": [10, 40, 70]}
     (work / "config.yaml").write_text(yaml.safe_dump(config))
-    run(["-c2", "results/discovery/rov.json", "results/fits/linear/body/rov.json"], work)
+    run(["-c2", "results/discovery/rov.json", "results/fits/linear/body/rov.json", "results/design/rov.json"], work)
     doc = json.loads((work / "results/discovery/rov.json").read_text())
     assert (
         doc["group"] == "rov" and doc["rigs"] == ["paper_rig", "short_arm"] and doc["trials"] == ["long_a", "short_a"]
@@ -142,6 +143,22 @@ def test_one_body_on_two_rigs_names_the_history_force_and_leaves_out_a_failed_tr
     assert {"added_mass_kg", "drag_area_m2", "linear_damping_nm_s[paper_rig]", "linear_damping_nm_s[short_arm]"} <= set(
         body["parameters"]
     )
+    # what to film next for the body: candidates on both its rigs and on the described 0.58 m arm, for the
+    # final model (with the history force), today's widths carried from discovery's coefficients
+    design = json.loads((work / "results/design/rov.json").read_text())
+    assert design["status"] == "ok" and design["rigs"] == ["paper_rig", "short_arm"]
+    assert design["model_terms"] == doc["final_terms"] and design["targets"] == ["added_mass_kg", "drag_coefficient"]
+    table = pd.read_csv(work / "results/design/rov.csv")
+    assert set(table.rig) == {"paper_rig", "short_arm", "mid_arm"}
+    assert set(table.release_deg) == {-70, -40, -10, 10, 40, 70}
+    assert table[table.rig == "mid_arm"].described_rig.all() and not table[table.rig != "mid_arm"].described_rig.any()
+    for name in ("added_mass_kg", "drag_coefficient"):
+        today = design["today"][name]
+        assert today["value"] == pytest.approx(doc["parameters"][name]["value"], rel=1e-3)
+        assert today["halfwidth95"] == pytest.approx(doc["parameters"][name]["ci95"][1] - today["value"], rel=0.05)
+        rows = table[table.coefficient == name]
+        assert (rows.halfwidth95_predicted <= rows.halfwidth95_today * (1 + 1e-9)).all()
+    assert 1 <= len(design["recommendations"]) <= 3 and all(r["sentence"] for r in design["recommendations"])
     # a body naming a rig that does not exist stops the run before any job, naming it
     config["bodies"] = {"rov": ["paper_rig", "shortarm"]}
     (work / "config.yaml").write_text(yaml.safe_dump(config))

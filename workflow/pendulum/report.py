@@ -23,6 +23,7 @@ import re
 
 from pendulum.report_checks import CheckSections
 from pendulum.report_comparison import ComparisonSections
+from pendulum.report_design import DesignSections
 from pendulum.report_discovery import DiscoverySections
 from pendulum.report_figures import FigureSections
 from pendulum.report_format import esc
@@ -32,7 +33,7 @@ from pendulum.report_tables import TableSections
 # The report
 
 
-class Report(ComparisonSections, TableSections, FigureSections, DiscoverySections, CheckSections):
+class Report(ComparisonSections, TableSections, FigureSections, DiscoverySections, DesignSections, CheckSections):
     """The report's sections as HTML, one method per notebook cell; its fields and look-ups: ``ReportData``."""
 
 

@@ -53,6 +53,14 @@ def report_files():
             }
             for g in sorted(DISCOVERY_GROUPS)
         },
+        # the design rule's outputs (DESIGN_TARGETS: design.smk)
+        "design": {
+            g: {
+                "document": f"results/design/{g}.json",
+                "table": f"results/design/{g}.csv",
+            }
+            for g in sorted(DISCOVERY_GROUPS)
+        },
     }
 
 

@@ -27,6 +27,7 @@ def all_targets():
     if TRIALS:
         targets.append("results/fits/summary.csv")
     targets += DISCOVERY_TARGETS  # workflow/rules/discovery.smk
+    targets += DESIGN_TARGETS  # workflow/rules/design.smk
     return targets
 
 
