@@ -10,6 +10,10 @@ release repeated, +10°) are each simulated with fresh noise, added, and the gro
 (sandwich) half-widths are the realised ones. Printed: the share of (case, coefficient) pairs whose
 realised half-width is within 25 % of the predicted one, and the share of seeds where the recommended trial
 leaves the drag coefficient's interval narrower than the naive one (issue 26's acceptance: ≥ 90 % each).
+
+With ``--separate``: the history force hidden at one arm length (discovery: indistinguishable from linear
+damping); the design, offered a described 0.40 m arm, recommends the separating trial; it is simulated,
+added, and discovery run again — printed: how often it then names the history force.
 """
 
 from __future__ import annotations
@@ -91,6 +95,40 @@ def run_case(seed: int) -> dict:
     return out
 
 
+SHORT_ARM_M = 0.40
+
+
+def separate_case(seed: int) -> dict:
+    """History force hidden at one arm length (reported indistinguishable from linear damping); the design,
+    offered a described 0.40 m arm, picks the separating trial; that trial simulated and added, discovery
+    is run again: does it name the history force?"""
+    from test_discovery_statistics import CANDIDATES, CASES, case_records
+
+    from pendulum.design import DesignOptions, design_group
+    from pendulum.discovery import discover
+    from pendulum.groupfit import GroupProblem, ordered
+    from pendulum.records import FitSettings, load_record
+    from pendulum.synthetic_records import hidden_effect_table
+
+    records, rigs = case_records("history_one_length", seed)
+    truth = CASES["history_one_length"][0]
+    before = discover(records, rigs, ("quadratic_drag",), CANDIDATES)
+    problem = GroupProblem(records, rigs, ordered(before["final_terms"]))
+    nuisance = [(float(r.theta_rad[0]), 0.0, 0.0) for r in records]
+    today = problem.solve(problem.start(truth, nuisance), FitSettings())
+    options = DesignOptions(releases_deg=(10.0, 30.0, 60.0), rigs=(("short_arm", {"length_m": SHORT_ARM_M}),))
+    document, _ = design_group(today, before["parameters"], FitSettings(), options, before["indistinguishable"])
+    separating = document["separating"]
+    out = {"seed": seed, "named_before": before["named_effects"], "separating": separating}
+    if not separating or "release_deg" not in separating[0]:
+        return {**out, "named_after": None}
+    short = {**PAPER_RIG, "length_m": SHORT_ARM_M}
+    table = hidden_effect_table(short, truth, separating[0]["release_deg"], seed=10_000 + seed, duration_s=20.0)
+    added = load_record(table, f"added{seed}", short, FitSettings())
+    after = discover([*records, added], [*rigs, "short_arm"], ("quadratic_drag",), CANDIDATES)
+    return {**out, "named_after": after["named_effects"], "verdict_after": after["verdict"]}
+
+
 def judge(results: list[dict]) -> dict:
     pairs = [
         abs(r[kind][c]["realised"] / r[kind][c]["predicted"] - 1) <= TOLERANCE
@@ -106,7 +144,22 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=60)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--separate", action="store_true", help="the indistinguishable-pair study instead")
     args = parser.parse_args(argv)
+    if args.separate:
+        named = 0
+        for seed in range(args.seed, args.seed + args.n):
+            r = separate_case(seed)
+            named += r["named_after"] == ["history_force"]
+            print(
+                seed,
+                r["named_before"],
+                [(e.get("rig"), e.get("release_deg")) for e in r["separating"]],
+                r["named_after"],
+                flush=True,
+            )
+        print(f"history force named after the recommended trial: {named} of {args.n}")
+        return 0
     results = []
     for seed in range(args.seed, args.seed + args.n):
         r = run_case(seed)

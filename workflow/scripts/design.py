@@ -21,8 +21,9 @@ def work():
     if not group.names:
         raise ValueError(f"group {name}: no trial could be fitted, so there is nothing to design from")
     fit = fit_final_model(group, discovery, settings)
-    document, rows = design_group(fit, discovery["parameters"], settings, DesignOptions.from_config(sm.params.design))
-    for item in document["recommendations"]:
+    options = DesignOptions.from_config(sm.params.design)
+    document, rows = design_group(fit, discovery["parameters"], settings, options, discovery.get("indistinguishable"))
+    for item in document["recommendations"] + document["separating"]:
         log.info("group %s: %s", name, item["sentence"])
     write_csv(design_table(rows), sm.output.table)
     write_json({"group": name, "status": "ok", "sources": [sm.input.discovery], **document}, sm.output.document)
