@@ -18,17 +18,17 @@ import pytest
 import yaml
 
 from conftest import DEMO_RAW, ROOT
-from pendulum import synthetic as syn
-from pendulum.fitting import fit_trials
-from pendulum.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
-from pendulum.physics import PendulumModel, Rig, small_angle_period_s
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import Camera, TrialSpec, render_trial, write_video
-from pendulum.synthetic_records import synthetic_angle_table
-from pendulum.synthetic_scene import Occlusions, _draw_disk
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.angles.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.camera.video import VideoError, frame_timeline, iter_luma
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.model.physics import PendulumModel, Rig, small_angle_period_s
+from pendulum.synthetic import experiment as syn
+from pendulum.synthetic.experiment import Camera, TrialSpec, render_trial, write_video
+from pendulum.synthetic.records import synthetic_angle_table
+from pendulum.synthetic.scene import Occlusions, _draw_disk
+from pendulum.tracking.marker import TrackerSettings, track_video
 from pendulum.trials import ConfigError, discover_trials, trial_settings, validate_config
-from pendulum.video import VideoError, frame_timeline, iter_luma
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from pendulum import synthetic as syn
-from pendulum.synthetic_scene import Faults
-from pendulum.video import VideoError, contact_sheet, frame_timeline, iter_luma
+from pendulum.camera.video import VideoError, contact_sheet, frame_timeline, iter_luma
+from pendulum.synthetic import experiment as syn
+from pendulum.synthetic.scene import Faults
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}

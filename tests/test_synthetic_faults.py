@@ -17,9 +17,9 @@ import pandas as pd
 import pytest
 import yaml
 
-from pendulum import synthetic as syn
-from pendulum.synthetic import Camera, TrialSpec, render_trial
-from pendulum.synthetic_scene import Bob, Faults, Letterbox, SecondObject, Stripes, stripe_coverage
+from pendulum.synthetic import experiment as syn
+from pendulum.synthetic.experiment import Camera, TrialSpec, render_trial
+from pendulum.synthetic.scene import Bob, Faults, Letterbox, SecondObject, Stripes, stripe_coverage
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
