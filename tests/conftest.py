@@ -61,7 +61,7 @@ def hard_videos(tmp_path_factory):
     from dataclasses import replace
 
     from pendulum.synthetic.experiment import generate_trial, load_specs
-    from pendulum.synthetic.scene import Occlusions
+    from pendulum.synthetic.specs import Occlusions
 
     out = tmp_path_factory.mktemp("hard_videos")
     base = {s.name: s for s in load_specs(DEMO_SPEC)}["demo_p20"]

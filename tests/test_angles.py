@@ -15,7 +15,8 @@ from pendulum.angles.geometry import (
     estimate_rig_geometry,
     fit_circle,
 )
-from pendulum.tracking.marker import TrackerSettings, track_video
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 
 
 @pytest.fixture(scope="module")

@@ -196,8 +196,8 @@ def test_a_body_on_a_thick_rod_is_tracked_without_the_rod(render_dir):
     ``edge`` when the rod counts."""
     from pendulum.angles.geometry import angles_from_track
     from pendulum.synthetic.wall import Wall, WallBody
-    from pendulum.tracking.marker import TrackerSettings
     from pendulum.tracking.method import track_trial
+    from pendulum.tracking.settings import TrackerSettings
 
     trial = small_trial(31)
     body = WallBody(look="apple", radius_px=30.0, level=70.0)

@@ -21,7 +21,8 @@ from pendulum.camera.calibration import CalibrationError, Lens
 from pendulum.camera.view import calibrate_camera_setup, map_track, path_tilt
 from pendulum.synthetic.experiment import load_specs, write_video
 from pendulum.synthetic.optics import Optics, render_lens_clip, render_plane_clip, render_trial_through, write_clip
-from pendulum.tracking.marker import TrackerSettings, track_video
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 from pendulum.trials import ConfigError, validate_config
 
 PATTERN = (9, 6)

@@ -13,9 +13,10 @@ import pytest
 
 from pendulum.camera.video import VideoError
 from pendulum.synthetic.experiment import write_video
-from pendulum.synthetic.scene import _draw_disk
+from pendulum.synthetic.scene import draw_disk
 from pendulum.tracking.detection import DetectionError, detect_marker
-from pendulum.tracking.marker import TrackerSettings, track_video
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 
 W, H, FPS = 480, 270, 30.0
 LETTERBOX_PX = 18
@@ -53,11 +54,11 @@ def _scene(path, *, marker, second=None, second_pivot=None, stripes=False, secon
                 u = 0.5 * (1 - np.cos(2 * math.pi * times[j] / 2.3))
                 sx = second[0][0] + u * (second[1][0] - second[0][0])
                 sy = second[0][1] + u * (second[1][1] - second[0][1])
-                _draw_disk(canvas, sx, sy, marker.get("second_radius", marker["radius"]), marker["grey"])
+                draw_disk(canvas, sx, sy, marker.get("second_radius", marker["radius"]), marker["grey"])
             if second_pivot is not None:  # a second pendulum about another pivot
                 ox, oy = _swing(times[j : j + 1] + 0.4, second_pivot, marker["arm"] * 0.8, 20.0, 1.3)
-                _draw_disk(canvas, float(ox[0]), float(oy[0]), marker["radius"], marker["grey"])
-            _draw_disk(canvas, mx[j], my[j], marker["radius"], marker["grey"])
+                draw_disk(canvas, float(ox[0]), float(oy[0]), marker["radius"], marker["grey"])
+            draw_disk(canvas, mx[j], my[j], marker["radius"], marker["grey"])
             acc += canvas
         frame = acc / sub.size + rng.normal(0, 2.0, (H, W)).astype(np.float32)
         frame[:LETTERBOX_PX] = 0.0
@@ -173,7 +174,8 @@ def test_a_line_mover_and_the_body_are_not_taken_for_a_second_swinging_object(tm
     line mover's upper part and blobs of the pendulum's body line up on a second arc (about (296, 20) px, in 64
     of 90 samples). Found by a new-user trial, which got "two objects swing"; the body's blobs (fixed in the
     frame turning with the marker) are now taken out of the rival arc, and what is left moves on a line."""
-    from pendulum.synthetic.experiment import TrialSpec, generate_trial
+    from pendulum.synthetic.experiment import generate_trial
+    from pendulum.synthetic.specs import TrialSpec
 
     rig = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
     truth = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
@@ -286,7 +288,7 @@ def _marker_on_a_rod(radius, centre=(80.37, 90.61), plate_px=3.0):
     cv2.rectangle(big, (int(x4 - 0.8 * radius), 0), (int(x4 + 0.8 * radius), int(y4)), 2, -1)  # 0.4 r wide
     shade = np.select([big == 1, big == 2], [200.0, 70.0], 150.0).astype(np.float32)
     canvas = cv2.resize(shade, (160, 180), interpolation=cv2.INTER_AREA)
-    _draw_disk(canvas, cx, cy, radius, 30.0)
+    draw_disk(canvas, cx, cy, radius, 30.0)
     return canvas
 
 

@@ -65,8 +65,8 @@ CANDIDATES = ("linear_damping", "coulomb_friction", "quadratic_drag", "history_f
 def case_records(name: str, seed: int):
     """The records of one realisation of a case, and their rigs' names."""
     from pendulum.fit.records import FitSettings, load_record
-    from pendulum.synthetic.experiment import PeriodicTorque
     from pendulum.synthetic.records import hidden_effect_table
+    from pendulum.synthetic.specs import PeriodicTorque
 
     truth, rigs, extra = CASES[name]
     options = dict(extra)

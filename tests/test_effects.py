@@ -13,21 +13,13 @@ from paper_rig import PAPER_RIG
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
 from pendulum.model.effects import TERMS, effects_for, history_equivalent, lower_bound
-from pendulum.model.physics import PendulumModel, Rig, simulate
-from pendulum.synthetic.experiment import (
-    Camera,
-    Disturbances,
-    PeriodicTorque,
-    TrialSpec,
-    load_specs,
-    release_time_s,
-    render_trial,
-    true_angle_rad,
-    truth_record,
-)
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
+from pendulum.synthetic.experiment import load_specs, release_time_s, render_trial, true_angle_rad, truth_record
 from pendulum.synthetic.records import hidden_effect_table, synthetic_angle_table
+from pendulum.synthetic.specs import Camera, Disturbances, PeriodicTorque, TrialSpec
 from pendulum.tracking.centroids import measure_marker
-from pendulum.tracking.marker import TrackerSettings
+from pendulum.tracking.settings import TrackerSettings
 
 RIG = Rig(**PAPER_RIG)
 # Paper rig by hand (tests/test_physics_reference.py): K = (m g − ρ g V) L = 7.679268 N·m,

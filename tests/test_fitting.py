@@ -16,7 +16,8 @@ from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
 from pendulum.fit.uncertainty import consistency_test
 from pendulum.io import write_json
-from pendulum.model.physics import PendulumModel, Rig
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
 from pendulum.synthetic.records import synthetic_angle_table
 
 SETTINGS = FitSettings()

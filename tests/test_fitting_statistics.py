@@ -32,7 +32,8 @@ from pendulum.fit.decay import decay_analysis
 from pendulum.fit.output_error import fit_joint, fit_trials
 from pendulum.fit.records import FitSettings, load_record
 from pendulum.io import write_json
-from pendulum.model.physics import PendulumModel, Rig
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
 from pendulum.synthetic.records import synthetic_angle_table
 
 ALPHA = 1e-3  # probability that a test fails although its claim is true

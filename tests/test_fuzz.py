@@ -21,8 +21,8 @@ from hypothesis import strategies as st
 from conftest import ROOT
 from pendulum.angles.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
 from pendulum.fit.records import FitSettings
-from pendulum.model.physics import Rig
-from pendulum.tracking.marker import FLAGS, TrackerSettings
+from pendulum.model.rig import Rig
+from pendulum.tracking.settings import FLAGS, TrackerSettings
 from pendulum.trials import RIG_KEYS, ConfigError, Trial, read_sidecar, trial_settings, validate_config
 
 FUZZ = settings(

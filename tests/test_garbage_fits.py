@@ -18,7 +18,8 @@ from pendulum.fit.checks import MAX_REST_OFFSET_DEG
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
 from pendulum.fit.summary import fit_document, summary_table
-from pendulum.model.physics import PendulumModel, Rig, simulate
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
 from pendulum.synthetic.records import angle_noise_rad, synthetic_angle_table
 
 RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}

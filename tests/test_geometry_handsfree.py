@@ -14,7 +14,8 @@ from conftest import ROOT
 from pendulum.angles.geometry import estimate_rig_geometry, fit_circle, pooled_pivot
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
-from pendulum.model.physics import PendulumModel, Rig, SimulationDiverged, simulate
+from pendulum.model.physics import PendulumModel, SimulationDiverged, simulate
+from pendulum.model.rig import Rig
 from pendulum.synthetic.records import synthetic_angle_table
 from pendulum.trials import ConfigError, Trial, add_sidecar_rigs, needs_rig_geometry, pooled_trials, trial_settings
 

@@ -17,7 +17,9 @@ from paper_rig import PAPER_RIG
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
 from pendulum.model.effects import history_equivalent
-from pendulum.model.physics import HISTORY_KERNEL, PendulumModel, Rig, history_integral, simulate
+from pendulum.model.history import HISTORY_KERNEL, history_integral
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
 from pendulum.synthetic.records import synthetic_angle_table
 
 RIG = Rig(**PAPER_RIG)

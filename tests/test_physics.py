@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from independent_eom import Pendulum, integrate
-from pendulum.model.physics import PendulumModel, Rig, simulate, small_angle_period_s, stick_angle_bound_rad
+from pendulum.model.physics import PendulumModel, simulate, small_angle_period_s, stick_angle_bound_rad
+from pendulum.model.rig import Rig
 
 PAPER_RIG = Rig(mass_kg=3.53, length_m=0.76, frontal_area_m2=0.0322, displaced_volume_m3=0.0025)
 TRUTH = dict(added_mass_kg=2.5, drag_area_m2=0.02576, linear_damping_nm_s=0.15, friction_torque_nm=0.02)

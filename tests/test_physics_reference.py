@@ -15,7 +15,8 @@ import pytest
 from independent_eom import Pendulum, angle_table, integrate
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
-from pendulum.model.physics import PendulumModel, Rig, simulate, small_angle_period_s
+from pendulum.model.physics import PendulumModel, simulate, small_angle_period_s
+from pendulum.model.rig import Rig
 
 # The paper's Table 1 rig: m = 3.53 kg, L = 0.76 m, A = 0.0322 m², V = 0.0025 m³, ρ = 1000 kg/m³, g = 9.81 m/s².
 #   weight    m g       = 3.53 · 9.81          = 34.6293 N

@@ -26,7 +26,7 @@ APPLE_PERIOD_S = 2.078  # measured independently (the clip's README)
 
 
 def default_settings():
-    from pendulum.tracking.marker import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
     config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
     return TrackerSettings.from_config(config)

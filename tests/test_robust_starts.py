@@ -11,7 +11,8 @@ import pytest
 
 from pendulum.fit.decay import decay_analysis, start_state
 from pendulum.fit.records import FitSettings, load_record
-from pendulum.model.physics import PendulumModel, Rig, simulate
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
 from pendulum.synthetic.records import synthetic_angle_table
 
 PAPER = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}

@@ -7,11 +7,13 @@ import pandas as pd
 import pytest
 
 from conftest import DEMO_RAW, DEMO_TRUTH, demo_trials
-from pendulum.synthetic.experiment import Camera, TrialSpec, generate_trial, release_time_s
-from pendulum.synthetic.scene import _draw_disk
+from pendulum.synthetic.experiment import generate_trial, release_time_s
+from pendulum.synthetic.scene import draw_disk
+from pendulum.synthetic.specs import Camera, TrialSpec
 from pendulum.tracking.centroids import measure_marker
 from pendulum.tracking.checks import exposure_centre_correction
-from pendulum.tracking.marker import TrackerSettings, track_video
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 from truth import track_errors
 
 
@@ -60,7 +62,7 @@ def test_occluded_frames_are_flagged_not_interpolated(hard_videos):
 
 def _disk_image(cx, cy, radius, size=120, body=55.0, marker=235.0):
     img = np.full((size, size), body, np.float32)
-    _draw_disk(img, cx, cy, radius, marker)
+    draw_disk(img, cx, cy, radius, marker)
     return img
 
 
@@ -167,7 +169,7 @@ def test_fast_marker_on_a_small_body_keeps_angle_accuracy(fast_video):
 def test_a_jump_next_to_lost_frames_is_flagged(gap_offset):
     """The leave-one-out stencil has holes beside lost frames; a jump there is still seen, and nothing else."""
     from pendulum.tracking.checks import flag_jumps
-    from pendulum.tracking.marker import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
     rng = np.random.default_rng(abs(gap_offset))
     t = np.arange(300) / 30.0

@@ -11,7 +11,8 @@ from pendulum.angles.geometry import image_angle_rad
 from pendulum.fit.output_error import _added_mass_lower_kg, fit_trials
 from pendulum.fit.records import FitSettings, load_record, rig_tolerances
 from pendulum.fit.uncertainty import coefficient_entry, consistency_test, interval95
-from pendulum.model.physics import PendulumModel, Rig
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
 from pendulum.synthetic.records import synthetic_angle_table
 
 RIG = PAPER_RIG

@@ -44,7 +44,7 @@ MIN_OK = 0.95
 
 
 def default_settings():
-    from pendulum.tracking.marker import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
     config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
     return TrackerSettings.from_config(config)
@@ -144,7 +144,7 @@ def compare(workdir: Path) -> Path:
     import cv2
 
     from pendulum.camera.video import iter_luma
-    from pendulum.synthetic.experiment import Camera, TrialSpec
+    from pendulum.synthetic.specs import Camera, TrialSpec
     from pendulum.synthetic.wall import Wall, WallBody, WallTrial, write_wall_trial
 
     real = next(iter_luma(ROOT.parent / "shared" / "data" / "real-video" / "redapple_480p.mov"))[2].copy()

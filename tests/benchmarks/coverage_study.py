@@ -49,7 +49,8 @@ sys.path.insert(0, str(ROOT / "workflow"))
 sys.path.insert(0, str(ROOT / "tests"))
 
 from paper_rig import PAPER_RIG, TRUTH  # noqa: E402
-from pendulum.synthetic.experiment import Camera, TrialSpec, generate_trial, truth_record  # noqa: E402
+from pendulum.synthetic.experiment import generate_trial, truth_record  # noqa: E402
+from pendulum.synthetic.specs import Camera, TrialSpec  # noqa: E402
 
 FRICTION = ("quadratic_drag", "linear_damping", "coulomb_friction")
 PARAMETERS = ("added_mass_kg", "drag_area_m2", "drag_coefficient", "linear_damping_nm_s", "friction_torque_nm")
@@ -160,7 +161,8 @@ def _source_hash(*names: str) -> str:
 
 def build_trial(spec: TrialSpec, workdir: str, rerender: bool) -> dict:
     """Render (unless cached with the same spec) and track (unless cached with the same tracker)."""
-    from pendulum.tracking.marker import TrackerSettings, track_video
+    from pendulum.tracking.marker import track_video
+    from pendulum.tracking.settings import TrackerSettings
 
     workdir = Path(workdir)
     videos, truth_dir, tracks = workdir / "videos", workdir / "truth", workdir / "tracks"

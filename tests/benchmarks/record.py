@@ -52,7 +52,7 @@ from workflow_rules import rule_declarations  # noqa: E402
 from pendulum.camera import video  # noqa: E402
 from pendulum.provenance import git_state, package_versions  # noqa: E402
 from pendulum.synthetic.experiment import generate_trial  # noqa: E402
-from pendulum.tracking.marker import TrackerSettings  # noqa: E402
+from pendulum.tracking.settings import TrackerSettings  # noqa: E402
 
 PROJECT_FILES = ("Snakefile", "config.yaml", "workflow", "profiles", "notebooks", "environment-lock.txt")
 SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")

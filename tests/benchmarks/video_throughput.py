@@ -24,7 +24,8 @@ sys.path.insert(0, str(ROOT / "workflow"))
 from pendulum.angles.geometry import angles_from_track, estimate_rig_geometry  # noqa: E402
 from pendulum.camera.video import contact_sheet, frame_timeline, iter_luma  # noqa: E402
 from pendulum.synthetic.experiment import generate_trial, load_specs  # noqa: E402
-from pendulum.tracking.marker import TrackerSettings, track_video  # noqa: E402
+from pendulum.tracking.marker import track_video  # noqa: E402
+from pendulum.tracking.settings import TrackerSettings  # noqa: E402
 
 
 def decode_only(path):

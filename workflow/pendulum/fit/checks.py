@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from pendulum.fit.records import AngleRecord
-from pendulum.fit.uncertainty import _lag1
-from pendulum.model.physics import Rig
+from pendulum.fit.uncertainty import lag1_autocorrelation
+from pendulum.model.rig import Rig
 
 # Garbage in (issue 12): thresholds of :func:`record_checks`.
 MIN_USABLE_FRACTION = 0.5  # of the samples after the release transient: less, and pieces of the swing are fitted
@@ -180,6 +180,6 @@ def misfit_warning(record: AngleRecord, residual: np.ndarray) -> list[str]:
         return []
     return [
         f"trial {record.trial}: residual RMS {math.degrees(rms):.3g}° is {rms / floor:.0f}× the record's noise "
-        f"({math.degrees(floor):.2g}°) and smooth (lag-1 {_lag1(residual):.2f}): the model misses a systematic "
-        "effect; its coefficients absorb it and their intervals do not cover that error"
+        f"({math.degrees(floor):.2g}°) and smooth (lag-1 {lag1_autocorrelation(residual):.2f}): the model misses "
+        "a systematic effect; its coefficients absorb it and their intervals do not cover that error"
     ]

@@ -14,7 +14,8 @@ from scipy.optimize import least_squares, nnls
 
 from pendulum.angles.geometry import noise_level, swing_centre_rad, turning_points
 from pendulum.fit.records import AngleRecord
-from pendulum.model.physics import ADDED_MASS, TERMS, PendulumModel
+from pendulum.model.effects import ADDED_MASS, TERMS
+from pendulum.model.physics import PendulumModel
 
 
 def extrema(t, theta):

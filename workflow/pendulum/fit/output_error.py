@@ -41,25 +41,18 @@ from pendulum.fit.decay import decay_analysis
 from pendulum.fit.records import AngleRecord, FitSettings
 from pendulum.fit.uncertainty import (
     Z95,
-    _lag1,
     coefficient_entry,
     consistency_test,
     drag_coefficient_entry,
     interval95,
     jacobian_rank_warnings,
+    lag1_autocorrelation,
     linear_response,
     sandwich_covariance,
     systematic_perturbations,
 )
-from pendulum.model.physics import (
-    ADDED_MASS,
-    TERMS,
-    PendulumModel,
-    SimulationDiverged,
-    keulegan_carpenter_number,
-    lower_bound,
-    simulate,
-)
+from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound
+from pendulum.model.physics import PendulumModel, SimulationDiverged, keulegan_carpenter_number, simulate
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
 
@@ -351,7 +344,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
                 math.degrees(nuis[k][2] + Z95 * stderr[len(names) + 3 * k + 2]),
             ],
             "rms_deg": math.degrees(float(np.sqrt(np.mean(r**2)))),
-            "residual_lag1_autocorrelation": _lag1(r),
+            "residual_lag1_autocorrelation": lag1_autocorrelation(r),
             "peak_speed_m_s": peak_speed,
             "period_s": period,
             "keulegan_carpenter_number": keulegan_carpenter_number(peak_speed, period, rec.characteristic_length_m),

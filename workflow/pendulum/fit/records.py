@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.geometry import InputError, swing_extrema
-from pendulum.model.physics import Rig
+from pendulum.model.rig import Rig
 
 
 @dataclass(frozen=True)

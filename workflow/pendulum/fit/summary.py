@@ -10,8 +10,9 @@ import pandas as pd
 
 from pendulum.fit.decay import half_cycles, loss_at_amplitude
 from pendulum.fit.records import WATER_KINEMATIC_VISCOSITY_M2_S, FitSettings, characteristic_length_m, load_record
-from pendulum.model.effects import TERMS
-from pendulum.model.physics import ADDED_MASS, PendulumModel, Rig, simulate
+from pendulum.model.effects import ADDED_MASS, TERMS
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
 
 
 def fit_document(fit: dict, *, variant: str, rig: dict, sources: list[str], settings: FitSettings) -> dict:

@@ -9,7 +9,7 @@ import numpy as np
 from scipy.linalg import solve_banded
 from scipy.special import chdtrc, ndtri
 
-from pendulum.model.physics import Rig
+from pendulum.model.rig import Rig
 
 Z95 = float(ndtri(0.975))  # the standard normal's 97.5 % quantile (as scipy.stats, which costs 0.7 s to import)
 
@@ -116,7 +116,7 @@ def _meat(jac: np.ndarray, phi: np.ndarray, var: float) -> np.ndarray:
     return var * (z.T @ z)
 
 
-def _lag1(r: np.ndarray) -> float:
+def lag1_autocorrelation(r: np.ndarray) -> float:
     r = r - r.mean()
     return float(np.dot(r[1:], r[:-1]) / np.dot(r, r)) if np.dot(r, r) > 0 else 0.0
 

@@ -21,12 +21,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:  # pendulum.model.physics imports this module
-    from pendulum.model.physics import Rig
+from pendulum.model.rig import Rig
 
 
 @dataclass(frozen=True)

@@ -7,15 +7,15 @@ from pathlib import Path
 from pendulum.report.data import ReportData, failure_text, is_ok, problem_text, record_problems, true_value
 from pendulum.report.format import (
     COEFFICIENTS,
-    _finite,
-    _minus,
     esc,
     estimate_cell,
     fmt,
     garbage_badge,
+    is_finite,
     png_data_uri,
     table_html,
     td,
+    with_minus_sign,
 )
 
 NOTES_STYLE = "max-width:22em;min-width:14em"  # one note a line, wider than Table 3's warning column
@@ -52,11 +52,11 @@ def frame_notes(frames: dict) -> list[str]:
     if frames.get("variable_frame_rate"):
         interval = frames.get("frame_interval_s")
         details = [f"{frames['irregular_intervals']} irregular intervals"] if frames.get("irregular_intervals") else []
-        details += [f"median {fmt(1e3 * interval, 3)} ms"] if _finite(interval) else []
+        details += [f"median {fmt(1e3 * interval, 3)} ms"] if is_finite(interval) else []
         notes.append("variable frame rate" + (f" ({', '.join(details)})" if details else ""))
-    if _finite(frames.get("rotation_deg")) and float(frames["rotation_deg"]) % 360:
+    if is_finite(frames.get("rotation_deg")) and float(frames["rotation_deg"]) % 360:
         notes.append(f"rotation metadata {float(frames['rotation_deg']):g}°: frames used as stored")
-    if _finite(frames.get("bit_depth")) and int(frames["bit_depth"]) > 8:
+    if is_finite(frames.get("bit_depth")) and int(frames["bit_depth"]) > 8:
         pixel_format = f" ({frames['pixel_format']})" if frames.get("pixel_format") else ""
         notes.append(f"{int(frames['bit_depth'])}-bit{pixel_format}")
     for key, text in (("dropped_frames", "dropped frame(s)"), ("duplicate_timestamps", "duplicate time stamp(s)")):
@@ -201,7 +201,12 @@ class CheckSections(ReportData):
                             td(f"{COEFFICIENTS[name][1]}, {COEFFICIENTS[name][0]}"),
                             td(esc(truth), "num"),
                             estimate_cell(entry),
-                            td(esc(_minus(f"{z:+.2f}" if abs(z) >= 0.005 else "0.00")) if _finite(z) else "—", "num"),
+                            td(
+                                esc(with_minus_sign(f"{z:+.2f}" if abs(z) >= 0.005 else "0.00"))
+                                if is_finite(z)
+                                else "—",
+                                "num",
+                            ),
                             td("yes" if inside else '<span class="warn">no</span>'),
                             td(f"{covered} of {n_fit}", "num"),
                         ]
@@ -262,7 +267,7 @@ class CheckSections(ReportData):
             elif not is_ok(frames):
                 frame_cells = [failure_cell(frames, said, span=4)]
             else:
-                fps = frames.get("mean_fps") if _finite(frames.get("mean_fps")) else frames.get("nominal_fps")
+                fps = frames.get("mean_fps") if is_finite(frames.get("mean_fps")) else frames.get("nominal_fps")
                 variable = ' <span class="warn">variable</span>' if frames.get("variable_frame_rate") else ""
                 frame_cells = [
                     td(str(frames.get("n_frames", "—")), "num"),

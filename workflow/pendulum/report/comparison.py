@@ -10,18 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from pendulum.model.physics import TERMS
+from pendulum.model.effects import TERMS
 from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report.format import (
     COEFFICIENTS,
     TERM_LABELS,
     UNRELIABLE_STYLE,
-    _finite,
     esc,
     estimate_cell,
     estimate_parts,
     fmt,
     garbage_badge,
+    is_finite,
     table_html,
     td,
 )
@@ -94,7 +94,7 @@ class ComparisonSections(ReportData):
         scale = {
             name: p.get("scale_factor")
             for name, p in (consistency.get("parameters") or {}).items()
-            if _finite(p.get("scale_factor"))
+            if is_finite(p.get("scale_factor"))
         }
         worst = max(scale, key=scale.get) if scale else None
         others = [
@@ -204,13 +204,13 @@ class ComparisonSections(ReportData):
                     continue
                 clean = [t for t in trials if is_ok(self.fits.get((v, t))) and not record_problems(self.fits[(v, t)])]
                 lag1 = [self.fits[(v, t)]["trials"][t].get("residual_lag1_autocorrelation") for t in clean]
-                lag1 = [x for x in lag1 if _finite(x)]
+                lag1 = [x for x in lag1 if is_finite(x)]
                 ratio = [
                     self.fits[(v, t)]["rms_deg"] / self.docs[(t, "angles")]["noise_deg"]
                     for t in clean
                     if is_ok(self.fits.get((v, t)))
                     and is_ok(self.docs.get((t, "angles")))
-                    and _finite(self.docs[(t, "angles")].get("noise_deg"))
+                    and is_finite(self.docs[(t, "angles")].get("noise_deg"))
                     and self.docs[(t, "angles")]["noise_deg"] > 0
                 ]
                 consistency = joint.get("consistency") or {}
@@ -218,7 +218,7 @@ class ComparisonSections(ReportData):
                     (
                         p.get("scale_factor")
                         for p in (consistency.get("parameters") or {}).values()
-                        if _finite(p.get("scale_factor"))
+                        if is_finite(p.get("scale_factor"))
                     ),
                     default=None,
                 )

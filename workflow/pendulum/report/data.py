@@ -16,8 +16,8 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from pendulum.model.physics import ADDED_MASS, TERMS
-from pendulum.report.format import MARKERS, PALETTE, TERM_LABELS, _finite, _minus, fmt
+from pendulum.model.effects import ADDED_MASS, TERMS
+from pendulum.report.format import MARKERS, PALETTE, TERM_LABELS, fmt, is_finite, with_minus_sign
 
 # ---------------------------------------------------------------------------
 # Reading the results
@@ -58,7 +58,7 @@ def true_value(truth: dict | None, name: str) -> float | None:
     values = truth.get("truth") or {}
     if name == "drag_coefficient":
         area, cda = (truth.get("rig") or {}).get("frontal_area_m2"), true_value(truth, "drag_area_m2")
-        return cda / area if _finite(area) and cda is not None else None
+        return cda / area if is_finite(area) and cda is not None else None
     if name in values:
         return float(values[name])
     effects = truth.get("effects")
@@ -236,7 +236,7 @@ class ReportData:
 
     def release_detected(self, trial: str) -> bool:
         angles = self.docs.get((trial, "angles"), {})
-        return is_ok(angles) and _finite(angles.get("hold_angle_deg"))
+        return is_ok(angles) and is_finite(angles.get("hold_angle_deg"))
 
     def release_deg(self, trial: str) -> float | None:
         """Release angle: the hold angle before release, else (no release in the record) the first fitted angle."""
@@ -336,7 +336,7 @@ class ReportData:
         a = self.release_deg(trial)
         if a is None:
             return "—"
-        return _minus(f"{a:+.0f}°") + ("" if self.release_detected(trial) else "†")
+        return with_minus_sign(f"{a:+.0f}°") + ("" if self.release_detected(trial) else "†")
 
     def dagger_note(self) -> str:
         """The note for release angles marked †, when any trial has one."""

@@ -18,7 +18,7 @@ from functools import partial
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.report.data import ReportData, failure_text, is_ok, read_json, read_table
 from pendulum.report.discovery_figures import figures_html, model_key, model_label
-from pendulum.report.format import COEFFICIENTS, _finite, esc, estimate_parts, fmt, table_html, td
+from pendulum.report.format import COEFFICIENTS, esc, estimate_parts, fmt, is_finite, table_html, td
 
 _PLAIN = lambda text: text  # noqa: E731  (a caption left unnumbered)
 
@@ -64,18 +64,18 @@ def prose(text: str) -> str:
 
 def p_text(p) -> str:
     """A p-value to two significant figures; below 10⁻¹⁰ only the bound (the tail is no better known)."""
-    if not _finite(p):
+    if not is_finite(p):
         return "—"
     return "< 10⁻¹⁰" if float(p) < 1e-10 else fmt(p, 2)
 
 
 def deg(rad) -> str:
-    return fmt(math.degrees(float(rad)), 2) if _finite(rad) else "—"
+    return fmt(math.degrees(float(rad)), 2) if is_finite(rad) else "—"
 
 
 def shrink_cell(before, after) -> str:
     """RMS before → after in degrees, with the factor it shrank by."""
-    if not (_finite(before) and _finite(after)):
+    if not (is_finite(before) and is_finite(after)):
         return td("—", "na")
     factor = float(before) / float(after) if float(after) > 0 else math.inf
     note = f"{fmt(factor, 2)}× smaller" if factor >= 1 else f"{fmt(1 / factor, 2)}× larger"
@@ -88,7 +88,7 @@ def evidence_cells(ev: dict) -> list[str]:
         return [td("—", "na")] * 4
     sign = "&gt;" if ev.get("significant") else "≤"
     n = f" of {ev['n_samples']}" if "n_samples" in ev else ""
-    level = f'<span class="q">level {fmt(ev["level"], 2)}</span>' if _finite(ev.get("level")) else ""
+    level = f'<span class="q">level {fmt(ev["level"], 2)}</span>' if is_finite(ev.get("level")) else ""
     statistic = ev["likelihood_ratio"] if abs(ev["likelihood_ratio"]) >= 1e-3 else 0.0  # no rounding noise
     return [
         td(f"{fmt(statistic, 3)} {sign} {fmt(ev['threshold'], 3)}", "num"),

@@ -11,9 +11,9 @@ import io
 
 import numpy as np
 
-from pendulum.model.physics import ADDED_MASS
+from pendulum.model.effects import ADDED_MASS
 from pendulum.report.data import ReportData, is_ok, record_problems, true_value
-from pendulum.report.format import MARKERS, PLAIN_SYMBOLS, _finite, esc, figure_html, fmt
+from pendulum.report.format import MARKERS, PLAIN_SYMBOLS, esc, figure_html, fmt, is_finite
 
 FIGURE_DPI = 110
 
@@ -217,7 +217,7 @@ class FigureSections(ReportData):
                                 half = 1.96 * scale * float(je.get("stderr_statistical") or 0.0)
                                 bound = je.get("lower_bound")
                                 low = je["value"] - half
-                                low = max(low, float(bound)) if _finite(bound) else low
+                                low = max(low, float(bound)) if is_finite(bound) else low
                                 ax.axhspan(low, je["value"] + half, color=colour, alpha=0.18, lw=0)
                                 ax.axhline(je["value"], color=colour, lw=0.8, alpha=0.9)
                         truth = {true_value(self.truth.get(t), name) for t in trials if t in self.truth} - {None}

@@ -12,7 +12,7 @@ import base64
 import html
 import math
 
-from pendulum.model.physics import ADDED_MASS
+from pendulum.model.effects import ADDED_MASS
 
 # ---------------------------------------------------------------------------
 # Names, symbols and units
@@ -59,25 +59,25 @@ MINUS = "\u2212"
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 
-def _finite(value) -> bool:
+def is_finite(value) -> bool:
     try:
         return value is not None and math.isfinite(float(value))
     except (TypeError, ValueError):
         return False
 
 
-def _minus(text: str) -> str:
+def with_minus_sign(text: str) -> str:
     return text.replace("-", MINUS)
 
 
 def _scientific(value: float, sig: int) -> str:
     mantissa, exponent = f"{value:.{sig - 1}e}".split("e")
-    return _minus(f"{mantissa}×10{str(int(exponent)).translate(_SUPERSCRIPT)}")
+    return with_minus_sign(f"{mantissa}×10{str(int(exponent)).translate(_SUPERSCRIPT)}")
 
 
 def fmt(value, sig: int = 3) -> str:
     """``value`` to ``sig`` significant figures; ×10ⁿ outside 0.001–99 999; "—" when missing."""
-    if not _finite(value):
+    if not is_finite(value):
         return "—"
     value = float(value)
     if value == 0:
@@ -85,7 +85,7 @@ def fmt(value, sig: int = 3) -> str:
     if not 1e-3 <= abs(value) < 1e5:
         return _scientific(value, sig)
     decimals = max(0, sig - 1 - math.floor(math.log10(abs(value))))
-    return _minus(f"{value:.{decimals}f}")
+    return with_minus_sign(f"{value:.{decimals}f}")
 
 
 def decimals_for(uncertainty: float, digits: int = 2) -> int:
@@ -94,7 +94,7 @@ def decimals_for(uncertainty: float, digits: int = 2) -> int:
 
 
 def fmt_at(value: float, decimals: int) -> str:
-    return _minus(f"{value:.{decimals}f}")
+    return with_minus_sign(f"{value:.{decimals}f}")
 
 
 def estimate_parts(entry: dict | None) -> tuple[str, str]:
@@ -106,16 +106,16 @@ def estimate_parts(entry: dict | None) -> tuple[str, str]:
     ``not identifiable`` when flagged. Never prints a bound's rounding noise
     (4.3e-14) as a measurement.
     """
-    if not entry or not _finite(entry.get("value")):
+    if not entry or not is_finite(entry.get("value")):
         return "—", ""
     value = float(entry["value"])
     low, high = (entry.get("ci95") or [None, None])[:2]
     if entry.get("at_bound"):
         bound = entry.get("lower_bound", value)
-        upper = f"< {fmt(high, 2)}" if _finite(high) else "no upper limit"
-        return fmt(bound if _finite(bound) else value, 3), f"(at bound; {upper})"
+        upper = f"< {fmt(high, 2)}" if is_finite(high) else "no upper limit"
+        return fmt(bound if is_finite(bound) else value, 3), f"(at bound; {upper})"
     qualifier = ""
-    if _finite(low) and _finite(high) and high > low:
+    if is_finite(low) and is_finite(high) and high > low:
         half = (float(high) - float(low)) / 2
         decimals = decimals_for(half)
         scale = max(abs(value), abs(float(low)), abs(float(high)))

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 from pendulum.fit.records import RIG_DEFAULTS, WATER_KINEMATIC_VISCOSITY_M2_S, rig_tolerances, with_rig_defaults
-from pendulum.model.physics import Rig
+from pendulum.model.rig import Rig
 from pendulum.report.data import (
     ReportData,
     failure_text,

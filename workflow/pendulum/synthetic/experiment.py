@@ -4,12 +4,12 @@ The truth trajectory comes from :func:`pendulum.model.physics.simulate` (the sam
 equations the fitter uses) with any set of effects of the library
 (:data:`pendulum.model.effects.TERMS`, the history force included), including ones a
 fitted model lacks, and optionally with effects outside the library
-(:class:`Disturbances`: a periodic disturbance torque, a pivot drifting in the
+(:class:`pendulum.synthetic.specs.Disturbances`: a periodic disturbance torque, a pivot drifting in the
 image; for the video-free angle tables of :mod:`pendulum.synthetic.records` a drifting zero). The
 renderer draws a monochrome camera view: a textured, cluttered tank background, the pivot, the rod,
 the vehicle and a circular marker dot; the exposure blur is the average of sub-exposure renders;
 sensor noise is added before lossy H.264 compression. Real footage's faults
-(:class:`pendulum.synthetic.scene.Faults`: background stripes, letterbox borders, a second moving
+(:class:`pendulum.synthetic.specs.Faults`: background stripes, letterbox borders, a second moving
 object, two-tone and shiny bobs, a trimmed clip's discarded packets; a long exposure's streak) are
 off by default, so existing renders stay byte-identical; :mod:`pendulum.synthetic.scene` draws them.
 
@@ -31,115 +31,19 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from pendulum.model.physics import PendulumModel, Rig, simulate
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
 from pendulum.synthetic.scene import (
-    Bob,
-    Faults,
-    Occlusions,
-    _disk_overlap_fraction,
-    _draw_bob,
-    _draw_disk,
-    _shades,
+    disk_overlap_fraction,
+    draw_bob,
+    draw_disk,
     letterbox_covered_fraction,
     letterbox_mask,
     occlusion_schedule,
+    pendulum_shades,
     stripe_coverage,
 )
-
-
-@dataclass
-class Camera:
-    """How the synthetic camera sees the rig."""
-
-    width_px: int = 1280
-    height_px: int = 720
-    fps: float = 30.0
-    pivot_px: tuple[float, float] = (640.3, 70.6)
-    marker_arm_px: float = 560.0  # pivot to marker centre
-    marker_radius_px: float = 10.0
-    polarity: str = "bright"  # bright marker on darker scene, or "dark" on bright
-    roll_deg: float = 0.0  # camera roll: image vertical minus true vertical
-    exposure_fraction: float = 0.5  # shutter open time / frame interval
-    exposure_subsamples: int = 8
-    noise_sigma: float = 3.0  # grey levels, before compression
-    crf: int = 22  # x264 constant rate factor (lossy compression)
-    preset: str = "veryfast"
-    # Largest marker step between sub-exposures: a long exposure gets more sub-exposures (never fewer
-    # than ``exposure_subsamples``) so its streak is smooth. In the truth record only when changed.
-    blur_step_px: float = 1.5
-
-
-@dataclass(frozen=True)
-class PeriodicTorque:
-    """A disturbance torque outside the library: τ(t) = A sin(2π t / T + φ), t in the simulation's time base."""
-
-    amplitude_nm: float
-    period_s: float
-    phase_rad: float = 0.0
-
-    def __call__(self, t: float) -> float:
-        return self.amplitude_nm * math.sin(2 * math.pi * t / self.period_s + self.phase_rad)
-
-
-@dataclass
-class Disturbances:
-    """Effects outside the model library, for tests of the discovery; all off by default.
-
-    ``pivot_drift_px``: the rendered pivot (and with it the whole pendulum) moves
-    linearly from ``camera.pivot_px`` at t = 0 to ``pivot_px + pivot_drift_px`` at
-    the end of the video. ``torque_*``: a periodic torque A sin(2π t/T + φ) acting
-    on the pendulum (t: video time), e.g. a pump or vortex shedding off the tank.
-    """
-
-    pivot_drift_px: tuple[float, float] = (0.0, 0.0)
-    torque_amplitude_nm: float = 0.0
-    torque_period_s: float = 1.0
-    torque_phase_rad: float = 0.0
-
-    @property
-    def torque(self) -> PeriodicTorque | None:
-        if self.torque_amplitude_nm == 0:
-            return None
-        return PeriodicTorque(self.torque_amplitude_nm, self.torque_period_s, self.torque_phase_rad)
-
-    @property
-    def drifting(self) -> bool:
-        return any(v != 0 for v in self.pivot_drift_px)
-
-    @property
-    def active(self) -> bool:
-        return self.drifting or self.torque is not None
-
-
-@dataclass
-class TrialSpec:
-    name: str
-    release_deg: float
-    rig: dict
-    truth: dict  # physical coefficients, e.g. added_mass_kg, drag_area_m2, ...
-    effects: list[str]  # terms of the true physics (names in pendulum.model.effects.TERMS)
-    seed: int = 0
-    hold_s: float = 1.0  # pendulum held at the release angle before release
-    duration_s: float = 25.0
-    camera: Camera = field(default_factory=Camera)
-    occlusions: Occlusions = field(default_factory=Occlusions)
-    disturbances: Disturbances = field(default_factory=Disturbances)
-    faults: Faults = field(default_factory=Faults)
-
-    @classmethod
-    def from_mapping(cls, values: dict) -> TrialSpec:
-        values = dict(values)
-        camera = dict(values.get("camera", {}))
-        if "pivot_px" in camera:
-            camera["pivot_px"] = tuple(camera["pivot_px"])
-        values["camera"] = Camera(**camera)
-        values["occlusions"] = Occlusions(**values.get("occlusions", {}))
-        disturbances = dict(values.get("disturbances") or {})
-        if "pivot_drift_px" in disturbances:
-            disturbances["pivot_drift_px"] = tuple(disturbances["pivot_drift_px"])
-        values["disturbances"] = Disturbances(**disturbances)
-        values["faults"] = Faults.from_mapping(values.get("faults"))
-        return cls(**values)
+from pendulum.synthetic.specs import Bob, Camera, TrialSpec
 
 
 def frame_times_s(spec: TrialSpec) -> np.ndarray:
@@ -249,9 +153,9 @@ def _draw_pendulum(canvas, camera: Camera, theta_rad: float, shades: dict, pivot
     cv2.fillConvexPoly(canvas, np.array(corners, np.int32), shades["body"], cv2.LINE_AA, shift)
     cv2.circle(canvas, fixed(px, py), 14 * scale, shades["hub"], -1, cv2.LINE_AA, shift)
     if bob is None or not bob.active:
-        _draw_disk(canvas, body_centre[0], body_centre[1], camera.marker_radius_px, shades["marker"])
+        draw_disk(canvas, body_centre[0], body_centre[1], camera.marker_radius_px, shades["marker"])
     else:
-        _draw_bob(canvas, body_centre[0], body_centre[1], camera, bob, phi, shades)
+        draw_bob(canvas, body_centre[0], body_centre[1], camera, bob, phi, shades)
 
 
 def exposure_subsamples(spec: TrialSpec) -> int:
@@ -294,14 +198,14 @@ class RenderedTrial:
 def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     """Render every frame of a trial and return it with its per-frame truth.
 
-    With faults (:class:`Faults`) the truth gains columns: ``streak_px`` (marker path length
+    With faults (:class:`pendulum.synthetic.specs.Faults`) the truth gains columns: ``streak_px`` (marker path length
     during the exposure), ``second_x_px``/``second_y_px`` (the second object's exposure-mean centre),
     and ``occluded_fraction`` counts the letterbox and a second object in front. A bubble wrapping
     from the end back to the start during a frame's exposure has no centre there (NaN).
     """
     cam = spec.camera
     faults = spec.faults
-    shades = _shades(cam)
+    shades = pendulum_shades(cam)
     n_lead = faults.trimmed_lead_frames
     times = frame_times_s(spec)
     if n_lead:
@@ -365,10 +269,10 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
                 np.copyto(canvas, background)
                 pivot = None if pivot_sub is None else (pivot_sub[0][i, j], pivot_sub[1][i, j])
                 if second_sub is not None and not second.in_front:
-                    _draw_disk(canvas, second_sub[0][i, j], second_sub[1][i, j], second_radius, second_level)
+                    draw_disk(canvas, second_sub[0][i, j], second_sub[1][i, j], second_radius, second_level)
                 _draw_pendulum(canvas, cam, float(theta_sub[i, j]), shades, pivot, bob)
                 if second_sub is not None and second.in_front:
-                    _draw_disk(canvas, second_sub[0][i, j], second_sub[1][i, j], second_radius, second_level)
+                    draw_disk(canvas, second_sub[0][i, j], second_sub[1][i, j], second_radius, second_level)
                 accum += canvas
             accum /= k
         frame = accum.copy()
@@ -389,7 +293,7 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
                     4,
                 )
                 d = math.hypot(ox - truth.marker_x_px[i], oy - truth.marker_y_px[i])
-                truth.loc[i, "occluded_fraction"] = _disk_overlap_fraction(cam.marker_radius_px, r_occ, d)
+                truth.loc[i, "occluded_fraction"] = disk_overlap_fraction(cam.marker_radius_px, r_occ, d)
         frame += noise_bank[i % len(noise_bank)] if i % 2 == 0 else np.flip(noise_bank[i % len(noise_bank)], axis=1)
         image = np.clip(np.rint(frame), 0, 255).astype(np.uint8)
         if border is not None:
@@ -405,7 +309,7 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
                 hidden[i] = max(hidden[i], letterbox_covered_fraction(cam, faults.letterbox, x, y))
             if second_sub is not None and second.in_front:
                 d = math.hypot(truth.second_x_px[i] - x, truth.second_y_px[i] - y)
-                hidden[i] = max(hidden[i], _disk_overlap_fraction(cam.marker_radius_px, second_radius, d))
+                hidden[i] = max(hidden[i], disk_overlap_fraction(cam.marker_radius_px, second_radius, d))
         truth["occluded_fraction"] = hidden
     truth = truth.iloc[n_lead:].reset_index(drop=True)
     return RenderedTrial(frames[n_lead:], truth, frames[:n_lead])

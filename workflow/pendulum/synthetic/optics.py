@@ -24,7 +24,8 @@ import cv2
 import numpy as np
 
 from pendulum.camera.calibration import Lens
-from pendulum.synthetic.experiment import RenderedTrial, TrialSpec, render_trial, write_video
+from pendulum.synthetic.experiment import RenderedTrial, render_trial, write_video
+from pendulum.synthetic.specs import TrialSpec
 
 SUPERSAMPLE = 3
 

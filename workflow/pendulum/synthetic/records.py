@@ -16,10 +16,11 @@ import numpy as np
 import pandas as pd
 
 from pendulum.model.effects import effects_for
-from pendulum.model.physics import PendulumModel, Rig, simulate
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
 
 if TYPE_CHECKING:
-    from pendulum.synthetic.experiment import PeriodicTorque
+    from pendulum.synthetic.specs import PeriodicTorque
 
 
 def angle_noise_rad(

@@ -1,171 +1,22 @@
-"""Synthetic scene: the pendulum's grey levels, exact-coverage disks and real footage's faults.
+"""Synthetic scene: the pendulum's grey levels, exact-coverage disks and real footage's faults drawn.
 
-What the renderer (:func:`pendulum.synthetic.experiment.render_trial`) draws besides the background, rod and body:
-grey levels of the pendulum's parts for a marker polarity; disks with exact pixel coverage (4×4
-supersampled, sub-pixel centre) for the marker, a two-tone or shiny bob (:class:`Bob`) and a second
-object; the faults of a scene (:class:`Faults`: background stripes, letterbox borders, a second moving
-object, the bob's look, a trimmed clip's discarded packets; :class:`Occlusions` passing in front of the
-marker and their schedule) and what each covers: each pixel's fraction inside a band, the letterbox
-mask, the fraction of the marker disk under a border or under another disk.
+What the renderer (:func:`pendulum.synthetic.experiment.render_trial`) draws besides the background, rod
+and body: grey levels of the pendulum's parts for a marker polarity; disks with exact pixel coverage (4×4
+supersampled, sub-pixel centre) for the marker, a two-tone or shiny bob and a second object; the faults of
+a scene (:class:`pendulum.synthetic.specs.Faults`: background stripes, letterbox borders, a second moving
+object, the bob's look, a trimmed clip's discarded packets; occlusions passing in front of the marker and
+their schedule) and what each covers: each pixel's fraction inside a band, the letterbox mask, the
+fraction of the marker disk under a border or under another disk.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from dataclasses import replace
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from pendulum.synthetic.experiment import Camera, TrialSpec
-
-
-@dataclass
-class Occlusions:
-    """Opaque objects (a hand, a bubble cloud) passing in front of the marker."""
-
-    fraction_of_frames: float = 0.0
-    event_frames: int = 6
-
-
-@dataclass
-class Stripes:
-    """Flat bands across the background with hard edges the marker crosses (a striped wall, tile joints).
-
-    A pixel is in a band when u − offset_px, with u = x cos a + y sin a (a = ``angle_deg``; 0: vertical
-    bands, u = x), lies in [0, width_px) modulo ``period_px`` (0: one band). Bands are drawn with exact
-    pixel coverage at grey ``level`` (below the scene for dark bands, above for bright).
-    """
-
-    width_px: float = 0.0  # 0: no stripes
-    period_px: float = 0.0
-    offset_px: float = 0.0
-    level: float = 30.0
-    angle_deg: float = 0.0
-
-    @property
-    def active(self) -> bool:
-        return self.width_px > 0
-
-
-@dataclass
-class Letterbox:
-    """Black borders (a phone's letterbox/pillarbox) of the given widths, drawn over everything, noise-free."""
-
-    top_px: int = 0
-    bottom_px: int = 0
-    left_px: int = 0
-    right_px: int = 0
-    level: float = 0.0
-
-    @property
-    def active(self) -> bool:
-        return any((self.top_px, self.bottom_px, self.left_px, self.right_px))
-
-
-@dataclass
-class SecondObject:
-    """Another disk in the scene (a bubble, a swaying float) on a non-circular path; ``path: none`` is off.
-
-    ``linear``: back and forth on the segment start→end, p = start + (end − start)(1 − cos 2πt/T)/2.
-    ``bubble``: rises from start to end in T, then again from start (one bubble at a time), with a
-    sideways wobble w sin(2πt/T_w) across the segment. t is video time; T = ``period_s``. Radius and
-    grey level default to the marker's (same size and polarity). Drawn behind the pendulum unless
-    ``in_front``; exposure-blurred like the marker.
-    """
-
-    path: str = "none"
-    start_px: tuple[float, float] = (0.0, 0.0)
-    end_px: tuple[float, float] = (0.0, 0.0)
-    period_s: float = 2.0
-    radius_px: float | None = None
-    level: float | None = None
-    wobble_px: float = 0.0
-    wobble_period_s: float = 0.5
-    in_front: bool = False
-
-    @property
-    def active(self) -> bool:
-        if self.path not in ("none", "linear", "bubble"):
-            raise ValueError(f"second_object.path must be 'none', 'linear' or 'bubble', got {self.path!r}")
-        return self.path != "none"
-
-    def position_px(self, times_s) -> tuple[np.ndarray, np.ndarray]:
-        """Centre at video times ``times_s`` (arrays allowed)."""
-        t = np.asarray(times_s, float)
-        (x0, y0), (x1, y1) = self.start_px, self.end_px
-        if self.path == "linear":
-            u = 0.5 * (1 - np.cos(2 * np.pi * t / self.period_s))
-            return x0 + u * (x1 - x0), y0 + u * (y1 - y0)
-        u = np.mod(t / self.period_s, 1.0)
-        length = math.hypot(x1 - x0, y1 - y0) or 1.0
-        nx, ny = -(y1 - y0) / length, (x1 - x0) / length  # across the path
-        w = self.wobble_px * np.sin(2 * np.pi * t / self.wobble_period_s)
-        return x0 + u * (x1 - x0) + w * nx, y0 + u * (y1 - y0) + w * ny
-
-
-@dataclass
-class Bob:
-    """The marker's look: plain (default), two-tone and/or shiny.
-
-    ``two_tone``: the half on the +x side of a line through the centre (at ``split_deg`` from the rod,
-    turning with the bob) has grey ``other_level`` (None: the opposite polarity's marker grey).
-    ``highlight_radius_px`` > 0: a specular spot of grey ``highlight_level`` at
-    ``highlight_offset`` marker radii from the centre, in image direction
-    ``highlight_direction_deg + highlight_gain·θ`` (degrees from +x toward +y; gain 0: a sphere under a fixed
-    lamp, the spot stays put while the bob turns under it; gain 1: it turns with the bob).
-    The truth's marker centre is always the disk's geometric centre.
-    """
-
-    two_tone: bool = False
-    other_level: float | None = None
-    split_deg: float = 0.0
-    highlight_radius_px: float = 0.0
-    highlight_level: float = 255.0
-    highlight_offset: float = 0.5
-    highlight_direction_deg: float = -135.0
-    highlight_gain: float = 0.0
-
-    @property
-    def active(self) -> bool:
-        return self.two_tone or self.highlight_radius_px > 0
-
-
-@dataclass
-class Faults:
-    """Real-world faults for the tracker and the frames stage; all off by default (renders unchanged).
-
-    ``trimmed_lead_frames``: the video file holds this many extra frames before its first shown
-    frame, as packets an MP4 edit list tells the decoder to discard (a phone's trimmed clip); the
-    truth describes the shown frames only (frame 0 at time 0).
-    """
-
-    stripes: Stripes = field(default_factory=Stripes)
-    letterbox: Letterbox = field(default_factory=Letterbox)
-    second_object: SecondObject = field(default_factory=SecondObject)
-    bob: Bob = field(default_factory=Bob)
-    trimmed_lead_frames: int = 0
-
-    @property
-    def active(self) -> bool:
-        parts = (self.stripes, self.letterbox, self.second_object, self.bob)
-        return any(p.active for p in parts) or self.trimmed_lead_frames > 0
-
-    @classmethod
-    def from_mapping(cls, values: dict | None) -> Faults:
-        values = dict(values or {})
-        second = dict(values.get("second_object") or {})
-        for key in ("start_px", "end_px"):
-            if key in second:
-                second[key] = tuple(second[key])
-        return cls(
-            stripes=Stripes(**(values.get("stripes") or {})),
-            letterbox=Letterbox(**(values.get("letterbox") or {})),
-            second_object=SecondObject(**second),
-            bob=Bob(**(values.get("bob") or {})),
-            trimmed_lead_frames=int(values.get("trimmed_lead_frames", 0)),
-        )
+from pendulum.synthetic.specs import Bob, Camera, Letterbox, Stripes, TrialSpec
 
 
 def occlusion_schedule(spec: TrialSpec, n_frames: int, first_frame: int) -> list[tuple[int, int]]:
@@ -180,7 +31,7 @@ def occlusion_schedule(spec: TrialSpec, n_frames: int, first_frame: int) -> list
     return [(int(s0), occ.event_frames) for s0 in starts]
 
 
-def _shades(camera: Camera) -> dict:
+def pendulum_shades(camera: Camera) -> dict:
     if camera.polarity == "dark":
         return {"rod": 95.0, "body": 205.0, "marker": 25.0, "hub": 70.0}
     if camera.polarity == "bright":
@@ -188,7 +39,7 @@ def _shades(camera: Camera) -> dict:
     raise ValueError(f"marker polarity must be 'bright' or 'dark', got {camera.polarity!r}")
 
 
-def _draw_disk(canvas, cx, cy, radius, value):
+def draw_disk(canvas, cx, cy, radius, value):
     """Exact-coverage anti-aliased disk (sub-pixel centre) blended into ``canvas``."""
     x0, x1 = int(math.floor(cx - radius - 2)), int(math.ceil(cx + radius + 2))
     y0, y1 = int(math.floor(cy - radius - 2)), int(math.ceil(cy + radius + 2))
@@ -207,7 +58,7 @@ def _draw_disk(canvas, cx, cy, radius, value):
 
 
 def _draw_disk_part(canvas, cx, cy, radius, value, normal=None):
-    """As :func:`_draw_disk`, restricted to the half (x − c)·normal ≥ 0 when ``normal`` is given."""
+    """As :func:`draw_disk`, restricted to the half (x − c)·normal ≥ 0 when ``normal`` is given."""
     x0c, x1c = max(int(math.floor(cx - radius - 2)), 0), min(int(math.ceil(cx + radius + 2)), canvas.shape[1])
     y0c, y1c = max(int(math.floor(cy - radius - 2)), 0), min(int(math.ceil(cy + radius + 2)), canvas.shape[0])
     if x0c >= x1c or y0c >= y1c:
@@ -223,21 +74,23 @@ def _draw_disk_part(canvas, cx, cy, radius, value, normal=None):
     patch += cover * (value - patch)
 
 
-def _draw_bob(canvas, cx, cy, camera: Camera, bob: Bob, phi: float, shades: dict):
-    """The marker disk with a two-tone half and/or a specular highlight (see :class:`Bob`)."""
+def draw_bob(canvas, cx, cy, camera: Camera, bob: Bob, phi: float, shades: dict):
+    """The marker disk with a two-tone half and/or a specular highlight (see :class:`pendulum.synthetic.specs.Bob`)."""
     r = camera.marker_radius_px
-    _draw_disk(canvas, cx, cy, r, shades["marker"])
+    draw_disk(canvas, cx, cy, r, shades["marker"])
     if bob.two_tone:
         other = bob.other_level
         if other is None:
-            other = _shades(replace(camera, polarity="dark" if camera.polarity == "bright" else "bright"))["marker"]
+            other = pendulum_shades(replace(camera, polarity="dark" if camera.polarity == "bright" else "bright"))[
+                "marker"
+            ]
         rod = math.atan2(math.cos(phi), math.sin(phi)) + math.radians(bob.split_deg)  # line direction in the image
         _draw_disk_part(canvas, cx, cy, r, float(other), (math.sin(rod), -math.cos(rod)))
     if bob.highlight_radius_px > 0:
         direction = math.radians(bob.highlight_direction_deg + bob.highlight_gain * math.degrees(phi))
         hx = cx + bob.highlight_offset * r * math.cos(direction)
         hy = cy + bob.highlight_offset * r * math.sin(direction)
-        _draw_disk(canvas, hx, hy, bob.highlight_radius_px, bob.highlight_level)
+        draw_disk(canvas, hx, hy, bob.highlight_radius_px, bob.highlight_level)
 
 
 def stripe_coverage(shape: tuple[int, int], stripes: Stripes) -> np.ndarray:
@@ -286,7 +139,7 @@ def letterbox_covered_fraction(camera: Camera, letterbox: Letterbox, x: float, y
     return min(1.0, sum(_disk_halfplane_fraction(r, d) for d, width in zip(distances, widths, strict=True) if width))
 
 
-def _disk_overlap_fraction(r_marker: float, r_other: float, distance: float) -> float:
+def disk_overlap_fraction(r_marker: float, r_other: float, distance: float) -> float:
     """Fraction of a disk of radius r_marker covered by a disk of radius r_other at ``distance``."""
     r, big, d = r_marker, r_other, distance
     if d >= r + big:

@@ -32,7 +32,8 @@ import cv2
 import numpy as np
 import pandas as pd
 
-from pendulum.synthetic.experiment import TrialSpec, true_angle_rad, write_video
+from pendulum.synthetic.experiment import true_angle_rad, write_video
+from pendulum.synthetic.specs import TrialSpec
 
 
 @dataclass(frozen=True)
@@ -276,7 +277,7 @@ STRING_EFFECTS = ["quadratic_drag", "linear_damping"]
 
 def random_wall_trial(seed: int, rig: dict = STRING_RIG, truth: dict = STRING_TRUTH, effects=STRING_EFFECTS):
     """A scene of real footage's faults drawn at random (the body study's scenes)."""
-    from pendulum.synthetic.experiment import Camera
+    from pendulum.synthetic.specs import Camera
 
     rng = np.random.default_rng(seed)
     width, height = [(640, 360), (960, 540)][int(rng.integers(0, 2))]

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 if TYPE_CHECKING:
-    from pendulum.tracking.marker import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
 
 def _disk_template(radius: float) -> np.ndarray:

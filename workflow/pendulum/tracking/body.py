@@ -50,7 +50,7 @@ from scipy.ndimage import median_filter
 
 from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.checks import flag_jumps
-from pendulum.tracking.marker import TrackerSettings
+from pendulum.tracking.settings import TrackerSettings
 
 log = logging.getLogger(__name__)
 

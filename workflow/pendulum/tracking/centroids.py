@@ -36,7 +36,7 @@ import cv2
 import numpy as np
 
 if TYPE_CHECKING:
-    from pendulum.tracking.marker import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
 
 @dataclass

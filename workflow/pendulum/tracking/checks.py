@@ -15,7 +15,7 @@ import numpy as np
 from scipy.ndimage import maximum_filter1d
 
 if TYPE_CHECKING:
-    from pendulum.tracking.marker import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
 
 def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:

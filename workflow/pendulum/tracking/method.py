@@ -15,7 +15,8 @@ import pandas as pd
 
 from pendulum.camera.video import VideoError
 from pendulum.tracking.body import track_body
-from pendulum.tracking.marker import TrackerSettings, track_video
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 
 MARKER_USABLE_FRACTION = 0.9
 
