@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from conftest import DEMO_RAW, ROOT
-from pendulum.angles.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.angles.record import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
 from pendulum.camera.video import VideoError, frame_timeline, iter_luma
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record

@@ -194,7 +194,7 @@ def test_a_body_on_a_thick_rod_is_tracked_without_the_rod(render_dir):
     frame, the body swinging 60 px below the frame's top: the rod leaves the frame, but whether the body is
     in view is judged on the body itself (within 1.2 inner radii of its thickest point): every frame is
     ``edge`` when the rod counts."""
-    from pendulum.angles.geometry import angles_from_track
+    from pendulum.angles.record import angles_from_track
     from pendulum.synthetic.wall import Wall, WallBody
     from pendulum.tracking.method import track_trial
     from pendulum.tracking.settings import TrackerSettings

@@ -16,7 +16,8 @@ import pytest
 import yaml
 
 from conftest import DEMO_SPEC, ROOT
-from pendulum.angles.geometry import angles_from_track, estimate_rig_geometry
+from pendulum.angles.geometry import estimate_rig_geometry
+from pendulum.angles.record import angles_from_track
 from pendulum.camera.calibration import CalibrationError, Lens
 from pendulum.camera.view import calibrate_camera_setup, map_track, path_tilt
 from pendulum.synthetic.experiment import load_specs, write_video

@@ -14,7 +14,7 @@ from scipy import stats
 
 from conftest import DEMO_TRUTH, SHARED, demo_trials
 from paper_rig import PAPER_RIG
-from pendulum.angles.geometry import angles_from_tracker_csv
+from pendulum.angles.record import angles_from_tracker_csv
 from pendulum.discovery.diagnosis import critical_value, mixture_p_value
 from pendulum.discovery.findings import plus_minus, separating_experiments
 from pendulum.discovery.selection import Discovery

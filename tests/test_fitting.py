@@ -74,7 +74,7 @@ def air_rig(diameter_m, mass_kg):
 
 
 def real_record(name, diameter_m, mass_kg, settings):
-    from pendulum.angles.geometry import angles_from_tracker_csv
+    from pendulum.angles.record import angles_from_tracker_csv
 
     rig = air_rig(diameter_m, mass_kg)
     raw = pd.read_csv(SHARED / "data/real-air-pendulum" / f"{name}.csv")

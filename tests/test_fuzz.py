@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from conftest import ROOT
-from pendulum.angles.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.angles.record import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
 from pendulum.fit.records import FitSettings
 from pendulum.model.rig import Rig
 from pendulum.tracking.settings import FLAGS, TrackerSettings

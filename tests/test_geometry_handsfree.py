@@ -169,7 +169,7 @@ def test_the_vertical_is_not_moved_by_flagged_frames_near_the_swing_ends():
     """A new user's clip with a disk passing the marker every 6 s: 16 flagged frames (NaN) moved the estimated
     vertical by −0.17° (stated σ 0.0066°): the extrema were looked up by frame where they were counted in kept
     samples. Exact damped swing about 0.3°, 5-frame gaps around every other extremum: the centre as without gaps."""
-    from pendulum.angles.geometry import swing_centre_rad
+    from pendulum.angles.swings import swing_centre_rad
 
     t = np.arange(0, 14, 1 / 30)
     centre = math.radians(0.3)

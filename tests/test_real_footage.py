@@ -45,7 +45,8 @@ def zero_crossing_period(time_s: np.ndarray, theta: np.ndarray) -> float:
 def apple():
     if not APPLE.is_file():
         pytest.skip(f"{APPLE} not found (../shared beside the project)")
-    from pendulum.angles.geometry import angles_from_track, estimate_rig_geometry
+    from pendulum.angles.geometry import estimate_rig_geometry
+    from pendulum.angles.record import angles_from_track
     from pendulum.tracking.method import track_trial
     from pendulum.tracking.path_shape import path_departure
 

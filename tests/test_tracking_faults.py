@@ -15,7 +15,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pendulum.angles.geometry import angles_from_track, estimate_rig_geometry
+from pendulum.angles.geometry import estimate_rig_geometry
+from pendulum.angles.record import angles_from_track
 from pendulum.synthetic.experiment import generate_trial, release_time_s
 from pendulum.synthetic.specs import TrialSpec
 from pendulum.tracking.marker import track_video

@@ -79,7 +79,8 @@ def render(seed: int, workdir: Path, duration_s: float = 8.0) -> tuple[Path, pd.
 
 def judge(seed: int, workdir: Path, duration_s: float = 8.0) -> dict:
     """Track one scene with the defaults and compare with its truth (module docstring)."""
-    from pendulum.angles.geometry import angles_from_track, estimate_rig_geometry
+    from pendulum.angles.geometry import estimate_rig_geometry
+    from pendulum.angles.record import angles_from_track
     from pendulum.camera.video import VideoError
     from pendulum.tracking.method import track_trial
     from pendulum.tracking.path_shape import path_departure

@@ -215,7 +215,8 @@ def draw_stated(group_index: int, rig_name: str) -> tuple[dict, dict]:
 
 def fit_group(task: dict) -> dict:
     """Angles, per-trial and joint fits of one group under one configuration (runs in a worker)."""
-    from pendulum.angles.geometry import angles_from_track, estimate_rig_geometry
+    from pendulum.angles.geometry import estimate_rig_geometry
+    from pendulum.angles.record import angles_from_track
     from pendulum.fit.output_error import fit_joint, fit_trials
     from pendulum.fit.records import FitSettings, load_record
 
@@ -410,7 +411,7 @@ def noise_diagnostics(task: dict) -> dict:
     z: tracked and gaussian use their own stderr; truth, locked and remainder the tracked fit's stderr
     (their own residuals are not the record's noise), so they show which part of the error moves the estimate.
     """
-    from pendulum.angles.geometry import angles_from_track
+    from pendulum.angles.record import angles_from_track
     from pendulum.fit.output_error import fit_trials
     from pendulum.fit.records import FitSettings, load_record
     from pendulum.synthetic.records import angle_noise_rad

@@ -63,7 +63,8 @@ from tracking_accuracy import (  # noqa: E402
     render_cached,
 )
 
-from pendulum.angles.geometry import InputError, angles_from_track, estimate_rig_geometry  # noqa: E402
+from pendulum.angles.geometry import estimate_rig_geometry  # noqa: E402
+from pendulum.angles.record import InputError, angles_from_track  # noqa: E402
 from pendulum.camera.video import VideoError  # noqa: E402
 from pendulum.synthetic.experiment import release_time_s, truth_record  # noqa: E402
 from pendulum.synthetic.specs import TrialSpec  # noqa: E402

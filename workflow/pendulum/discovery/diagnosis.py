@@ -14,7 +14,7 @@ import pandas as pd
 from scipy import stats
 from scipy.optimize import brentq, nnls
 
-from pendulum.angles.geometry import sample_noise_rad
+from pendulum.angles.swings import sample_noise_rad
 from pendulum.fit.decay import half_cycles
 from pendulum.fit.group import GroupFit
 from pendulum.model.effects import TERMS

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares, nnls
 
-from pendulum.angles.geometry import noise_level, swing_centre_rad, turning_points
+from pendulum.angles.swings import noise_level, swing_centre_rad, turning_points
 from pendulum.fit.records import AngleRecord
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import PendulumModel
@@ -43,7 +43,7 @@ def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
     cycle gives the amplitude loss ΔA = 2τ_f/K + (π c / 2Iω₀) A + (4 D / 3I) A²,
     K = (mg − B)L, D = ½ρ C_dA L³. The large-amplitude period is
     T = T₀ (1 + A²/16 + 11A⁴/3072), T₀ = 2π √(I/K). The rest offset is the
-    swing centre (:func:`~pendulum.angles.geometry.swing_centre_rad`, right at any frame
+    swing centre (:func:`~pendulum.angles.swings.swing_centre_rad`, right at any frame
     rate), else the median of the last fifth; θ0, θ̇0 come from :func:`start_state`
     without the jumps of :func:`_start_outliers` (``start_outlier_samples``, left
     out of the extinction curve too).

@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from pendulum.angles.geometry import InputError, swing_extrema
+from pendulum.angles.record import InputError
+from pendulum.angles.swings import swing_extrema
 from pendulum.model.rig import Rig
 
 
@@ -132,7 +133,7 @@ def load_record(
     ``angle_info``: the angles stage's JSON (arm radius, pivot covariance, vertical);
     ``source``: the angle file, named in errors. A record with fewer than 30
     usable samples or less than about one period (two swing extrema) after the
-    release transient raises :class:`~pendulum.angles.geometry.InputError` ("record too short").
+    release transient raises :class:`~pendulum.angles.record.InputError` ("record too short").
     """
     where = f"{source} (trial {trial})" if source else f"trial {trial}"
     rig_values = with_rig_defaults(rig_values)
