@@ -179,7 +179,13 @@ def build_trial(spec: TrialSpec, workdir: str, rerender: bool) -> dict:
     settings = TrackerSettings(marker_radius_px=spec.camera.marker_radius_px, polarity=spec.camera.polarity)
     key = {
         "tracker": _source_hash(
-            "tracking.py", "acquisition.py", "marker_arc.py", "track_checks.py", "centroids.py", "video.py"
+            "tracking/marker.py",
+            "tracking/settings.py",
+            "tracking/acquisition.py",
+            "tracking/marker_arc.py",
+            "tracking/checks.py",
+            "tracking/centroids.py",
+            "camera/video.py",
         ),
         "settings": asdict(settings),
         "video": video.stat().st_size,

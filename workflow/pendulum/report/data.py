@@ -3,8 +3,8 @@
 Reads only what the rules wrote (fit documents, curve and half-cycle tables,
 joint fits, the summary and status tables, tracking summaries, truth files of
 synthetic trials); nothing is fitted. :class:`ReportData` is the base of every
-group of sections (``report_tables``, ``report_figures``, ``report_comparison``,
-``report_checks``), which :class:`pendulum.report.notebook.Report` puts together.
+group of sections (``tables``, ``figures``, ``comparison``,
+``checks``), which :class:`pendulum.report.notebook.Report` puts together.
 """
 
 from __future__ import annotations

@@ -9,11 +9,11 @@ trials): nothing is fitted. Identical inputs give identical bytes: figures are
 PNG without a software stamp, the executed notebook carries no timestamps and
 fixed cell ids.
 
-The sections live in groups, one module each: ``report_tables`` (Tables 1–3),
-``report_figures``, ``report_comparison`` (summary box, model comparison),
-``report_discovery`` (the physics the baseline misses, per group) and
-``report_checks`` (header, truth, tracking, failures, provenance), over
-``report_data`` (the results, read once) and ``report_format`` (names, numbers,
+The sections live in groups, one module each: ``tables`` (Tables 1–3),
+``figures``, ``comparison`` (summary box, model comparison),
+``discovery`` (the physics the baseline misses, per group) and
+``checks`` (header, truth, tracking, failures, provenance), over
+``data`` (the results, read once) and ``format`` (names, numbers,
 HTML pieces). This module puts them together and runs the notebook.
 """
 
