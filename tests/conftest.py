@@ -50,7 +50,7 @@ def pytest_collection_modifyitems(config, items):
 
 
 def demo_trials():
-    from pendulum.synthetic import load_specs
+    from pendulum.synthetic.experiment import load_specs
 
     return [s.name for s in load_specs(DEMO_SPEC)]
 
@@ -60,8 +60,8 @@ def hard_videos(tmp_path_factory):
     """Short synthetic videos the demo lacks: a dark marker on a bright scene, 5 % occluded frames."""
     from dataclasses import replace
 
-    from pendulum.synthetic import generate_trial, load_specs
-    from pendulum.synthetic_scene import Occlusions
+    from pendulum.synthetic.experiment import generate_trial, load_specs
+    from pendulum.synthetic.specs import Occlusions
 
     out = tmp_path_factory.mktemp("hard_videos")
     base = {s.name: s for s in load_specs(DEMO_SPEC)}["demo_p20"]

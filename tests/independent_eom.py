@@ -1,4 +1,4 @@
-"""The pendulum's equation of motion written out a second time, independently of pendulum.physics.
+"""The pendulum's equation of motion written out a second time, independently of pendulum.model.physics.
 
 Nothing here imports the workflow package: the torques are typed in again from
 the paper's equation (4), generalised as in the README,
@@ -7,9 +7,9 @@ the paper's equation (4), generalised as in the README,
 
 and integrated with scipy's DOP853 at tight tolerance, restarted at every
 velocity reversal (where θ̇|θ̇| and sgn θ̇ are not smooth) with the Coulomb stick
-test |(m g − ρ g V) L sin θ| ≤ τ_f. If pendulum.physics gets a term wrong, the
+test |(m g − ρ g V) L sin θ| ≤ τ_f. If pendulum.model.physics gets a term wrong, the
 simulator and this reference disagree; the fitter, which simulates through
-pendulum.physics, then also misses the truth on records made here.
+pendulum.model.physics, then also misses the truth on records made here.
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """The reference paper's Table 1 rig and the demo set's hidden hydrodynamics, shared by the fitting tests."""
 
-from pendulum.physics import PendulumModel, Rig
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
 
 PAPER_RIG = {
     "mass_kg": 3.53,

@@ -8,14 +8,11 @@ import pytest
 import yaml
 
 from conftest import DEMO_RAW, DEMO_TRUTH, SHARED, demo_trials
-from pendulum.geometry import (
-    angles_from_track,
-    angles_from_tracker_csv,
-    detect_release,
-    estimate_rig_geometry,
-    fit_circle,
-)
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.angles.geometry import estimate_rig_geometry, fit_circle
+from pendulum.angles.record import angles_from_track, angles_from_tracker_csv
+from pendulum.angles.swings import detect_release
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +121,7 @@ def test_sample_noise_is_the_tracker_noise_at_any_amplitude(release_deg):
     averages σ within 4 % (one seed's estimate scatters 7 %, the mean of 50 by 1 %: a 4-sd band). The
     third-difference σ (kept for thresholds) reads 0.0095° at 60° and 0.011° at 75°: the swing's own
     third differences."""
-    from pendulum.geometry import sample_noise_rad
+    from pendulum.angles.swings import sample_noise_rad
 
     t = np.arange(600) / 30.0
     swing = np.radians(release_deg) * np.exp(-t / 8.0) * np.cos(2 * np.pi * t / 1.6)

@@ -18,17 +18,20 @@ import pytest
 import yaml
 
 from conftest import DEMO_RAW, ROOT
-from pendulum import synthetic as syn
-from pendulum.fitting import fit_trials
-from pendulum.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
-from pendulum.physics import PendulumModel, Rig, small_angle_period_s
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import Camera, TrialSpec, render_trial, write_video
-from pendulum.synthetic_records import synthetic_angle_table
-from pendulum.synthetic_scene import Occlusions, _draw_disk
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.angles.record import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.camera.video import VideoError, frame_timeline, iter_luma
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.model.physics import PendulumModel, small_angle_period_s
+from pendulum.model.rig import Rig
+from pendulum.synthetic import experiment as syn
+from pendulum.synthetic.experiment import render_trial, write_video
+from pendulum.synthetic.records import synthetic_angle_table
+from pendulum.synthetic.scene import draw_disk
+from pendulum.synthetic.specs import Camera, Occlusions, TrialSpec
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 from pendulum.trials import ConfigError, discover_trials, trial_settings, validate_config
-from pendulum.video import VideoError, frame_timeline, iter_luma
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
@@ -90,7 +93,7 @@ def with_disk(value, cx, cy, radius=6.0):
 
     def post(i, frame):
         image = frame.astype(np.float32)
-        _draw_disk(image, cx, cy, radius, value)
+        draw_disk(image, cx, cy, radius, value)
         return np.clip(np.rint(image), 0, 255).astype(np.uint8)
 
     return post
@@ -207,8 +210,8 @@ def test_damaged_data_in_the_middle_is_flagged_not_fatal(folder, plain):
 
 
 def test_no_marker_visible(folder, monkeypatch):
-    shades = syn._shades
-    monkeypatch.setattr(syn, "_shades", lambda cam: {**shades(cam), "marker": shades(cam)["body"]})
+    shades = syn.pendulum_shades
+    monkeypatch.setattr(syn, "pendulum_shades", lambda cam: {**shades(cam), "marker": shades(cam)["body"]})
     render(folder, spec("no_marker", duration_s=2.0))
     monkeypatch.undo()
     message = r"no_marker\.mp4: no marker found in any of its 60 frames \(the best spot scores 0\.\d\d; .*start_px"

@@ -8,10 +8,10 @@ import pytest
 from scipy import stats
 
 from paper_rig import PAPER_RIG
-from pendulum.fitting import fit_trials
-from pendulum.groupfit import fit_body
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic_records import hidden_effect_table
+from pendulum.fit.group import fit_body
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.synthetic.records import hidden_effect_table
 
 SHORT_RIG = {**PAPER_RIG, "length_m": 0.40}
 BODY = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576}

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pendulum.path_shape import path_departure
+from pendulum.tracking.path_shape import path_departure
 
 
 def circle_track(times, theta, pivot=(320.0, -300.0), arm=500.0, creep=(0.0, 0.0), noise=0.03, seed=0):
@@ -79,7 +79,7 @@ def test_a_clean_swing_is_a_pendulum_even_when_small():
 
 
 def small_trial(seed: int, **wall):
-    from pendulum.synthetic_wall import random_wall_trial
+    from pendulum.synthetic.wall import random_wall_trial
 
     trial = random_wall_trial(seed)
     spec = replace(trial.spec, duration_s=5.0)
@@ -92,7 +92,7 @@ def render_dir(tmp_path_factory):
 
 
 def render(trial, directory):
-    from pendulum.synthetic_wall import write_wall_trial
+    from pendulum.synthetic.wall import write_wall_trial
 
     video, truth = write_wall_trial(trial, directory, directory)
     return video, truth
@@ -100,9 +100,9 @@ def render(trial, directory):
 
 def test_two_swinging_objects_need_start_px(render_dir):
     """Two bodies in view: without start_px a clear refusal; with it, the one pointed at is followed."""
-    from pendulum.body import BodyError, find_body
-    from pendulum.synthetic import write_video
-    from pendulum.synthetic_wall import render_wall_trial
+    from pendulum.synthetic.experiment import write_video
+    from pendulum.synthetic.wall import render_wall_trial
+    from pendulum.tracking.body import BodyError, find_body
 
     left = small_trial(11, creep_px=(0.0, 0.0), shadows=(), band_depth=0.0)
     cam = left.spec.camera
@@ -120,8 +120,8 @@ def test_two_swinging_objects_need_start_px(render_dir):
 
 
 def test_nothing_moving_is_refused(render_dir):
-    from pendulum.body import BodyError, find_body
-    from pendulum.synthetic import write_video
+    from pendulum.synthetic.experiment import write_video
+    from pendulum.tracking.body import BodyError, find_body
 
     still = [np.full((120, 160), 150, np.uint8) for _ in range(60)]
     video = render_dir / "still.mp4"
@@ -166,8 +166,8 @@ def test_body_study_on_unseen_renders(tmp_path):
 def test_wall_render_puts_the_body_where_its_truth_says():
     """A uniform disk (no shading, shadows or thread) on a flat wall: its coverage centroid in each rendered
     frame (before compression) is the truth's exposure-mean centre, and the truth's angle is the physics'."""
-    from pendulum.synthetic import true_angle_rad
-    from pendulum.synthetic_wall import Wall, WallBody, render_wall_trial
+    from pendulum.synthetic.experiment import true_angle_rad
+    from pendulum.synthetic.wall import Wall, WallBody, render_wall_trial
 
     trial = small_trial(21)
     spec = replace(trial.spec, duration_s=0.5, camera=replace(trial.spec.camera, noise_sigma=0.0))
@@ -194,10 +194,10 @@ def test_a_body_on_a_thick_rod_is_tracked_without_the_rod(render_dir):
     frame, the body swinging 60 px below the frame's top: the rod leaves the frame, but whether the body is
     in view is judged on the body itself (within 1.2 inner radii of its thickest point): every frame is
     ``edge`` when the rod counts."""
-    from pendulum.geometry import angles_from_track
-    from pendulum.synthetic_wall import Wall, WallBody
-    from pendulum.track_method import track_trial
-    from pendulum.tracking import TrackerSettings
+    from pendulum.angles.record import angles_from_track
+    from pendulum.synthetic.wall import Wall, WallBody
+    from pendulum.tracking.method import track_trial
+    from pendulum.tracking.settings import TrackerSettings
 
     trial = small_trial(31)
     body = WallBody(look="apple", radius_px=30.0, level=70.0)

@@ -16,13 +16,15 @@ import pytest
 import yaml
 
 from conftest import DEMO_SPEC, ROOT
-from pendulum.calibration import CalibrationError, Lens
-from pendulum.geometry import angles_from_track, estimate_rig_geometry
-from pendulum.synthetic import load_specs, write_video
-from pendulum.synthetic_optics import Optics, render_lens_clip, render_plane_clip, render_trial_through, write_clip
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.angles.geometry import estimate_rig_geometry
+from pendulum.angles.record import angles_from_track
+from pendulum.camera.calibration import CalibrationError, Lens
+from pendulum.camera.view import calibrate_camera_setup, map_track, path_tilt
+from pendulum.synthetic.experiment import load_specs, write_video
+from pendulum.synthetic.optics import Optics, render_lens_clip, render_plane_clip, render_trial_through, write_clip
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 from pendulum.trials import ConfigError, validate_config
-from pendulum.view import calibrate_camera_setup, map_track, path_tilt
 
 PATTERN = (9, 6)
 SQUARE_M = 0.025

@@ -1,4 +1,4 @@
-"""What to film next (pendulum.design): predictions checked by simulation, and the workflow's design output.
+"""What to film next (pendulum.design.next_trials): predictions checked by simulation, and the workflow's design output.
 
 The claims of issue 26 over seeds, each with a binomial pass rule (α = 0.001 per claim): a realised
 half-width (the group refitted with the added trial, its reported sandwich interval) within 25 % of the
@@ -20,8 +20,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent / "benchmarks"))
 
 import design_study  # noqa: E402
 
-from pendulum.design import DesignOptions, design_group  # noqa: E402
-from pendulum.records import FitSettings  # noqa: E402
+from pendulum.design.next_trials import DesignOptions, design_group  # noqa: E402
+from pendulum.fit.records import FitSettings  # noqa: E402
 
 ALPHA = 1e-3
 SEEDS = range(10)
@@ -58,7 +58,7 @@ def small_group():
 
 
 def test_a_tolerance_that_dominates_is_named_and_more_trials_do_not_help(small_group):
-    from pendulum.uncertainty import Z95
+    from pendulum.fit.uncertainty import Z95
 
     fit = small_group
     j = fit.problem.labels.index("added_mass_kg")

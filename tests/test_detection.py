@@ -11,11 +11,12 @@ import cv2
 import numpy as np
 import pytest
 
-from pendulum.detection import DetectionError, detect_marker
-from pendulum.synthetic import write_video
-from pendulum.synthetic_scene import _draw_disk
-from pendulum.tracking import TrackerSettings, track_video
-from pendulum.video import VideoError
+from pendulum.camera.video import VideoError
+from pendulum.synthetic.experiment import write_video
+from pendulum.synthetic.scene import draw_disk
+from pendulum.tracking.detection import DetectionError, detect_marker
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 
 W, H, FPS = 480, 270, 30.0
 LETTERBOX_PX = 18
@@ -53,11 +54,11 @@ def _scene(path, *, marker, second=None, second_pivot=None, stripes=False, secon
                 u = 0.5 * (1 - np.cos(2 * math.pi * times[j] / 2.3))
                 sx = second[0][0] + u * (second[1][0] - second[0][0])
                 sy = second[0][1] + u * (second[1][1] - second[0][1])
-                _draw_disk(canvas, sx, sy, marker.get("second_radius", marker["radius"]), marker["grey"])
+                draw_disk(canvas, sx, sy, marker.get("second_radius", marker["radius"]), marker["grey"])
             if second_pivot is not None:  # a second pendulum about another pivot
                 ox, oy = _swing(times[j : j + 1] + 0.4, second_pivot, marker["arm"] * 0.8, 20.0, 1.3)
-                _draw_disk(canvas, float(ox[0]), float(oy[0]), marker["radius"], marker["grey"])
-            _draw_disk(canvas, mx[j], my[j], marker["radius"], marker["grey"])
+                draw_disk(canvas, float(ox[0]), float(oy[0]), marker["radius"], marker["grey"])
+            draw_disk(canvas, mx[j], my[j], marker["radius"], marker["grey"])
             acc += canvas
         frame = acc / sub.size + rng.normal(0, 2.0, (H, W)).astype(np.float32)
         frame[:LETTERBOX_PX] = 0.0
@@ -173,7 +174,8 @@ def test_a_line_mover_and_the_body_are_not_taken_for_a_second_swinging_object(tm
     line mover's upper part and blobs of the pendulum's body line up on a second arc (about (296, 20) px, in 64
     of 90 samples). Found by a new-user trial, which got "two objects swing"; the body's blobs (fixed in the
     frame turning with the marker) are now taken out of the rival arc, and what is left moves on a line."""
-    from pendulum.synthetic import TrialSpec, generate_trial
+    from pendulum.synthetic.experiment import generate_trial
+    from pendulum.synthetic.specs import TrialSpec
 
     rig = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
     truth = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
@@ -215,7 +217,7 @@ def test_a_line_mover_and_the_body_are_not_taken_for_a_second_swinging_object(tm
 
 def _arc_blobs(theta_rad, pivot=(300.0, 40.0), arm=200.0, radius=10.0):
     """One blob per sample on the marker's arc: x = cx + arm sin θ, y = cy + arm cos θ (image y down)."""
-    from pendulum.arcs import Blobs
+    from pendulum.tracking.arcs import Blobs
 
     theta = np.asarray(theta_rad, float)
     n = theta.size
@@ -246,7 +248,7 @@ def _sampled_swing(n, dt_s, theta0_deg, period_s, tau_s, hold=0):
 )
 def test_continuity_keeps_every_sample_of_a_clean_swing(dt_s, theta0_deg, period_s, tau_s, hold):
     """A marker's own track, however it swings or decays, loses no member to the continuity test."""
-    from pendulum.arcs import arc_track, continuous_members
+    from pendulum.tracking.arcs import arc_track, continuous_members
 
     blobs = _arc_blobs(_sampled_swing(60, dt_s, theta0_deg, period_s, tau_s, hold))
     track = arc_track(blobs, np.arange(60), -1, (300.0, 40.0, 200.0), 2, 10.0)
@@ -257,7 +259,7 @@ def test_continuity_keeps_every_sample_of_a_clean_swing(dt_s, theta0_deg, period
 def test_continuity_drops_other_objects_on_the_same_circle():
     """The RANSAC circle takes any blob near it: a static spot on the circle in the first samples, and a
     second object's blobs crossing it later. The continuity test keeps exactly the marker's samples."""
-    from pendulum.arcs import arc_track, continuous_members
+    from pendulum.tracking.arcs import arc_track, continuous_members
 
     theta = _sampled_swing(60, 0.133, 15.0, 1.4, 8.0, hold=0)
     wrong_theta = theta.copy()
@@ -286,7 +288,7 @@ def _marker_on_a_rod(radius, centre=(80.37, 90.61), plate_px=3.0):
     cv2.rectangle(big, (int(x4 - 0.8 * radius), 0), (int(x4 + 0.8 * radius), int(y4)), 2, -1)  # 0.4 r wide
     shade = np.select([big == 1, big == 2], [200.0, 70.0], 150.0).astype(np.float32)
     canvas = cv2.resize(shade, (160, 180), interpolation=cv2.INTER_AREA)
-    _draw_disk(canvas, cx, cy, radius, 30.0)
+    draw_disk(canvas, cx, cy, radius, 30.0)
     return canvas
 
 
@@ -294,8 +296,8 @@ def _marker_on_a_rod(radius, centre=(80.37, 90.61), plate_px=3.0):
 def test_marker_radius_is_read_from_its_edge_when_a_rod_widens_its_moments(radius):
     """Study scene 2003: the width² of the moments took in the rod and the plate's edge and read 16.1 px for a
     14.8 px marker (the tracker then flagged 92 % of frames). The edge radius sees the rod in a few rays only."""
-    from pendulum.centroids import edge_radius, linear_centroid
-    from pendulum.spots import refine_spot
+    from pendulum.tracking.centroids import edge_radius, linear_centroid
+    from pendulum.tracking.spots import refine_spot
 
     image = _marker_on_a_rod(radius)
     inverted = 255.0 - image
@@ -311,7 +313,7 @@ def test_of_two_answers_the_single_swing_below_its_pivot_is_taken():
     """Rules of ``_one_swing``: continuity (≥ 2× the samples one object visits in turn), then hanging (median angle
     within HANGS_DEG of the vertical below the pivot, or above it for a flat arc fitted on the wrong side, the
     other's beyond twice that); otherwise no answer."""
-    from pendulum.detection import HANGS_DEG, Detection, _one_swing
+    from pendulum.tracking.detection import HANGS_DEG, Detection, _one_swing
 
     def answer(n_continuous, rest_deg):
         return Detection(
@@ -345,7 +347,7 @@ def test_of_two_answers_the_single_swing_below_its_pivot_is_taken():
 def test_a_marker_held_still_from_the_start_gives_the_start_when_the_first_spot_is_anothers():
     """``_held_from_the_start``: the first kept members in samples 1–3 at one place (the marker held before the
     release) give the start; a moving start, a late first member or sample 0 on the track give none."""
-    from pendulum.detection import _held_from_the_start
+    from pendulum.tracking.detection import _held_from_the_start
 
     theta = np.radians([24.0, 24.0, 24.0, 24.0, 20.0, 12.0, 0.0])
     blobs = _arc_blobs(theta)

@@ -17,7 +17,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent / "benchmarks"))
 
 from detection_study import evaluate_scene, random_scene  # noqa: E402
 
-from pendulum.synthetic import generate_trial  # noqa: E402
+from pendulum.synthetic.experiment import generate_trial  # noqa: E402
 
 # The first twelve seeds from 7000 whose scene is a 640×360, 30 fps camera (6 s clips): none chosen by
 # outcome. Measured: all 12 pass (starts within 0.044 px, radii within 0.03 px, angle RMS ≤ 0.015°).

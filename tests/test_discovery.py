@@ -14,12 +14,12 @@ from scipy import stats
 
 from conftest import DEMO_TRUTH, SHARED, demo_trials
 from paper_rig import PAPER_RIG
-from pendulum.diagnosis import critical_value, mixture_p_value
-from pendulum.discovery import Discovery
-from pendulum.findings import plus_minus, separating_experiments
-from pendulum.geometry import angles_from_tracker_csv
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic_records import hidden_effect_table
+from pendulum.angles.record import angles_from_tracker_csv
+from pendulum.discovery.diagnosis import critical_value, mixture_p_value
+from pendulum.discovery.findings import plus_minus, separating_experiments
+from pendulum.discovery.selection import Discovery
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.synthetic.records import hidden_effect_table
 from workflow_run import copy_project, run
 
 CANDIDATES = ["linear_damping", "coulomb_friction", "quadratic_drag", "history_force", "restoring_correction"]
@@ -222,7 +222,7 @@ def test_noise_floor_of_a_continuous_record_is_its_noise_not_its_sampling_densit
     at 60°)."""
     from types import SimpleNamespace
 
-    from pendulum.diagnosis import noise_floor_rad
+    from pendulum.discovery.diagnosis import noise_floor_rad
 
     rng = np.random.default_rng(int(release_deg))
     t = np.arange(600) / 30.0

@@ -1,7 +1,7 @@
 """Discovery on angle tables with hidden effects (the workflow never sees the truth), and its error rates.
 
 Every case is a group of two 20 s records at 30 fps with the demo's tracking-like noise
-(pendulum.synthetic_records.hidden_effect_table), released at 20° and −10°: on the paper's rig,
+(pendulum.synthetic.records.hidden_effect_table), released at 20° and −10°: on the paper's rig,
 or, for "two lengths", one on the paper's rig (L = 0.76 m) and one on a 0.40 m arm
 declared as the same body. The baseline is the paper's quadratic-drag model; the true
 physics adds what the case hides. Magnitudes are the demo's (τ_f = 0.02 N·m, c = 0.15
@@ -64,9 +64,9 @@ CANDIDATES = ("linear_damping", "coulomb_friction", "quadratic_drag", "history_f
 
 def case_records(name: str, seed: int):
     """The records of one realisation of a case, and their rigs' names."""
-    from pendulum.records import FitSettings, load_record
-    from pendulum.synthetic import PeriodicTorque
-    from pendulum.synthetic_records import hidden_effect_table
+    from pendulum.fit.records import FitSettings, load_record
+    from pendulum.synthetic.records import hidden_effect_table
+    from pendulum.synthetic.specs import PeriodicTorque
 
     truth, rigs, extra = CASES[name]
     options = dict(extra)
@@ -81,7 +81,7 @@ def case_records(name: str, seed: int):
 
 def run_case(name: str, seed: int) -> dict:
     """Discovery on one realisation of a case: what it named, and per step the RMS before and after."""
-    from pendulum.discovery import discover
+    from pendulum.discovery.selection import discover
 
     records, rigs = case_records(name, seed)
     start = time.perf_counter()
@@ -110,7 +110,7 @@ def run_case(name: str, seed: int) -> dict:
 
 def null_statistics(seed: int) -> dict:
     """Λ (with n_eff) and the white-noise likelihood ratio of linear damping added to a null record's baseline."""
-    from pendulum.discovery import Discovery
+    from pendulum.discovery.selection import Discovery
 
     records, rigs = case_records("null", seed)
     run = Discovery(records, rigs, ("quadratic_drag",), CANDIDATES)

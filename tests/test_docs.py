@@ -64,7 +64,7 @@ def top_level_entries() -> set[str]:
 
 
 def named_paths(text: str, top: set[str]) -> list[str]:
-    """Repository paths named in code spans: `workflow/pendulum/body.py`, `config.yaml`, `data/raw/` …
+    """Repository paths named in code spans: `workflow/pendulum/tracking/body.py`, `config.yaml`, `data/raw/` …
 
     A span counts when it is one word (or, in a command, a word naming a .py file) whose first part is a
     top-level entry of the repository and that looks like a path (has a / or a file suffix); globs and

@@ -10,24 +10,16 @@ from scipy.integrate import solve_ivp
 
 from conftest import DEMO_SPEC, ROOT
 from paper_rig import PAPER_RIG
-from pendulum.centroids import measure_marker
-from pendulum.effects import TERMS, effects_for, history_equivalent, lower_bound
-from pendulum.fitting import fit_trials
-from pendulum.physics import PendulumModel, Rig, simulate
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic import (
-    Camera,
-    Disturbances,
-    PeriodicTorque,
-    TrialSpec,
-    load_specs,
-    release_time_s,
-    render_trial,
-    true_angle_rad,
-    truth_record,
-)
-from pendulum.synthetic_records import hidden_effect_table, synthetic_angle_table
-from pendulum.tracking import TrackerSettings
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.model.effects import TERMS, effects_for, history_equivalent, lower_bound
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
+from pendulum.synthetic.experiment import load_specs, release_time_s, render_trial, true_angle_rad, truth_record
+from pendulum.synthetic.records import hidden_effect_table, synthetic_angle_table
+from pendulum.synthetic.specs import Camera, Disturbances, PeriodicTorque, TrialSpec
+from pendulum.tracking.centroids import measure_marker
+from pendulum.tracking.settings import TrackerSettings
 
 RIG = Rig(**PAPER_RIG)
 # Paper rig by hand (tests/test_physics_reference.py): K = (m g − ρ g V) L = 7.679268 N·m,

@@ -8,13 +8,14 @@ import pandas as pd
 import pytest
 
 from paper_rig import PAPER_RIG
-from pendulum.decay import half_cycles, loss_at_amplitude
-from pendulum.fitting import fit_trials
+from pendulum.fit.decay import half_cycles, loss_at_amplitude
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, characteristic_length_m, load_record
+from pendulum.fit.summary import cycle_table, fit_document, fitted_curve, summary_table
 from pendulum.io import write_json
-from pendulum.physics import PendulumModel, Rig
-from pendulum.records import FitSettings, characteristic_length_m, load_record
-from pendulum.summary import cycle_table, fit_document, fitted_curve, summary_table
-from pendulum.synthetic_records import synthetic_angle_table
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import synthetic_angle_table
 
 RIG_VALUES = {**PAPER_RIG, "characteristic_length_m": None, "kinematic_viscosity_m2_s": 1.0e-6}
 RIG = Rig.from_mapping(RIG_VALUES)

@@ -12,12 +12,13 @@ import pytest
 
 from conftest import SHARED
 from paper_rig import PAPER_RIG, VARIANTS, truth_for
-from pendulum.fitting import fit_trials
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.fit.uncertainty import consistency_test
 from pendulum.io import write_json
-from pendulum.physics import PendulumModel, Rig
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic_records import synthetic_angle_table
-from pendulum.uncertainty import consistency_test
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import synthetic_angle_table
 
 SETTINGS = FitSettings()
 
@@ -73,7 +74,7 @@ def air_rig(diameter_m, mass_kg):
 
 
 def real_record(name, diameter_m, mass_kg, settings):
-    from pendulum.geometry import angles_from_tracker_csv
+    from pendulum.angles.record import angles_from_tracker_csv
 
     rig = air_rig(diameter_m, mass_kg)
     raw = pd.read_csv(SHARED / "data/real-air-pendulum" / f"{name}.csv")

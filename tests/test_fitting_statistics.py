@@ -15,8 +15,8 @@ derived from the binomial distribution:
   tolerance is so wide that failure is negligible for any seed; each docstring
   gives the offline check over ≥ 20 (usually 60–300) seeds behind it.
 
-The truth records are synthetic (pendulum.synthetic, which shares
-pendulum.physics with the fitter); tests/test_physics_reference.py checks both
+The truth records are synthetic (pendulum.synthetic.experiment, which shares
+pendulum.model.physics with the fitter); tests/test_physics_reference.py checks both
 against physics written out independently.
 """
 
@@ -28,12 +28,13 @@ import pytest
 from scipy.stats import binom
 
 from paper_rig import PAPER_RIG, TRUTH, VARIANTS, truth_for
-from pendulum.decay import decay_analysis
-from pendulum.fitting import fit_joint, fit_trials
+from pendulum.fit.decay import decay_analysis
+from pendulum.fit.output_error import fit_joint, fit_trials
+from pendulum.fit.records import FitSettings, load_record
 from pendulum.io import write_json
-from pendulum.physics import PendulumModel, Rig
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic_records import synthetic_angle_table
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import synthetic_angle_table
 
 ALPHA = 1e-3  # probability that a test fails although its claim is true
 SETTINGS = FitSettings()

@@ -19,10 +19,10 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from conftest import ROOT
-from pendulum.geometry import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
-from pendulum.physics import Rig
-from pendulum.records import FitSettings
-from pendulum.tracking import FLAGS, TrackerSettings
+from pendulum.angles.record import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.fit.records import FitSettings
+from pendulum.model.rig import Rig
+from pendulum.tracking.settings import FLAGS, TrackerSettings
 from pendulum.trials import RIG_KEYS, ConfigError, Trial, read_sidecar, trial_settings, validate_config
 
 FUZZ = settings(

@@ -4,7 +4,7 @@ warnings (and so in the summary's ``warnings`` column), ``reliable`` false, and 
 ``identifiable``. Clean records, and a wrong model on clean records, are not flagged.
 
 Records are synthetic angle tables (the demo rig and physics) corrupted the way a tracker on the
-wrong object corrupts them; thresholds are those of :func:`pendulum.record_checks.record_checks`.
+wrong object corrupts them; thresholds are those of :func:`pendulum.fit.checks.record_checks`.
 """
 
 import math
@@ -14,12 +14,13 @@ import pandas as pd
 import pytest
 from scipy.stats import binom
 
-from pendulum.fitting import fit_trials
-from pendulum.physics import PendulumModel, Rig, simulate
-from pendulum.record_checks import MAX_REST_OFFSET_DEG
-from pendulum.records import FitSettings, load_record
-from pendulum.summary import fit_document, summary_table
-from pendulum.synthetic_records import angle_noise_rad, synthetic_angle_table
+from pendulum.fit.checks import MAX_REST_OFFSET_DEG
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.fit.summary import fit_document, summary_table
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import angle_noise_rad, synthetic_angle_table
 
 RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
 TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}
@@ -154,7 +155,7 @@ def test_an_unreliable_trial_is_left_out_of_the_joint_fit_and_discovery_with_its
 def test_a_period_the_rig_values_cannot_give_is_named():
     """Another rig's values (a new user's first clip): the record swings faster than the rig can at the
     least added mass. T_min = 2π √(m L² / ((m − ρV) g L)) for the paper's point-mass rig: 3.238 s."""
-    from pendulum.record_checks import rig_period_problem
+    from pendulum.fit.checks import rig_period_problem
 
     rig = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
     t = np.arange(0, 20, 1 / 60)

@@ -11,11 +11,12 @@ import pytest
 from scipy.stats import binom
 
 from conftest import ROOT
-from pendulum.fitting import fit_trials
-from pendulum.geometry import estimate_rig_geometry, fit_circle, pooled_pivot
-from pendulum.physics import PendulumModel, Rig, SimulationDiverged, simulate
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic_records import synthetic_angle_table
+from pendulum.angles.geometry import estimate_rig_geometry, fit_circle, pooled_pivot
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.model.physics import PendulumModel, SimulationDiverged, simulate
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import synthetic_angle_table
 from pendulum.trials import ConfigError, Trial, add_sidecar_rigs, needs_rig_geometry, pooled_trials, trial_settings
 
 PAPER_RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
@@ -168,7 +169,7 @@ def test_the_vertical_is_not_moved_by_flagged_frames_near_the_swing_ends():
     """A new user's clip with a disk passing the marker every 6 s: 16 flagged frames (NaN) moved the estimated
     vertical by −0.17° (stated σ 0.0066°): the extrema were looked up by frame where they were counted in kept
     samples. Exact damped swing about 0.3°, 5-frame gaps around every other extremum: the centre as without gaps."""
-    from pendulum.geometry import swing_centre_rad
+    from pendulum.angles.swings import swing_centre_rad
 
     t = np.arange(0, 14, 1 / 30)
     centre = math.radians(0.3)
@@ -189,7 +190,7 @@ def test_a_hold_with_one_shared_error_counts_as_one_point_of_the_path():
     blocks), the swing within 0.035 px; counted once per frame it moved the pooled pivot 2.3 px (3σ) on a 27°
     arc. Over 40 seeds of a 12° swing with a 1 s hold shifted +0.11 px: the pivot's 95 % interval covers the
     truth in ≥ 34 (P = 0.004 under its 95 %; measured 37); counting every hold frame covered it in none."""
-    from pendulum.geometry import path_points
+    from pendulum.angles.geometry import path_points
 
     covered = covered_every_frame = 0
     for seed in range(40):

@@ -1,6 +1,6 @@
 """The Basset–Boussinesq history force: its memory in the simulator against closed forms.
 
-The history torque is −K_h L² H(t), H(t) = ∫₀ᵗ θ̈(τ)/√(t−τ) dτ. pendulum.physics carries H as
+The history torque is −K_h L² H(t), H(t) = ∫₀ᵗ θ̈(τ)/√(t−τ) dτ. pendulum.model.physics carries H as
 c₀ θ̈ + Σ w_j z_j with z_j' = −λ_j z_j + θ̈ (HistoryKernel). The references here share none of that:
 Fresnel integrals for prescribed accelerations, and the exact Laplace-transform solution of the
 small-amplitude oscillator with the history force (residues plus the branch-cut integral).
@@ -14,11 +14,13 @@ from scipy.integrate import quad
 from scipy.special import fresnel
 
 from paper_rig import PAPER_RIG
-from pendulum.effects import history_equivalent
-from pendulum.fitting import fit_trials
-from pendulum.physics import HISTORY_KERNEL, PendulumModel, Rig, history_integral, simulate
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic_records import synthetic_angle_table
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.model.effects import history_equivalent
+from pendulum.model.history import HISTORY_KERNEL, history_integral
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import synthetic_angle_table
 
 RIG = Rig(**PAPER_RIG)
 # Paper rig by hand (tests/test_physics_reference.py): K = 7.679268 N·m, I = m L² + m_a L² = 3.482928 kg·m²
@@ -215,7 +217,7 @@ def test_history_force_at_one_frequency_is_added_mass_plus_linear_damping():
     K_h = 0.3 kg/√s on the paper rig, θ0 = 1e-3 rad, 5–40 s (the branch-cut tail is < 2e-3 of the swing there).
     (1) The exact pole s_p = −σ + iω_d of (I + K_h L²√(π/s)) s² + K = 0: period 2π/ω_d and σ to 1e-4 and
         2e-3 relative (measured 7e-6 and 6e-5).
-    (2) pendulum.effects.history_equivalent at ω = ω_d: added mass m_h = K_h √(π/2ω), damping
+    (2) pendulum.model.effects.history_equivalent at ω = ω_d: added mass m_h = K_h √(π/2ω), damping
         c_h = K_h L² √(πω/2); I' = I + m_h L², σ' = c_h/2I', ω' = √(K/I' − σ'²). The single-frequency
         picture neglects that the swing decays (s is not iω): period to 1e-3, rate to 3 % (measured 3e-4, 1.2 %).
     """
@@ -246,7 +248,7 @@ def test_history_force_at_one_frequency_is_added_mass_plus_linear_damping():
 def test_fitter_recovers_a_hidden_history_coefficient():
     """[quadratic_drag, history_force] fitted to a noise-free record made with K_h = 0.3 kg/√s, C_d = 0.8, m_a = 2.5 kg.
 
-    Fitter and generator share pendulum.physics; what differs is the start: the generator runs the
+    Fitter and generator share pendulum.model.physics; what differs is the start: the generator runs the
     memory from the release, the fit starts 0.25 s later and assumes θ̇ grew linearly from rest since
     (history_origin_s = 0). Tolerance 2e-3 relative on K_h (measured 2.5e-4), 1e-3 on m_a and C_d
     (measured 3e-5, 1.1e-4).

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pendulum import video
+from pendulum.camera import video
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTS = ROOT / "workflow" / "scripts"
@@ -114,7 +114,7 @@ def _run_setup(threads):
         f"sys.path.insert(0, {str(SCRIPTS)!r})\n"
         "import _setup\n"
         "numpy_before = 'numpy' in sys.modules\n"
-        "from pendulum import video\n"
+        "from pendulum.camera import video\n"
         "keys = ['OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS', 'PENDULUM_DECODER_THREADS']\n"
         "print(json.dumps({'env': {k: os.environ.get(k) for k in keys}, 'numpy_before': numpy_before,"
         " 'decoder': video.DECODER_THREADS}))\n"

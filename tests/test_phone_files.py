@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from pendulum import synthetic as syn
-from pendulum.synthetic_scene import Faults
-from pendulum.video import VideoError, contact_sheet, frame_timeline, iter_luma
+from pendulum.camera.video import VideoError, contact_sheet, frame_timeline, iter_luma
+from pendulum.synthetic import experiment as syn
+from pendulum.synthetic.specs import Camera, Faults, TrialSpec
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
@@ -29,10 +29,10 @@ EFFECTS = ["quadratic_drag", "linear_damping", "coulomb_friction"]
 
 
 def small_spec(name, **faults):
-    camera = syn.Camera(
+    camera = Camera(
         width_px=320, height_px=240, fps=25.0, pivot_px=(160.3, 30.6), marker_arm_px=150.0, marker_radius_px=6.0
     )
-    spec = syn.TrialSpec(name, 30.0, RIG, TRUTH, EFFECTS, seed=4, hold_s=0.3, duration_s=3.0, camera=camera)
+    spec = TrialSpec(name, 30.0, RIG, TRUTH, EFFECTS, seed=4, hold_s=0.3, duration_s=3.0, camera=camera)
     return replace(spec, faults=Faults(**faults))
 
 

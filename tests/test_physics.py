@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from independent_eom import Pendulum, integrate
-from pendulum.physics import PendulumModel, Rig, simulate, small_angle_period_s, stick_angle_bound_rad
+from pendulum.model.physics import PendulumModel, simulate, small_angle_period_s, stick_angle_bound_rad
+from pendulum.model.rig import Rig
 
 PAPER_RIG = Rig(mass_kg=3.53, length_m=0.76, frontal_area_m2=0.0322, displaced_volume_m3=0.0025)
 TRUTH = dict(added_mass_kg=2.5, drag_area_m2=0.02576, linear_damping_nm_s=0.15, friction_torque_nm=0.02)
@@ -32,7 +33,7 @@ def test_simulator_matches_tight_reference(terms, release_deg):
     params = {k: TRUTH[k] for k in model.parameter_names}
     times = np.arange(0, 20, 1 / 30)
     theta, _ = simulate(model, params, math.radians(release_deg), 0.0, times)
-    # the equation of motion typed in again, not through pendulum.physics (more cases: test_physics_reference.py)
+    # the equation of motion typed in again, not through pendulum.model.physics (more cases: test_physics_reference.py)
     independent = Pendulum(**{FIELDS[k]: v for k, v in params.items()})
     ref, _ = integrate(independent, math.radians(release_deg), 0.0, times)
     assert np.max(np.abs(theta - ref)) < 1e-6

@@ -1,6 +1,6 @@
-"""pendulum.physics against references that do not go through pendulum.physics.
+"""pendulum.model.physics against references that do not go through pendulum.model.physics.
 
-The synthetic generator and the fitter share pendulum.physics, so a wrong term
+The synthetic generator and the fitter share pendulum.model.physics, so a wrong term
 there is invisible to a fit of synthetic data. These tests compare it with
 closed forms (worked out here, with the arithmetic written down) and with the
 equation of motion typed in again in tests/independent_eom.py, and fit records
@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 
 from independent_eom import Pendulum, angle_table, integrate
-from pendulum.fitting import fit_trials
-from pendulum.physics import PendulumModel, Rig, simulate, small_angle_period_s
-from pendulum.records import FitSettings, load_record
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.model.physics import PendulumModel, simulate, small_angle_period_s
+from pendulum.model.rig import Rig
 
 # The paper's Table 1 rig: m = 3.53 kg, L = 0.76 m, A = 0.0322 m², V = 0.0025 m³, ρ = 1000 kg/m³, g = 9.81 m/s².
 #   weight    m g       = 3.53 · 9.81          = 34.6293 N
@@ -27,7 +28,7 @@ L2 = 0.5776
 
 
 def model_and_params(p: Pendulum, terms):
-    """The same pendulum as pendulum.physics spells it."""
+    """The same pendulum as pendulum.model.physics spells it."""
     rig = Rig(
         mass_kg=p.mass,
         length_m=p.length,
@@ -199,7 +200,7 @@ def test_simulator_matches_the_independently_written_equation_of_motion(case):
 def test_fitter_recovers_the_truth_from_an_independently_simulated_record(terms, release_deg):
     """No noise: a record from tests/independent_eom.py fits back to m_a = 2.5 kg and C_d = 0.8 to 0.1 %.
 
-    The fitter simulates through pendulum.physics; if its equation were wrong, the best fit of a
+    The fitter simulates through pendulum.model.physics; if its equation were wrong, the best fit of a
     correct record would sit elsewhere (e.g. a lost ½ doubles C_d, m_a L for m_a L² gives m_a·L).
     The record has buoyancy and a stated body inertia (2.4 kg·m²). Noise-free, the estimates are
     off only by the two integrators' differences (< 1e-7 rad): 0.1 % is far wider than that and far

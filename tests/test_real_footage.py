@@ -26,7 +26,7 @@ APPLE_PERIOD_S = 2.078  # measured independently (the clip's README)
 
 
 def default_settings():
-    from pendulum.tracking import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
     config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
     return TrackerSettings.from_config(config)
@@ -45,9 +45,10 @@ def zero_crossing_period(time_s: np.ndarray, theta: np.ndarray) -> float:
 def apple():
     if not APPLE.is_file():
         pytest.skip(f"{APPLE} not found (../shared beside the project)")
-    from pendulum.geometry import angles_from_track, estimate_rig_geometry
-    from pendulum.path_shape import path_departure
-    from pendulum.track_method import track_trial
+    from pendulum.angles.geometry import estimate_rig_geometry
+    from pendulum.angles.record import angles_from_track
+    from pendulum.tracking.method import track_trial
+    from pendulum.tracking.path_shape import path_departure
 
     track = track_trial(APPLE, default_settings())
     corrected, path = path_departure(track)
@@ -97,9 +98,9 @@ def test_apple_camera_creep_is_measured_said_and_corrected(apple):
 def test_spinning_star_is_not_taken_for_a_pendulum():
     if not STAR.is_file():
         pytest.skip(f"{STAR} not found")
-    from pendulum.path_shape import path_departure
-    from pendulum.track_method import track_trial
-    from pendulum.video import VideoError
+    from pendulum.camera.video import VideoError
+    from pendulum.tracking.method import track_trial
+    from pendulum.tracking.path_shape import path_departure
 
     try:
         track = track_trial(STAR, default_settings())

@@ -16,9 +16,9 @@ import pandas as pd
 import pytest
 
 from conftest import demo_trials
-from pendulum import report as R
-from pendulum.report_data import best_variant, nested_parent, variant_order
-from pendulum.report_format import estimate_parts, fmt, format_estimate
+from pendulum.report import notebook as R
+from pendulum.report.data import best_variant, nested_parent, variant_order
+from pendulum.report.format import estimate_parts, fmt, format_estimate
 from workflow_run import digest, planned_wildcards, run
 
 VARIANTS = {"quadratic": ["quadratic_drag"], "linear": ["quadratic_drag", "linear_damping"]}
@@ -271,7 +271,7 @@ def test_the_report_kernel_runs_encrypted_without_the_plain_tcp_warning(tmp_path
     nbformat.write(nb, str(tmp_path / "in.ipynb"))
     code = (
         "import sys; sys.path.insert(0, sys.argv[1]);"
-        "from pendulum.report import build_report;"
+        "from pendulum.report.notebook import build_report;"
         "build_report('in.ipynb', 'out.html', 'out.ipynb', {})"
     )
     library = os.path.join(os.path.dirname(__file__), "..", "workflow")
@@ -337,7 +337,7 @@ def test_contents_are_taken_from_the_headings_with_their_anchor_marks_removed():
 
 def test_editing_plot_code_or_the_notebook_reruns_only_the_report(report_project):
     for path, edit in (
-        ("workflow/pendulum/report_figures.py", "\nMPL_STYLE['lines.linewidth'] = 1.2  # a style edit\n"),
+        ("workflow/pendulum/report/figures.py", "\nMPL_STYLE['lines.linewidth'] = 1.2  # a style edit\n"),
         ("notebooks/report.ipynb", "\n"),
     ):
         path = report_project / path
@@ -456,7 +456,7 @@ def test_the_report_renders_in_chromium_with_every_image_and_table3_complete(rep
 
 def test_a_log_axis_spanning_less_than_a_factor_three_has_several_labels():
     """A new user's local-C_d panel (1.0 to 1.9) had the single label '1'; wide spans keep 1-2-5 ticks."""
-    from pendulum.report_figures import log_axes, new_figure
+    from pendulum.report.figures import log_axes, new_figure
 
     fig = new_figure(6, 2.5)
     narrow, wide = fig.subplots(1, 2)

@@ -11,8 +11,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pendulum import report_discovery as D
-from pendulum.findings import ANOTHER_FREQUENCY
+from pendulum.discovery.findings import ANOTHER_FREQUENCY
+from pendulum.report import discovery as D
 from workflow_run import run
 
 RULE = (
@@ -61,7 +61,7 @@ def _entry(value, low, high, at_bound=False, **extra):
 
 
 def _document(steps=(), rounds=(), final_terms=("quadratic_drag",), parameters=None, **fields):
-    """A discovery document (pendulum.discovery) of group g on rig r; baseline quadratic drag, RMS 0.63°."""
+    """A discovery document (pendulum.discovery.selection) of group g on rig r; baseline quadratic drag, RMS 0.63°."""
     return {
         "group": "g",
         "status": "ok",

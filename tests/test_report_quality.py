@@ -9,8 +9,8 @@ import re
 import pandas as pd
 import pytest
 
-from pendulum import report as R
-from pendulum.report_checks import frame_notes
+from pendulum.report import notebook as R
+from pendulum.report.checks import frame_notes
 
 VARIANTS = {"quadratic": ["quadratic_drag"], "linear": ["quadratic_drag", "linear_damping"]}
 PROBLEM = (
@@ -263,7 +263,7 @@ def test_the_consistency_figure_leaves_out_fits_on_unreliable_records_and_says_w
 
 
 def test_the_tracking_table_says_whether_the_marker_was_detected_or_given():
-    from pendulum.report_checks import marker_text
+    from pendulum.report.checks import marker_text
 
     given = {"marker": {"polarity": "bright", "marker_radius_px": 12.0, "start_px": None}, "detection": None}
     found = {"marker": {"polarity": "dark", "marker_radius_px": 6.03261}, "detection": {"polarity": "dark"}}

@@ -5,11 +5,11 @@ each labelled for what it is."""
 import json
 import math
 
-from pendulum import report as R
-from pendulum.effects import TERMS
-from pendulum.findings import verdict
-from pendulum.report_checks import calibration_rows, failure_cell
-from pendulum.report_discovery import residual_check_table
+from pendulum.discovery.findings import verdict
+from pendulum.model.effects import TERMS
+from pendulum.report import notebook as R
+from pendulum.report.checks import calibration_rows, failure_cell
+from pendulum.report.discovery import residual_check_table
 
 VARIANTS = {"quadratic": ["quadratic_drag"], "linear": ["quadratic_drag", "linear_damping"]}
 RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322}
@@ -161,7 +161,7 @@ def test_own_data_and_config_do_not_dirty_the_tree_and_dirty_files_are_named():
     """A new user moved the demo truth files out of data/truth (README 'Your own videos') and every summary box
     said 'uncommitted changes' with the provenance table's bare 'yes'."""
     from pendulum.provenance import NOT_CODE
-    from pendulum.report_checks import changes_text
+    from pendulum.report.checks import changes_text
 
     assert {"data/raw", "data/truth", "config.yaml"} <= set(NOT_CODE)
     assert "workflow" not in NOT_CODE and "notebooks" not in NOT_CODE

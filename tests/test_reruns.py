@@ -109,9 +109,9 @@ def test_editing_a_sidecar_rig_value_refits_that_trial_without_retracking(demo_p
 @pytest.mark.parametrize(
     "module,first_stage,untouched",
     [
-        ("fitting.py", "fit_trial", {"frames", "tracks", "rig_geometry", "angles"}),
-        ("tracking.py", "tracks", {"frames"}),
-        ("geometry.py", "angles", {"frames", "tracks"}),
+        ("fit/output_error.py", "fit_trial", {"frames", "tracks", "rig_geometry", "angles"}),
+        ("tracking/marker.py", "tracks", {"frames"}),
+        ("angles/record.py", "angles", {"frames", "tracks"}),
     ],
 )
 def test_editing_a_library_module_reruns_the_stages_that_import_it(demo_project, module, first_stage, untouched):

@@ -9,10 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from pendulum.decay import decay_analysis, start_state
-from pendulum.physics import PendulumModel, Rig, simulate
-from pendulum.records import FitSettings, load_record
-from pendulum.synthetic_records import synthetic_angle_table
+from pendulum.fit.decay import decay_analysis, start_state
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import synthetic_angle_table
 
 PAPER = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
 TRUTH = {"added_mass_kg": 2.5, "drag_area_m2": 0.02576, "linear_damping_nm_s": 0.15, "friction_torque_nm": 0.02}

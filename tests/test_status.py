@@ -6,7 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pendulum.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot
+from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot
+from pendulum.fit.uncertainty import jacobian_rank_warnings
 from pendulum.status import (
     UpstreamFailed,
     describe,
@@ -17,7 +18,6 @@ from pendulum.status import (
     status_table,
     trial_status,
 )
-from pendulum.uncertainty import jacobian_rank_warnings
 
 LOG = logging.getLogger("test_status")
 

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from conftest import DEMO_RAW, DEMO_SPEC, DEMO_TRUTH
-from pendulum.synthetic import generate_trial, load_specs, marker_position_px
+from pendulum.synthetic.experiment import generate_trial, load_specs, marker_position_px
 
 
 def sha(path):

@@ -17,9 +17,10 @@ import pandas as pd
 import pytest
 import yaml
 
-from pendulum import synthetic as syn
-from pendulum.synthetic import Camera, TrialSpec, render_trial
-from pendulum.synthetic_scene import Bob, Faults, Letterbox, SecondObject, Stripes, stripe_coverage
+from pendulum.synthetic import experiment as syn
+from pendulum.synthetic.experiment import render_trial
+from pendulum.synthetic.scene import stripe_coverage
+from pendulum.synthetic.specs import Bob, Camera, Faults, Letterbox, SecondObject, Stripes, TrialSpec
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
@@ -170,8 +171,8 @@ def test_long_exposure_streak_is_smooth_and_as_long_as_the_path(monkeypatch):
     i = int(rendered.truth.streak_px.idxmax())
     assert rendered.truth.streak_px[i] == pytest.approx(streak[i], rel=0.02)
     # the marker's light alone: the same render with the marker in the body's grey subtracted
-    shades = syn._shades
-    monkeypatch.setattr(syn, "_shades", lambda camera: {**shades(camera), "marker": shades(camera)["body"]})
+    shades = syn.pendulum_shades
+    monkeypatch.setattr(syn, "pendulum_shades", lambda camera: {**shades(camera), "marker": shades(camera)["body"]})
     light = rendered.frames[i].astype(float) - render_trial(fast).frames[i]
     ys, xs = np.nonzero(light > 4)
     theta = rendered.truth.theta_rad[i]

@@ -7,11 +7,13 @@ import pandas as pd
 import pytest
 
 from conftest import DEMO_RAW, DEMO_TRUTH, demo_trials
-from pendulum.centroids import measure_marker
-from pendulum.synthetic import Camera, TrialSpec, generate_trial, release_time_s
-from pendulum.synthetic_scene import _draw_disk
-from pendulum.track_checks import exposure_centre_correction
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.synthetic.experiment import generate_trial, release_time_s
+from pendulum.synthetic.scene import draw_disk
+from pendulum.synthetic.specs import Camera, TrialSpec
+from pendulum.tracking.centroids import measure_marker
+from pendulum.tracking.checks import exposure_centre_correction
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 from truth import track_errors
 
 
@@ -60,7 +62,7 @@ def test_occluded_frames_are_flagged_not_interpolated(hard_videos):
 
 def _disk_image(cx, cy, radius, size=120, body=55.0, marker=235.0):
     img = np.full((size, size), body, np.float32)
-    _draw_disk(img, cx, cy, radius, marker)
+    draw_disk(img, cx, cy, radius, marker)
     return img
 
 
@@ -166,8 +168,8 @@ def test_fast_marker_on_a_small_body_keeps_angle_accuracy(fast_video):
 @pytest.mark.parametrize("gap_offset", [1, 2, 3, 4, -1, -3])
 def test_a_jump_next_to_lost_frames_is_flagged(gap_offset):
     """The leave-one-out stencil has holes beside lost frames; a jump there is still seen, and nothing else."""
-    from pendulum.track_checks import flag_jumps
-    from pendulum.tracking import TrackerSettings
+    from pendulum.tracking.checks import flag_jumps
+    from pendulum.tracking.settings import TrackerSettings
 
     rng = np.random.default_rng(abs(gap_offset))
     t = np.arange(300) / 30.0
@@ -190,7 +192,7 @@ def test_the_reference_along_the_arc_follows_a_smooth_curve_and_holds_beyond_it(
     4 radii of arc (0.128 rad), then stays level."""
     from types import SimpleNamespace
 
-    from pendulum.marker_arc import ArcReference, MarkerArc
+    from pendulum.tracking.marker_arc import ArcReference, MarkerArc
 
     pivot, arm, r = (300.0, 20.0), 250.0, 8.0
     arc = MarkerArc(SimpleNamespace(pivot_px=pivot, arm_px=arm), r)

@@ -15,9 +15,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pendulum.geometry import angles_from_track, estimate_rig_geometry
-from pendulum.synthetic import TrialSpec, generate_trial, release_time_s
-from pendulum.tracking import TrackerSettings, track_video
+from pendulum.angles.geometry import estimate_rig_geometry
+from pendulum.angles.record import angles_from_track
+from pendulum.synthetic.experiment import generate_trial, release_time_s
+from pendulum.synthetic.specs import TrialSpec
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
@@ -163,7 +166,7 @@ def test_after_lost_frames_the_window_follows_the_arc_and_stays_inside_the_swing
     seen so far (+ 2 marker radii), however long the gap (the old linear guess ran off the arc)."""
     from types import SimpleNamespace
 
-    from pendulum.marker_arc import MarkerArc
+    from pendulum.tracking.marker_arc import MarkerArc
 
     pivot, arm, radius = (300.0, 20.0), 250.0, 8.0
     arc = MarkerArc(SimpleNamespace(pivot_px=pivot, arm_px=arm), radius)
@@ -183,12 +186,12 @@ def test_after_lost_frames_the_window_follows_the_arc_and_stays_inside_the_swing
 def _marker_on_body(extra, r=12.0, cx=70.3, cy=60.6):
     """A bright marker (235) of radius r on a body (55) reaching r + 8 px, scene 40; ``extra(img, when)``
     draws behind the body (when="back") or in front of everything ("front"); noise σ = 2."""
-    from pendulum.synthetic_scene import _draw_disk
+    from pendulum.synthetic.scene import draw_disk
 
     img = np.full((140, 140), 40.0, np.float32)
     extra(img, "back")
     img[int(cy - r - 8) : int(cy + r + 9), int(cx - r - 8) : int(cx + r + 9)] = 55.0
-    _draw_disk(img, cx, cy, r, 235.0)
+    draw_disk(img, cx, cy, r, 235.0)
     extra(img, "front")
     noise = np.random.default_rng(1).normal(0.0, 2.0, img.shape)
     return np.clip(np.rint(img + noise), 0, 255).astype(np.uint8)
@@ -205,8 +208,8 @@ def test_the_centroid_checks_see_the_marker_window_only():
     marker's edge (centroids disagree by 0.92 px), and a disk of the marker's grey reaching into the
     margin beyond its edge, which the thresholded centroid cannot tell (it shifts both alike) but the
     same centroid in a mask 1.5 px tighter does (0.41 px; the bias is 0.62 px)."""
-    from pendulum.centroids import measure_marker
-    from pendulum.synthetic_scene import _draw_disk
+    from pendulum.synthetic.scene import draw_disk
+    from pendulum.tracking.centroids import measure_marker
 
     r, cx, cy = 12.0, 70.3, 60.6
     settings = TrackerSettings(marker_radius_px=r)
@@ -217,16 +220,16 @@ def test_the_centroid_checks_see_the_marker_window_only():
         return m, math.hypot(m.x - cx, m.y - cy)
 
     beyond = {
-        "second disk": lambda img, when: when == "back" and _draw_disk(img, cx - 6, cy + 38, 16.0, 235.0),
+        "second disk": lambda img, when: when == "back" and draw_disk(img, cx - 6, cy + 38, 16.0, 235.0),
         "stripe": lambda img, when: when == "back" and img.__setitem__(np.s_[int(cy + r + 9) : int(cy + r + 17)], 180),
     }
     for name, extra in beyond.items():
         m, error = measure(extra)
         assert error <= 0.01, name
         assert m.disagreement_px <= 0.1 and m.margin_shift_px <= 0.05, name
-    m, error = measure(lambda img, when: when == "front" and _draw_disk(img, cx + 12, cy + 4, 6.0, 145.0))
+    m, error = measure(lambda img, when: when == "front" and draw_disk(img, cx + 12, cy + 4, 6.0, 145.0))
     assert m.disagreement_px > limit
-    m, error = measure(lambda img, when: when == "front" and _draw_disk(img, cx + r + 9, cy + 3, 9.0, 235.0))
+    m, error = measure(lambda img, when: when == "front" and draw_disk(img, cx + r + 9, cy + 3, 9.0, 235.0))
     assert error > settings.max_margin_shift_px  # a real bias ...
     assert m.margin_shift_px > settings.max_margin_shift_px  # ... flagged
     assert m.disagreement_px <= limit  # (which the thresholded centroid misses)
@@ -236,8 +239,8 @@ def _swing_with_a_passer_by(path, hide=range(100, 106), below_px=25.0):
     """A bright 10 px marker swinging ±0.2 rad on a 300 px arm (period 2.5 s, 30 fps, 6 s), hidden in
     frames ``hide``; a disk of its grey, radius 11 px, passes ``below_px`` below the marker's position at
     the first hidden frame, moving 1 px per frame along x, in frames 92–139. Returns the marker's truth."""
-    from pendulum.synthetic import write_video
-    from pendulum.synthetic_scene import _draw_disk
+    from pendulum.synthetic.experiment import write_video
+    from pendulum.synthetic.scene import draw_disk
 
     fps, n, r = 30.0, 180, 10.0
     theta = 0.2 * np.cos(2 * np.pi * np.arange(n) / fps / 2.5)
@@ -248,9 +251,9 @@ def _swing_with_a_passer_by(path, hide=range(100, 106), below_px=25.0):
     for i in range(n):
         img = np.full((360, 640), 40.0, np.float32)
         if k0 - 8 <= i < k0 + 40:
-            _draw_disk(img, mx[k0] + (i - k0), my[k0] + below_px, 1.1 * r, 235.0)
+            draw_disk(img, mx[k0] + (i - k0), my[k0] + below_px, 1.1 * r, 235.0)
         if i not in hide:
-            _draw_disk(img, mx[i], my[i], r, 235.0)
+            draw_disk(img, mx[i], my[i], r, 235.0)
         frames.append(np.clip(np.rint(img + rng.normal(0.0, 2.0, img.shape)), 0, 255).astype(np.uint8))
     write_video(frames, path, fps, 18, "veryfast")
     return mx, my
@@ -328,8 +331,8 @@ def _swing_changing_along_the_arc(path, stripe_rad=None, n=150):
     (contrast × area) is 0.81 × at −0.3 rad, 1.21 × at +0.3 rad that at rest (a lens, vignetting), its
     width² 0.9 … 1.1 ×. ``stripe_rad``: a band 80 px wide across the arc at that angle dims everything
     behind it by 20 % (a shadow crossing). Returns the marker's truth (x, y) and angle."""
-    from pendulum.synthetic import write_video
-    from pendulum.synthetic_scene import _draw_disk
+    from pendulum.synthetic.experiment import write_video
+    from pendulum.synthetic.scene import draw_disk
 
     fps, amp, arm, pivot = 30.0, 0.3, 280.0, (320.0, 20.0)
     t = np.arange(n) / fps
@@ -346,7 +349,7 @@ def _swing_changing_along_the_arc(path, stripe_rad=None, n=150):
     for i in range(n):
         grow = 1.0 + 0.1 * theta[i] / amp
         img = scene.copy()
-        _draw_disk(img, mx[i], my[i], 9.0 * math.sqrt(grow), 40.0 + 180.0 * grow)
+        draw_disk(img, mx[i], my[i], 9.0 * math.sqrt(grow), 40.0 + 180.0 * grow)
         img *= shade
         frames.append(np.clip(np.rint(img + rng.normal(0.0, 2.0, img.shape)), 0, 255).astype(np.uint8))
     write_video(frames, path, fps, 18, "veryfast")
@@ -361,7 +364,7 @@ def test_a_smooth_change_along_the_arc_is_not_glare_but_a_sudden_one_is_flagged(
     reference (``reference_along_arc=False``) most of the swing is "glare"/"occluded". A 20 % dimming
     at one place (a shadow band across the arc at +0.15 rad) is still flagged on every pass while the
     marker is wholly inside it, and the frames outside stay ok."""
-    from pendulum.detection import detect_marker
+    from pendulum.tracking.detection import detect_marker
 
     settings = TrackerSettings(polarity="auto", marker_radius_px=None)
     mx, my, theta = _swing_changing_along_the_arc(tmp_path / "smooth.mp4")
@@ -386,7 +389,7 @@ def test_a_smooth_change_along_the_arc_is_not_glare_but_a_sudden_one_is_flagged(
 def test_a_track_lost_to_occluded_flags_names_the_cause_and_the_remedy():
     """Most frames occluded (a new user's bare ball over stripes, 374 of 420): the message names both causes
     (covered, or the background behind the path) and the settings that decide, not just 'partly hidden'."""
-    from pendulum.tracking import unusable_reason
+    from pendulum.tracking.marker import unusable_reason
 
     message = unusable_reason({"ok": 40, "occluded": 374, "lost": 6}, 420)
     assert message.startswith("the marker is usable in only 40 of 420 frames (10 %; lost 6, occluded 374)")

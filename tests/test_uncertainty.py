@@ -7,12 +7,13 @@ import pytest
 from scipy import stats
 
 from paper_rig import PAPER_RIG, TRUTH, VARIANTS
-from pendulum.fitting import _added_mass_lower_kg, fit_trials
-from pendulum.geometry import image_angle_rad
-from pendulum.physics import PendulumModel, Rig
-from pendulum.records import FitSettings, load_record, rig_tolerances
-from pendulum.synthetic_records import synthetic_angle_table
-from pendulum.uncertainty import coefficient_entry, consistency_test, interval95
+from pendulum.angles.geometry import image_angle_rad
+from pendulum.fit.output_error import _added_mass_lower_kg, fit_trials
+from pendulum.fit.records import FitSettings, load_record, rig_tolerances
+from pendulum.fit.uncertainty import coefficient_entry, consistency_test, interval95
+from pendulum.model.physics import PendulumModel
+from pendulum.model.rig import Rig
+from pendulum.synthetic.records import synthetic_angle_table
 
 RIG = PAPER_RIG
 TERMS = VARIANTS["friction"]
@@ -211,7 +212,7 @@ def test_the_ar_recursion_and_the_normal_and_chi2_constants_match_scipy_signal_a
     references they replace."""
     from scipy import signal, special, stats
 
-    from pendulum.uncertainty import Z95, Z95_ONE_SIDED, all_pole
+    from pendulum.fit.uncertainty import Z95, Z95_ONE_SIDED, all_pole
 
     rng = np.random.default_rng(7)
     for order in (0, 1, 2, 5, 10):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from pendulum.synthetic import main  # noqa: E402
+from pendulum.synthetic.experiment import main  # noqa: E402
 
 if __name__ == "__main__":
     raise SystemExit(main())

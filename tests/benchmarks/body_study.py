@@ -3,7 +3,7 @@
     nice -n 10 .venv/bin/python tests/benchmarks/body_study.py [--n 20] [--seed 5000] [--only SEED ...]
         [--workdir DIR] [--compare]
 
-Scene ``s`` is drawn by :func:`pendulum.synthetic_wall.random_wall_trial` from ``s`` alone: a body
+Scene ``s`` is drawn by :func:`pendulum.synthetic.wall.random_wall_trial` from ``s`` alone: a body
 (apple, two-tone ball or printed pattern, radius 15–40 px at 640 px width, its look turning about
 the thread), a wall with a lighting gradient, maybe a soft dark band, 0–2 soft shadows following the
 body, a faint thread from a pivot above the frame, exposure drift, maybe defocus and camera creep,
@@ -44,14 +44,14 @@ MIN_OK = 0.95
 
 
 def default_settings():
-    from pendulum.tracking import TrackerSettings
+    from pendulum.tracking.settings import TrackerSettings
 
     config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
     return TrackerSettings.from_config(config)
 
 
 def demo_physics():
-    from pendulum.synthetic import load_specs
+    from pendulum.synthetic.experiment import load_specs
 
     spec = load_specs(ROOT / "data" / "synthetic" / "demo.yaml")[0]
     return spec.rig, spec.truth, spec.effects
@@ -60,14 +60,14 @@ def demo_physics():
 def scene(seed: int, duration_s: float = 8.0):
     from dataclasses import replace
 
-    from pendulum.synthetic_wall import random_wall_trial
+    from pendulum.synthetic.wall import random_wall_trial
 
     trial = random_wall_trial(seed)
     return replace(trial, spec=replace(trial.spec, duration_s=duration_s, name=f"wall_{seed}_{duration_s:g}s"))
 
 
 def render(seed: int, workdir: Path, duration_s: float = 8.0) -> tuple[Path, pd.DataFrame]:
-    from pendulum.synthetic_wall import write_wall_trial
+    from pendulum.synthetic.wall import write_wall_trial
 
     trial = scene(seed, duration_s)
     video = workdir / f"{trial.spec.name}.mp4"
@@ -79,10 +79,11 @@ def render(seed: int, workdir: Path, duration_s: float = 8.0) -> tuple[Path, pd.
 
 def judge(seed: int, workdir: Path, duration_s: float = 8.0) -> dict:
     """Track one scene with the defaults and compare with its truth (module docstring)."""
-    from pendulum.geometry import angles_from_track, estimate_rig_geometry
-    from pendulum.path_shape import path_departure
-    from pendulum.track_method import track_trial
-    from pendulum.video import VideoError
+    from pendulum.angles.geometry import estimate_rig_geometry
+    from pendulum.angles.record import angles_from_track
+    from pendulum.camera.video import VideoError
+    from pendulum.tracking.method import track_trial
+    from pendulum.tracking.path_shape import path_departure
 
     trial = scene(seed, duration_s)
     video, truth = render(seed, workdir, duration_s)
@@ -143,9 +144,9 @@ def compare(workdir: Path) -> Path:
     """The real apple clip's first frame beside a render of the same scene values (a look, not a test)."""
     import cv2
 
-    from pendulum.synthetic import Camera, TrialSpec
-    from pendulum.synthetic_wall import Wall, WallBody, WallTrial, write_wall_trial
-    from pendulum.video import iter_luma
+    from pendulum.camera.video import iter_luma
+    from pendulum.synthetic.specs import Camera, TrialSpec
+    from pendulum.synthetic.wall import Wall, WallBody, WallTrial, write_wall_trial
 
     real = next(iter_luma(ROOT.parent / "shared" / "data" / "real-video" / "redapple_480p.mov"))[2].copy()
     rig, truth, effects = demo_physics()

@@ -49,7 +49,8 @@ sys.path.insert(0, str(ROOT / "workflow"))
 sys.path.insert(0, str(ROOT / "tests"))
 
 from paper_rig import PAPER_RIG, TRUTH  # noqa: E402
-from pendulum.synthetic import Camera, TrialSpec, generate_trial, truth_record  # noqa: E402
+from pendulum.synthetic.experiment import generate_trial, truth_record  # noqa: E402
+from pendulum.synthetic.specs import Camera, TrialSpec  # noqa: E402
 
 FRICTION = ("quadratic_drag", "linear_damping", "coulomb_friction")
 PARAMETERS = ("added_mass_kg", "drag_area_m2", "drag_coefficient", "linear_damping_nm_s", "friction_torque_nm")
@@ -160,7 +161,8 @@ def _source_hash(*names: str) -> str:
 
 def build_trial(spec: TrialSpec, workdir: str, rerender: bool) -> dict:
     """Render (unless cached with the same spec) and track (unless cached with the same tracker)."""
-    from pendulum.tracking import TrackerSettings, track_video
+    from pendulum.tracking.marker import track_video
+    from pendulum.tracking.settings import TrackerSettings
 
     workdir = Path(workdir)
     videos, truth_dir, tracks = workdir / "videos", workdir / "truth", workdir / "tracks"
@@ -177,7 +179,13 @@ def build_trial(spec: TrialSpec, workdir: str, rerender: bool) -> dict:
     settings = TrackerSettings(marker_radius_px=spec.camera.marker_radius_px, polarity=spec.camera.polarity)
     key = {
         "tracker": _source_hash(
-            "tracking.py", "acquisition.py", "marker_arc.py", "track_checks.py", "centroids.py", "video.py"
+            "tracking/marker.py",
+            "tracking/settings.py",
+            "tracking/acquisition.py",
+            "tracking/marker_arc.py",
+            "tracking/checks.py",
+            "tracking/centroids.py",
+            "camera/video.py",
         ),
         "settings": asdict(settings),
         "video": video.stat().st_size,
@@ -200,7 +208,7 @@ def build_trial(spec: TrialSpec, workdir: str, rerender: bool) -> dict:
 
 def draw_stated(group_index: int, rig_name: str) -> tuple[dict, dict]:
     """Stated rig values = truth + N(0, tolerance), one draw per group; and the absolute tolerances."""
-    from pendulum.records import rig_tolerances
+    from pendulum.fit.records import rig_tolerances
 
     rig = RIGS[rig_name]
     tolerances = rig_tolerances(rig["values"], rig["tolerances"])
@@ -213,9 +221,10 @@ def draw_stated(group_index: int, rig_name: str) -> tuple[dict, dict]:
 
 def fit_group(task: dict) -> dict:
     """Angles, per-trial and joint fits of one group under one configuration (runs in a worker)."""
-    from pendulum.fitting import fit_joint, fit_trials
-    from pendulum.geometry import angles_from_track, estimate_rig_geometry
-    from pendulum.records import FitSettings, load_record
+    from pendulum.angles.geometry import estimate_rig_geometry
+    from pendulum.angles.record import angles_from_track
+    from pendulum.fit.output_error import fit_joint, fit_trials
+    from pendulum.fit.records import FitSettings, load_record
 
     settings = FitSettings()
     workdir = Path(task["workdir"])
@@ -408,10 +417,10 @@ def noise_diagnostics(task: dict) -> dict:
     z: tracked and gaussian use their own stderr; truth, locked and remainder the tracked fit's stderr
     (their own residuals are not the record's noise), so they show which part of the error moves the estimate.
     """
-    from pendulum.fitting import fit_trials
-    from pendulum.geometry import angles_from_track
-    from pendulum.records import FitSettings, load_record
-    from pendulum.synthetic_records import angle_noise_rad
+    from pendulum.angles.record import angles_from_track
+    from pendulum.fit.output_error import fit_trials
+    from pendulum.fit.records import FitSettings, load_record
+    from pendulum.synthetic.records import angle_noise_rad
 
     settings = FitSettings()
     workdir = Path(task["workdir"])

@@ -4,7 +4,7 @@
 
 Per seed: a group of two noisy trials of the paper's rig (releases +10° and −8°, model quadratic drag +
 linear damping, tracking-like noise 0.05° white + 0.03° AR(1)), fitted from the truth; the design
-(:func:`pendulum.design.design_group`, statistical part only: no tolerances) predicts each coefficient's
+(:func:`pendulum.design.next_trials.design_group`, statistical part only: no tolerances) predicts each coefficient's
 95 % half-width after one more trial. Then the recommended trial and a naive one (today's most common
 release repeated, +10°) are each simulated with fresh noise, added, and the group refitted: its reported
 (sandwich) half-widths are the realised ones. Printed: the share of (case, coefficient) pairs whose
@@ -42,9 +42,10 @@ COEFFICIENTS = ("added_mass_kg", "drag_area_m2", "linear_damping_nm_s")
 
 
 def record(release_deg: float, seed: int, name: str):
-    from pendulum.physics import PendulumModel, Rig
-    from pendulum.records import FitSettings, load_record
-    from pendulum.synthetic_records import synthetic_angle_table
+    from pendulum.fit.records import FitSettings, load_record
+    from pendulum.model.physics import PendulumModel
+    from pendulum.model.rig import Rig
+    from pendulum.synthetic.records import synthetic_angle_table
 
     model = PendulumModel(Rig(**PAPER_RIG), TERMS)
     table = synthetic_angle_table(model, TRUTH, release_deg, duration_s=20.0, rng=np.random.default_rng(seed), **NOISE)
@@ -53,8 +54,8 @@ def record(release_deg: float, seed: int, name: str):
 
 def fit(records):
     """The group fitted from the truth (θ0 from the first sample, θ̇0 = 0, δ = 0)."""
-    from pendulum.groupfit import GroupProblem
-    from pendulum.records import FitSettings
+    from pendulum.fit.group import GroupProblem
+    from pendulum.fit.records import FitSettings
 
     problem = GroupProblem(records, ["paper"] * len(records), TERMS)
     nuisance = [(float(r.theta_rad[0]), 0.0, 0.0) for r in records]
@@ -62,16 +63,16 @@ def fit(records):
 
 
 def realised(group_fit) -> dict[str, float]:
-    from pendulum.records import FitSettings
-    from pendulum.uncertainty import Z95
+    from pendulum.fit.records import FitSettings
+    from pendulum.fit.uncertainty import Z95
 
     cov, _, _ = group_fit.covariance(FitSettings().max_ar_order)
     return {label: Z95 * math.sqrt(cov[j, j]) for j, label in enumerate(group_fit.problem.labels)}
 
 
 def run_case(seed: int) -> dict:
-    from pendulum.design import DesignOptions, design_group
-    from pendulum.records import FitSettings
+    from pendulum.design.next_trials import DesignOptions, design_group
+    from pendulum.fit.records import FitSettings
 
     base = [record(r, 1000 * seed + i, f"s{seed}_{i}") for i, r in enumerate(RELEASES_DEG)]
     today = fit(base)
@@ -104,11 +105,11 @@ def separate_case(seed: int) -> dict:
     is run again: does it name the history force?"""
     from test_discovery_statistics import CANDIDATES, CASES, case_records
 
-    from pendulum.design import DesignOptions, design_group
-    from pendulum.discovery import discover
-    from pendulum.groupfit import GroupProblem, ordered
-    from pendulum.records import FitSettings, load_record
-    from pendulum.synthetic_records import hidden_effect_table
+    from pendulum.design.next_trials import DesignOptions, design_group
+    from pendulum.discovery.selection import discover
+    from pendulum.fit.group import GroupProblem, ordered
+    from pendulum.fit.records import FitSettings, load_record
+    from pendulum.synthetic.records import hidden_effect_table
 
     records, rigs = case_records("history_one_length", seed)
     truth = CASES["history_one_length"][0]

@@ -63,11 +63,14 @@ from tracking_accuracy import (  # noqa: E402
     render_cached,
 )
 
-from pendulum.detection import DetectionError, detect_marker  # noqa: E402
-from pendulum.geometry import InputError, angles_from_track, estimate_rig_geometry  # noqa: E402
-from pendulum.synthetic import TrialSpec, release_time_s, truth_record  # noqa: E402
-from pendulum.tracking import TrackerSettings, track_video  # noqa: E402
-from pendulum.video import VideoError  # noqa: E402
+from pendulum.angles.geometry import estimate_rig_geometry  # noqa: E402
+from pendulum.angles.record import InputError, angles_from_track  # noqa: E402
+from pendulum.camera.video import VideoError  # noqa: E402
+from pendulum.synthetic.experiment import release_time_s, truth_record  # noqa: E402
+from pendulum.synthetic.specs import TrialSpec  # noqa: E402
+from pendulum.tracking.detection import DetectionError, detect_marker  # noqa: E402
+from pendulum.tracking.marker import track_video  # noqa: E402
+from pendulum.tracking.settings import TrackerSettings  # noqa: E402
 
 RIGS = {"small": (RIG_SMALL, TRUTH_SMALL), "short": (RIG_SHORT, TRUTH_SHORT), "long": (RIG_LONG, TRUTH_LONG)}
 # The marker's edge stays this far inside the picture over the whole swing: the tracker measures a ring

@@ -28,8 +28,8 @@ import yaml  # noqa: E402
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "workflow"))
 
-from pendulum.discovery import Discovery, DiscoveryOptions  # noqa: E402
-from pendulum.records import FitSettings, load_record  # noqa: E402
+from pendulum.discovery.selection import Discovery, DiscoveryOptions  # noqa: E402
+from pendulum.fit.records import FitSettings, load_record  # noqa: E402
 from pendulum.trials import RIG_KEYS  # noqa: E402
 
 

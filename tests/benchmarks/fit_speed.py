@@ -17,10 +17,11 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "workflow"))
 
-from pendulum.fitting import fit_trials  # noqa: E402
-from pendulum.physics import PendulumModel, Rig  # noqa: E402
-from pendulum.records import FitSettings, load_record  # noqa: E402
-from pendulum.synthetic_records import synthetic_angle_table  # noqa: E402
+from pendulum.fit.output_error import fit_trials  # noqa: E402
+from pendulum.fit.records import FitSettings, load_record  # noqa: E402
+from pendulum.model.physics import PendulumModel  # noqa: E402
+from pendulum.model.rig import Rig  # noqa: E402
+from pendulum.synthetic.records import synthetic_angle_table  # noqa: E402
 
 RIG = {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322, "displaced_volume_m3": 0.0025}
 VARIANTS = {

@@ -49,10 +49,10 @@ import fit_speed  # noqa: E402
 import video_throughput  # noqa: E402
 from workflow_rules import rule_declarations  # noqa: E402
 
-from pendulum import video  # noqa: E402
+from pendulum.camera import video  # noqa: E402
 from pendulum.provenance import git_state, package_versions  # noqa: E402
-from pendulum.synthetic import generate_trial  # noqa: E402
-from pendulum.tracking import TrackerSettings  # noqa: E402
+from pendulum.synthetic.experiment import generate_trial  # noqa: E402
+from pendulum.tracking.settings import TrackerSettings  # noqa: E402
 
 PROJECT_FILES = ("Snakefile", "config.yaml", "workflow", "profiles", "notebooks", "environment-lock.txt")
 SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
@@ -331,7 +331,7 @@ def tracking_memory(path: Path, threads: int) -> dict:
     that only imports the same modules."""
     code = (
         "import sys, re; sys.path.insert(0, {workflow!r});"
-        "from pendulum import video; from pendulum.tracking import TrackerSettings, track_video;"
+        "from pendulum.camera import video; from pendulum.tracking.marker import TrackerSettings, track_video;"
         "video.set_decoder_threads({threads});"
         "t = track_video({path!r}, TrackerSettings(**{settings!r})) if {track} else None;"
         "hwm = re.search(r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read()).group(1);"

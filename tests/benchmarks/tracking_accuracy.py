@@ -46,9 +46,12 @@ import yaml
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "workflow"))
 
-from pendulum.geometry import angles_from_track, estimate_rig_geometry  # noqa: E402
-from pendulum.synthetic import Camera, TrialSpec, generate_trial, marker_position_px, release_time_s  # noqa: E402
-from pendulum.tracking import TrackerSettings, track_video  # noqa: E402
+from pendulum.angles.geometry import estimate_rig_geometry  # noqa: E402
+from pendulum.angles.record import angles_from_track  # noqa: E402
+from pendulum.synthetic.experiment import generate_trial, marker_position_px, release_time_s  # noqa: E402
+from pendulum.synthetic.specs import Camera, TrialSpec  # noqa: E402
+from pendulum.tracking.marker import track_video  # noqa: E402
+from pendulum.tracking.settings import TrackerSettings  # noqa: E402
 
 EFFECTS = ["quadratic_drag", "linear_damping", "coulomb_friction"]
 

@@ -21,10 +21,12 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "workflow"))
 
-from pendulum.geometry import angles_from_track, estimate_rig_geometry  # noqa: E402
-from pendulum.synthetic import generate_trial, load_specs  # noqa: E402
-from pendulum.tracking import TrackerSettings, track_video  # noqa: E402
-from pendulum.video import contact_sheet, frame_timeline, iter_luma  # noqa: E402
+from pendulum.angles.geometry import estimate_rig_geometry  # noqa: E402
+from pendulum.angles.record import angles_from_track  # noqa: E402
+from pendulum.camera.video import contact_sheet, frame_timeline, iter_luma  # noqa: E402
+from pendulum.synthetic.experiment import generate_trial, load_specs  # noqa: E402
+from pendulum.tracking.marker import track_video  # noqa: E402
+from pendulum.tracking.settings import TrackerSettings  # noqa: E402
 
 
 def decode_only(path):

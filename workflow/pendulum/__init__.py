@@ -1,1 +1,1 @@
-"""Free-decay pendulum identification: physics, synthetic experiment, video to angle."""
+"""Free-decay pendulum identification: camera → tracking → angles → fit (model) → discovery → report."""

@@ -64,7 +64,7 @@ def fitted_trials(
     """The trials whose angles and per-trial fit succeeded on a reliable record, and why each other one is left out.
 
     A fit marked ``reliable: false`` (its record failed the garbage checks of
-    :func:`pendulum.record_checks.record_checks`) is left out too: one mis-tracked video
+    :func:`pendulum.fit.checks.record_checks`) is left out too: one mis-tracked video
     must not move the coefficients of every trial it would be pooled with.
     """
     excluded = {}

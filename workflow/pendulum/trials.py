@@ -11,7 +11,7 @@ from pathlib import Path
 import jsonschema
 import yaml
 
-from pendulum.video import VIDEO_EXTENSIONS
+from pendulum.camera.video import VIDEO_EXTENSIONS
 
 SCHEMA_DIR = Path(__file__).resolve().parents[1] / "schemas"
 RIG_KEYS = (

@@ -1,4 +1,4 @@
-from pendulum.bodies import discovery_groups, discovery_settings  # noqa: E402
+from pendulum.fit.bodies import discovery_groups, discovery_settings  # noqa: E402
 
 DISCOVERY = discovery_settings(config)  # None: the default baseline is not a variant
 DISCOVERY_GROUPS = discovery_groups(config, TRIALS) if DISCOVERY else {}

@@ -12,26 +12,49 @@ LIBRARY_DIR = Path(workflow.basedir) / "workflow" / "pendulum"
 SCRIPTS_DIR = Path(workflow.basedir) / "workflow" / "scripts"
 
 
+def _module_file(name):
+    """The file of a dotted `pendulum` module (a package by its __init__.py), else None."""
+    parts = name.split(".")[1:]
+    for path in (
+        LIBRARY_DIR.joinpath(*parts).with_suffix(".py"),
+        LIBRARY_DIR.joinpath(*parts, "__init__.py"),
+    ):
+        if parts and path.is_file():
+            return path
+    return None
+
+
+def _with_packages(path):
+    """A module's file and the __init__.py of every package above it (Python runs them on import)."""
+    files = {path}
+    for parent in path.parents:
+        if parent == LIBRARY_DIR.parent:
+            break
+        files.add(parent / "__init__.py")
+    return files
+
+
 @functools.lru_cache(maxsize=None)  # each file parsed once per Snakemake run
 def _library_imports(path):
-    """Names of the `pendulum` modules a Python file imports (absolute or relative)."""
+    """The `pendulum` module files a Python file imports (absolute or relative, also inside functions)."""
     names = set()
     for node in ast.walk(ast.parse(Path(path).read_text())):
         if isinstance(node, ast.ImportFrom):
-            source = node.module or ""
-            if node.level and path.parent == LIBRARY_DIR:
-                names |= {source} if source else {a.name for a in node.names}
-            elif source == "pendulum":
-                names |= {a.name for a in node.names}
-            elif source.startswith("pendulum."):
-                names.add(source.split(".")[1])
+            if node.level:
+                package = path.parent.relative_to(LIBRARY_DIR.parent).parts
+                package = package[: len(package) - (node.level - 1)]
+                source = ".".join(package + ((node.module,) if node.module else ()))
+            else:
+                source = node.module or ""
+            if source == "pendulum" or source.startswith("pendulum."):
+                names.add(source)
+                names |= {
+                    f"{source}.{a.name}" for a in node.names
+                }  # `from pendulum.fit import decay`
         elif isinstance(node, ast.Import):
-            names |= {
-                a.name.split(".")[1]
-                for a in node.names
-                if a.name.startswith("pendulum.")
-            }
-    return frozenset(n for n in names if (LIBRARY_DIR / f"{n}.py").is_file())
+            names |= {a.name for a in node.names if a.name.startswith("pendulum.")}
+    files = {_module_file(n) for n in names} - {None}
+    return frozenset(f for file in files for f in _with_packages(file))
 
 
 def script_code(script):
@@ -42,12 +65,12 @@ def script_code(script):
     """
     seen, todo = set(), set(_library_imports(SCRIPTS_DIR / script))
     while todo:
-        name = todo.pop()
-        if name not in seen:
-            seen.add(name)
-            todo |= _library_imports(LIBRARY_DIR / f"{name}.py")
+        path = todo.pop()
+        if path not in seen:
+            seen.add(path)
+            todo |= _library_imports(path)
     files = [LIBRARY_DIR / "__init__.py", SCRIPTS_DIR / "_setup.py"]
-    files += [LIBRARY_DIR / f"{n}.py" for n in sorted(seen)]
+    files += sorted(seen - {LIBRARY_DIR / "__init__.py"})
     return [os.path.relpath(f) for f in files]
 
 

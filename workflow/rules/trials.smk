@@ -5,7 +5,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(workflow.basedir) / "workflow"))
 
-from pendulum.bodies import body_groups, group_trial_rigs, group_trials  # noqa: E402
+from pendulum.fit.bodies import (  # noqa: E402
+    body_groups,
+    group_trial_rigs,
+    group_trials,
+)
 from pendulum.trials import (  # noqa: E402
     GEOMETRY_KEYS,
     RIG_KEYS,

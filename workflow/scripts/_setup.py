@@ -1,7 +1,7 @@
 """Shared start of every script: the job's thread budget, then the `pendulum` library on the path.
 
 Imported first, before numpy: BLAS/OpenMP pools (OpenBLAS, OpenMP, MKL, …) and the video
-decoder (``PENDULUM_DECODER_THREADS``, read by `pendulum.video`) get exactly the rule's
+decoder (``PENDULUM_DECODER_THREADS``, read by `pendulum.camera.video`) get exactly the rule's
 `threads` (``snakemake.threads``, which Snakemake lowers to the cores it was given), so a
 job uses the cores the scheduler reserved for it and no more.
 """

@@ -6,16 +6,11 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.geometry import (
-    angles_from_track,
-    angles_from_tracker_csv,
-    estimate_rig_geometry,
-    off_rig_circle,
-    read_tracker_csv,
-)
+from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle
+from pendulum.angles.record import angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.camera.view import ImageToPlane, map_point, map_track
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
-from pendulum.view import ImageToPlane, map_point, map_track
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "angles")

@@ -1,9 +1,9 @@
 """Snakemake adapter: lens model and swing-plane homography of one camera setup from its checkerboard clips."""
 
 import _setup  # noqa: F401
+from pendulum.camera.view import calibrate_camera_setup
 from pendulum.io import script_logger, write_json
 from pendulum.status import run_stage
-from pendulum.view import calibrate_camera_setup
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "calibrate_camera")

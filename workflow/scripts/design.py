@@ -1,10 +1,10 @@
 """Snakemake adapter: what to film next for one group (a body or a rig), from discovery's final model."""
 
 import _setup  # noqa: F401
-from pendulum.bodies import load_group
-from pendulum.design import ROW_COLUMNS, DesignOptions, design_group, design_table, fit_final_model
+from pendulum.design.next_trials import ROW_COLUMNS, DesignOptions, design_group, design_table, fit_final_model
+from pendulum.fit.bodies import load_group
+from pendulum.fit.records import FitSettings
 from pendulum.io import read_json, script_logger, write_csv, write_json
-from pendulum.records import FitSettings
 from pendulum.status import empty_table, is_failed, run_stage
 
 sm = snakemake  # noqa: F821

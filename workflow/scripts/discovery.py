@@ -1,11 +1,11 @@
 """Snakemake adapter: discovery of the physics the baseline variant misses, for one group (a body or a rig)."""
 
 import _setup  # noqa: F401
-from pendulum.bodies import load_group
-from pendulum.discovery import Discovery, DiscoveryOptions
-from pendulum.findings import EXTINCTION_COLUMNS, RESIDUAL_COLUMNS
+from pendulum.discovery.findings import EXTINCTION_COLUMNS, RESIDUAL_COLUMNS
+from pendulum.discovery.selection import Discovery, DiscoveryOptions
+from pendulum.fit.bodies import load_group
+from pendulum.fit.records import FitSettings
 from pendulum.io import script_logger, write_csv, write_json
-from pendulum.records import FitSettings
 from pendulum.status import empty_table, run_stage
 
 sm = snakemake  # noqa: F821

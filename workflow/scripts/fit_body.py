@@ -1,10 +1,10 @@
 """Snakemake adapter: one model variant fitted jointly to every trial of one body on its rigs (config ``bodies``)."""
 
 import _setup  # noqa: F401
-from pendulum.bodies import load_group
-from pendulum.groupfit import fit_body
+from pendulum.fit.bodies import load_group
+from pendulum.fit.group import fit_body
+from pendulum.fit.records import FitSettings
 from pendulum.io import script_logger, write_json
-from pendulum.records import FitSettings
 from pendulum.status import run_stage
 
 sm = snakemake  # noqa: F821

@@ -5,11 +5,11 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.fitting import fit_joint
+from pendulum.fit.output_error import fit_joint
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.fit.summary import fit_document
 from pendulum.io import read_json, script_logger, write_json
-from pendulum.records import FitSettings, load_record
 from pendulum.status import fitted_trials, run_stage
-from pendulum.summary import fit_document
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "fit_joint")

@@ -4,8 +4,8 @@ import json
 from pathlib import Path
 
 import _setup  # noqa: F401
+from pendulum.fit.summary import summary_table
 from pendulum.io import script_logger, write_csv
-from pendulum.summary import summary_table
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "fit_summary")

@@ -16,12 +16,12 @@ import numpy as np
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.decay import HALF_CYCLE_COLUMNS
-from pendulum.fitting import fit_trials
+from pendulum.fit.decay import HALF_CYCLE_COLUMNS
+from pendulum.fit.output_error import fit_trials
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.fit.summary import CURVE_COLUMNS, cycle_table, fit_document, fitted_curve
 from pendulum.io import read_json, script_logger, write_csv, write_json
-from pendulum.records import FitSettings, load_record
 from pendulum.status import empty_table, require_ok, run_stage
-from pendulum.summary import CURVE_COLUMNS, cycle_table, fit_document, fitted_curve
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "fit_trial")

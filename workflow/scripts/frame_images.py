@@ -3,8 +3,8 @@
 from pathlib import Path
 
 import _setup  # noqa: F401
+from pendulum.camera.video import iter_luma
 from pendulum.io import script_logger, write_png
-from pendulum.video import iter_luma
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "frame_images")

@@ -1,9 +1,9 @@
 """Snakemake adapter: frame timeline, summary and contact sheet of one video (failed outputs if unreadable)."""
 
 import _setup  # noqa: F401
+from pendulum.camera.video import contact_sheet_with_times, frame_timeline
 from pendulum.io import script_logger, write_csv, write_json, write_png
 from pendulum.status import empty_table, failure_image, run_stage
-from pendulum.video import contact_sheet_with_times, frame_timeline
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "frames")

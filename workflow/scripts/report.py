@@ -5,7 +5,7 @@ from pathlib import Path
 
 import _setup  # noqa: F401
 from pendulum.io import script_logger
-from pendulum.report import build_report
+from pendulum.report.notebook import build_report
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "report")

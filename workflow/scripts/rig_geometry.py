@@ -7,10 +7,10 @@ import numpy as np
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.geometry import estimate_rig_geometry
+from pendulum.angles.geometry import estimate_rig_geometry
+from pendulum.camera.view import ImageToPlane, map_point, map_track, path_tilt
 from pendulum.io import script_logger, write_json
 from pendulum.status import is_failed, require_ok, run_stage
-from pendulum.view import ImageToPlane, map_point, map_track, path_tilt
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "rig_geometry")

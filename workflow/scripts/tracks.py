@@ -12,12 +12,12 @@ from pathlib import Path
 import cv2
 
 import _setup  # noqa: F401
+from pendulum.camera.video import VideoError, track_over_sheet
 from pendulum.io import script_logger, write_csv, write_json, write_png
-from pendulum.path_shape import path_departure
 from pendulum.status import empty_table, failure_image, run_stage
-from pendulum.track_method import track_trial
-from pendulum.tracking import TrackerSettings
-from pendulum.video import VideoError, track_over_sheet
+from pendulum.tracking.method import track_trial
+from pendulum.tracking.path_shape import path_departure
+from pendulum.tracking.settings import TrackerSettings
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "tracks")

@@ -1,0 +1,258 @@
+"""The swing's geometry from marker tracks: circles fitted to the path, the pivot, the vertical, image angles.
+
+θ = atan2(x − x_p, y − y_p) − φ, with image y pointing down, the pivot at
+(x_p, y_p) and φ the image angle of the true vertical (camera roll); θ > 0
+swings to +x. The arc displacement is s = L θ. The pivot, when not given, is
+the centre of a circle fitted to the marker path (pooled over a rig's trials);
+the vertical, when not given, is the centre of the oscillation. The angle record
+itself is made in :mod:`pendulum.angles.record`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+
+from pendulum.angles.swings import swing_centre_rad
+
+
+@dataclass
+class CircleFit:
+    pivot_x_px: float
+    pivot_y_px: float
+    radius_px: float
+    rms_px: float
+    n_points: int
+    arc_span_deg: float
+    pivot_covariance_px2: list | None = None  # 2×2 covariance of (x_p, y_p), for the error budget
+    effective_points: float | None = None  # n corrected for the residuals' autocorrelation
+
+
+def fit_circle(x, y, weights=None) -> CircleFit:
+    """Geometric least-squares circle (algebraic Kåsa fit as the start), minimising Σ w (|p − c| − R)².
+
+    ``weights`` w per point (None: all 1). The pivot covariance is σ² (JᵀWJ)⁻¹
+    with σ² = Σ w r² / (n − 3), inflated for the residuals' lag-1 correlation.
+    """
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    good = np.isfinite(x) & np.isfinite(y)
+    x, y = x[good], y[good]
+    root_w = None if weights is None else np.sqrt(np.asarray(weights, float)[good])
+    if x.size < 10:
+        raise ValueError(f"a circle fit needs at least 10 tracked points, got {x.size}")
+    a = np.column_stack([x, y, np.ones_like(x)])
+    b = x**2 + y**2
+    (c0, c1, c2), *_ = np.linalg.lstsq(a, b, rcond=None)
+    cx, cy = c0 / 2, c1 / 2
+    r0 = math.sqrt(max(c2 + cx**2 + cy**2, 1e-9))
+
+    def residual(p):
+        return np.hypot(x - p[0], y - p[1]) - p[2]
+
+    if root_w is None:
+        sol = least_squares(residual, [cx, cy, r0], x_scale="jac")
+    else:
+        sol = least_squares(lambda p: root_w * residual(p), [cx, cy, r0], x_scale="jac")
+    cx, cy, r = sol.x
+    ang = np.degrees(np.arctan2(x - cx, y - cy))
+    # Covariance σ² (JᵀJ)⁻¹, with n replaced by an effective count n (1 − ρ)/(1 + ρ):
+    # neighbouring track points share their errors (texture, blur), ρ is the lag-1 correlation.
+    res = sol.fun
+    rho = float(np.clip(np.corrcoef(res[1:], res[:-1])[0, 1], 0.0, 0.99)) if res.size > 3 else 0.0
+    n_eff = max(x.size * (1 - rho) / (1 + rho), 4.0)
+    sigma2 = float(res @ res) / max(x.size - 3, 1)
+    cov = np.linalg.pinv(sol.jac.T @ sol.jac) * sigma2 * x.size / n_eff
+    return CircleFit(
+        float(cx),
+        float(cy),
+        float(r),
+        float(np.sqrt(np.mean(res**2))) if root_w is None else float(np.sqrt(np.mean(residual(sol.x) ** 2))),
+        int(x.size),
+        float(np.ptp(ang)),
+        cov[:2, :2].tolist(),
+        float(n_eff),
+    )
+
+
+def image_angle_rad(x, y, pivot_px) -> np.ndarray:
+    """atan2(x − x_p, y − y_p): the marker's angle from the image's downward vertical."""
+    return np.arctan2(np.asarray(x, float) - pivot_px[0], np.asarray(y, float) - pivot_px[1])
+
+
+OUTLIER_TRACK_FACTOR = 8.0  # a track this many times the others' circle RMS off their circle is left out
+OUTLIER_TRACK_FLOOR_PX = 1.0  # ... and at least this far (px RMS)
+
+
+def _radial_rms_px(track: pd.DataFrame, circle: CircleFit) -> float:
+    ok = track.flag == "ok"
+    d = np.hypot(track.x_px[ok] - circle.pivot_x_px, track.y_px[ok] - circle.pivot_y_px) - circle.radius_px
+    return float(np.sqrt(np.mean(d.to_numpy(float) ** 2))) if ok.any() else math.inf
+
+
+NOISY_TRACK_FACTOR = 2.0  # a track more than this × the median track's RMS off the circle is down-weighted
+STILL_TOLERANCE_PX = 0.5  # a run of ok frames all this close to their running mean ...
+STILL_MIN_FRAMES = 10  # ... and at least this long is the marker held still: one point of the path
+
+
+def path_points(track: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """The ok positions of a track, each run of ≥ 10 frames within 0.5 px of its running mean (the hold
+    before the release, the rest after it) replaced by its median: one position measured many times.
+
+    Its frames share one error (the same sub-pixel phase, a video codec's persistent blocks: a new
+    user's 1.5 s hold was 0.11 px off in all 42 frames while the swing's frames were within 0.035 px);
+    counted 42 times, that error moved the pooled pivot by 2.3 px on a 27° arc.
+    """
+    ok = (track.flag == "ok").to_numpy()
+    x, y = track.x_px.to_numpy(float)[ok], track.y_px.to_numpy(float)[ok]
+    keep_x, keep_y = [], []
+    i = 0
+    while i < x.size:
+        j, sx, sy = i + 1, x[i], y[i]
+        while j < x.size and math.hypot(x[j] - sx / (j - i), y[j] - sy / (j - i)) <= STILL_TOLERANCE_PX:
+            sx, sy, j = sx + x[j], sy + y[j], j + 1
+        if j - i >= STILL_MIN_FRAMES:
+            keep_x.append(float(np.median(x[i:j])))
+            keep_y.append(float(np.median(y[i:j])))
+            i = j
+        else:
+            keep_x.append(float(x[i]))
+            keep_y.append(float(y[i]))
+            i += 1
+    return np.array(keep_x), np.array(keep_y)
+
+
+def _pooled_circle(tracks: dict[str, pd.DataFrame]) -> CircleFit:
+    """Circle through the pooled paths (:func:`path_points`), each track weighted min(1, (2 σ_median / σ_k)²).
+
+    σ_k is track k's RMS distance from the unweighted pooled circle: a track
+    noisier than twice the median counts by its inverse variance. When no track
+    is that noisy every weight is 1 and the unweighted fit is the answer.
+    """
+    names = list(tracks)  # the callers' order: the pooled sums are the same numbers every time
+    points = {n: path_points(tracks[n]) for n in names}
+    xs = np.concatenate([points[n][0] for n in names])
+    ys = np.concatenate([points[n][1] for n in names])
+    circle = fit_circle(xs, ys)
+    if len(tracks) < 2:
+        return circle
+    spread = {n: _radial_rms_px(tracks[n], circle) for n in names}
+    median = float(np.median([v for v in spread.values() if math.isfinite(v)] or [0.0]))
+    weight = {n: min(1.0, (NOISY_TRACK_FACTOR * median / spread[n]) ** 2) if spread[n] > 0 else 1.0 for n in names}
+    if all(w == 1.0 for w in weight.values()):
+        return circle
+    w = np.concatenate([np.full(points[n][0].size, weight[n]) for n in names])
+    return fit_circle(xs, ys, weights=w)
+
+
+def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, str]]:
+    """Circle through the pooled marker paths, leaving out tracks that are not on it.
+
+    With three or more tracks, the track farthest off the pooled circle (RMS
+    radial distance) is compared with the circle fitted to the others: more than
+    OUTLIER_TRACK_FACTOR × their RMS and more than OUTLIER_TRACK_FLOOR_PX off, it
+    is left out (a moved camera, a tracked reflection) and the test repeated.
+    Returns the circle and {trial: reason} of the tracks left out.
+    """
+    kept = dict(tracks)
+    rejected: dict[str, str] = {}
+    circle = _pooled_circle(kept)
+    while len(kept) >= 3:
+        worst = max(sorted(kept), key=lambda name: _radial_rms_px(kept[name], circle))
+        others = {k: v for k, v in kept.items() if k != worst}
+        reference = _pooled_circle(others)
+        off = _radial_rms_px(kept[worst], reference)
+        limit = max(OUTLIER_TRACK_FACTOR * reference.rms_px, OUTLIER_TRACK_FLOOR_PX)
+        if not off > limit:
+            break
+        rejected[worst] = (
+            f"its marker path is {off:.2f} px RMS off the circle through the other {len(others)} trials' paths "
+            f"(limit {limit:.2f} px): camera moved or wrong object tracked? Give its pivot_px in a sidecar"
+        )
+        kept, circle = others, reference
+    return circle, rejected
+
+
+def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
+    """Why a track cannot use its rig's pooled pivot (its path is off the rig's circle), or None."""
+    circle = geometry.get("circle")
+    if not circle:
+        return None
+    off = _radial_rms_px(track, CircleFit(**circle))
+    limit = max(OUTLIER_TRACK_FACTOR * circle["rms_px"], OUTLIER_TRACK_FLOOR_PX)
+    if off > limit:
+        return (
+            f"the marker path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): "
+            "camera moved or wrong object tracked? Give this trial's pivot_px in a sidecar"
+        )
+    return None
+
+
+def pivot_uncertainty(pivot_covariance_px2, radius_px: float, vertical_deg: float) -> dict:
+    """Standard errors of an estimated pivot and the angle offset they cause.
+
+    A pivot error δp moves every angle by the component of δp across the arm at
+    rest, divided by the arm: σ_θ = √(eᵀ C e) / R with e = (cos φ, −sin φ), φ the
+    vertical's image angle (a constant offset, absorbed by the fits' rest offset).
+    """
+    cov = np.asarray(pivot_covariance_px2, float)
+    phi = math.radians(vertical_deg)
+    e = np.array([math.cos(phi), -math.sin(phi)])
+    return {
+        "pivot_stderr_px": [float(math.sqrt(max(cov[0, 0], 0.0))), float(math.sqrt(max(cov[1, 1], 0.0)))],
+        "angle_offset_stderr_deg": float(math.degrees(math.sqrt(max(e @ cov @ e, 0.0)) / radius_px)),
+    }
+
+
+def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertical_deg=None) -> dict:
+    """Pivot (circle through the pooled marker paths, outlying tracks left out) and vertical.
+
+    The vertical is the median oscillation centre (:func:`swing_centre_rad`, any
+    amplitude) of the tracks used; when no track has a clean swing it is the
+    image vertical (0°) with a warning under ``warnings`` (the fits' rest offset
+    absorbs a camera roll). Values given are kept; only the missing ones are
+    estimated. An estimated pivot comes with ``pivot_stderr_px`` and
+    ``angle_offset_stderr_deg``.
+    """
+    result: dict = {"trials": sorted(tracks), "rejected_trials": {}, "warnings": []}
+    if pivot_px is None:
+        if not tracks:
+            raise ValueError("no trial has a usable track to estimate the pivot from; give pivot_px")
+        circle, rejected = pooled_pivot(tracks)
+        tracks = {k: v for k, v in tracks.items() if k not in rejected}
+        pivot_px = [circle.pivot_x_px, circle.pivot_y_px]
+        result["rejected_trials"] = rejected
+        result["pivot_source"] = f"estimated: circle fitted to the pooled marker paths of {len(tracks)} trial(s)"
+        result["circle"] = asdict(circle)
+        result["pivot_covariance_px2"] = circle.pivot_covariance_px2
+    else:
+        result["pivot_source"] = "given"
+    result["pivot_px"] = [float(pivot_px[0]), float(pivot_px[1])]
+    if vertical_deg is None:
+        centres = []
+        for track in tracks.values():
+            th = image_angle_rad(track.x_px.where(track.flag == "ok"), track.y_px.where(track.flag == "ok"), pivot_px)
+            found = swing_centre_rad(th)
+            if found is not None:
+                centres.append(found[0])
+        if centres:
+            vertical_deg = math.degrees(float(np.median(centres)))
+            result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
+        else:
+            vertical_deg = 0.0
+            why = "no usable track" if not tracks else "no trial has a clean swing (three extrema above the noise)"
+            result["vertical_source"] = "image vertical (not estimated)"
+            result["warnings"].append(
+                f"cannot estimate the vertical ({why}); the image vertical (0°) is used: the fits' rest offset "
+                "absorbs a camera roll, give vertical_deg to state it"
+            )
+    else:
+        result["vertical_source"] = "given"
+    result["vertical_deg"] = float(vertical_deg)
+    if result.get("circle") and result["pivot_covariance_px2"] is not None:
+        result.update(pivot_uncertainty(result["pivot_covariance_px2"], result["circle"]["radius_px"], vertical_deg))
+    return result

@@ -1,0 +1,254 @@
+"""A marker track or a Tracker table → the angle record: θ(t) about the pivot, release found, rest trimmed.
+
+θ = atan2(x − x_p, y − y_p) − φ, with image y pointing down, the pivot at (x_p, y_p) and φ the image
+angle of the true vertical (camera roll); θ > 0 swings to +x. Bad input raises :class:`InputError`,
+which names the file and what to do.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from pendulum.angles.geometry import image_angle_rad
+from pendulum.angles.swings import detect_release, rest_start_index, sample_noise_rad
+
+
+@dataclass
+class AngleRecordInfo:
+    source: str
+    pivot_px: list | None
+    vertical_deg: float
+    length_m: float
+    release_detected: bool
+    release_time_s: float
+    hold_angle_deg: float | None
+    first_frame: int | None
+    n_samples: int
+    n_flagged: int
+    rest_from_s: float | None
+    noise_deg: float
+    arm_radius_px: float | None = None  # pivot to marker, median over the tracked samples
+    pivot_covariance_px2: list | None = None  # of an estimated pivot (None: given, taken as exact)
+    notes: list = field(default_factory=list)  # what was done about imperfect input (sorted, dropped rows, …)
+
+    def to_dict(self):
+        return asdict(self)
+
+
+def angle_record(
+    time_s,
+    theta_image_rad,
+    quality,
+    flag,
+    *,
+    vertical_deg: float,
+    length_m: float,
+    source: str,
+    pivot_px=None,
+    frame=None,
+    keep_rest_s: float = 2.0,
+    arm_radius_px: float | None = None,
+    pivot_covariance_px2=None,
+) -> tuple[pd.DataFrame, AngleRecordInfo]:
+    """θ relative to the vertical, trimmed to the free decay (release → shortly after coming to rest).
+
+    Output columns: ``time_s`` (since release), ``video_time_s``, ``frame``,
+    ``theta_rad``, ``theta_deg``, ``s_m`` (= L θ), ``quality``, ``flag``.
+    Flagged samples keep θ = NaN (never interpolated). Times must be finite and
+    in order; a record without a swing raises :class:`InputError` naming ``source``.
+    """
+    t = np.asarray(time_s, float)
+    flag = np.asarray(flag, dtype=object)
+    theta = np.asarray(theta_image_rad, float) - math.radians(vertical_deg)
+    theta = np.mod(theta + math.pi, 2 * math.pi) - math.pi  # in [−π, π) whatever the vertical
+    if not np.isfinite(t).all() or np.any(np.diff(t) < 0):
+        raise InputError(f"{source}: times are missing or not in order; cannot make an angle record")
+    usable = (flag == "ok") & np.isfinite(theta)
+    theta = np.where(usable, theta, np.nan)
+    try:
+        release = detect_release(t, theta)
+    except ValueError as exc:
+        raise InputError(f"{source}: {exc}") from exc
+    end = t.size
+    rest = rest_start_index(theta)
+    rest_from = None
+    if rest is not None and rest > release.first_sample:
+        rest_from = float(t[rest])
+        end = int(np.searchsorted(t, t[rest] + keep_rest_s, side="right"))
+    sl = slice(release.first_sample, end)
+    table = pd.DataFrame(
+        {
+            "time_s": t[sl] - release.time_s,
+            "video_time_s": t[sl],
+            "frame": (np.arange(t.size) if frame is None else np.asarray(frame))[sl],
+            "theta_rad": theta[sl],
+            "theta_deg": np.degrees(theta[sl]),
+            "s_m": length_m * theta[sl],
+            "quality": np.asarray(quality, float)[sl],
+            "flag": flag[sl],
+        }
+    )
+    info = AngleRecordInfo(
+        source=source,
+        pivot_px=None if pivot_px is None else [float(pivot_px[0]), float(pivot_px[1])],
+        vertical_deg=float(vertical_deg),
+        length_m=float(length_m),
+        release_detected=release.detected,
+        release_time_s=release.time_s,
+        hold_angle_deg=None if release.hold_angle_rad is None else math.degrees(release.hold_angle_rad),
+        first_frame=int(table.frame.iloc[0]) if len(table) else None,
+        n_samples=int(len(table)),
+        n_flagged=int((table.flag != "ok").sum()),
+        rest_from_s=rest_from,
+        noise_deg=math.degrees(sample_noise_rad(theta)),
+        arm_radius_px=arm_radius_px,
+        pivot_covariance_px2=pivot_covariance_px2,
+    )
+    return table, info
+
+
+def angles_from_track(
+    track: pd.DataFrame, *, pivot_px, vertical_deg: float, length_m: float, source: str, pivot_covariance_px2=None
+):
+    """Angle record of a marker track (see :func:`angle_record`); a malformed track raises :class:`InputError`."""
+    missing = {"frame", "time_s", "x_px", "y_px", "quality", "flag"} - set(track.columns)
+    if missing:
+        raise InputError(f"{source}: the track lacks column(s) {sorted(missing)}")
+    if len(pivot_px) != 2 or not np.isfinite(np.asarray(pivot_px, float)).all():
+        raise InputError(f"{source}: the pivot {pivot_px!r} is not a finite pixel position (x, y)")
+    columns = {c: pd.to_numeric(track[c], errors="coerce").to_numpy(float) for c in ("time_s", "x_px", "y_px")}
+    x, y = columns["x_px"], columns["y_px"]
+    with np.errstate(over="ignore", invalid="ignore"):
+        theta_img = image_angle_rad(x, y, pivot_px)
+        radius = np.hypot(x - pivot_px[0], y - pivot_px[1])
+    # a position on the pivot (or not finite) has no angle
+    ok = (track.flag == "ok").to_numpy() & np.isfinite(theta_img) & np.isfinite(radius) & (radius >= 1.0)
+    flag = np.where(ok | (track.flag != "ok").to_numpy(), track.flag.to_numpy(object), "lost")
+    return angle_record(
+        columns["time_s"],
+        theta_img,
+        pd.to_numeric(track.quality, errors="coerce").to_numpy(float),
+        flag,
+        vertical_deg=vertical_deg,
+        length_m=length_m,
+        source=source,
+        pivot_px=pivot_px,
+        frame=track.frame,
+        arm_radius_px=float(np.median(radius[ok])) if ok.any() else None,
+        pivot_covariance_px2=pivot_covariance_px2,
+    )
+
+
+class InputError(ValueError):
+    """A bad angle table or track: the message names the file and the problem."""
+
+
+ANGLE_TABLE_COLUMNS = ("t_s", "theta_deg")
+MAX_REPEATED_TIME_FRACTION = 0.1  # more rows at an already used time than this: the time column is broken
+
+
+def read_tracker_csv(path) -> pd.DataFrame:
+    """Read an angle table (``t_s``, ``theta_deg``) as exported by Tracker or a spreadsheet.
+
+    Comma-, semicolon- (with decimal commas) and tab-separated files are read;
+    an empty or unparsable file raises :class:`InputError` naming it.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from exc
+    if not text.strip():
+        raise InputError(f"{path}: empty file; export the angle table again (columns t_s, theta_deg)")
+    header = text.lstrip().splitlines()[0]
+    sep = max((",", ";", "\t"), key=header.count)
+    try:
+        return pd.read_csv(io.StringIO(text), sep=sep, decimal="," if sep == ";" else ".")
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as exc:
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{path}: not a readable CSV table ({reason}); export it again") from exc
+
+
+def _numeric(table: pd.DataFrame, column: str, source: str) -> np.ndarray:
+    """A column as floats; text that is not a number raises :class:`InputError` (blank cells are NaN)."""
+    raw = table[column]
+    values = pd.to_numeric(raw, errors="coerce")
+    text = raw.astype(str).str.strip()
+    bad = values.isna() & raw.notna() & (text != "") & ~text.str.lower().isin(("nan", "na", "n/a", "null", "none"))
+    if bad.any():
+        rows = np.flatnonzero(bad.to_numpy())
+        more = f" and {rows.size - 1} more" if rows.size > 1 else ""
+        raise InputError(
+            f"{source}: column {column} holds text that is not a number ({text.iloc[rows[0]]!r} on line "
+            f"{rows[0] + 2}{more}); fix those cells or export again"
+        )
+    return values.to_numpy(float)
+
+
+def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_m: float, source: str):
+    """Angle record of an angle export (columns ``t_s``, ``theta_deg``, as Tracker writes).
+
+    Imperfect rows are dealt with and listed in ``info.notes``: rows without a
+    time are dropped; missing or infinite angles are flagged ``lost``; rows out
+    of time order are sorted; exact repeats are dropped; a later row at a time
+    already used is flagged ``duplicate``. Raises :class:`InputError` (naming
+    ``source``) for missing columns, text in a number column, angles beyond
+    ±180°, times repeated in more than 10 % of the rows, or no swing.
+    """
+    missing = set(ANGLE_TABLE_COLUMNS) - set(table.columns)
+    if missing:
+        names = [str(c) for c in table.columns]
+        found = f"found {names[:6]}" if all(n.isprintable() for n in names) else "no readable header: not a text CSV?"
+        raise InputError(
+            f"{source}: angle table lacks column(s) {sorted(missing)}; expected t_s and theta_deg ({found})"
+        )
+    t = _numeric(table, "t_s", source)
+    deg = _numeric(table, "theta_deg", source)
+    notes = []
+    timed = np.isfinite(t)
+    if not timed.all():
+        notes.append(f"{int((~timed).sum())} row(s) without a time dropped")
+        t, deg = t[timed], deg[timed]
+    with np.errstate(invalid="ignore"):
+        beyond = np.abs(deg) > 180
+    if beyond.any():
+        raise InputError(
+            f"{source}: theta_deg reaches {deg[beyond][0]:g}°, beyond ±180°; is the column an angle in degrees?"
+        )
+    if np.any(np.diff(t) < 0):
+        notes.append("rows were not in time order; sorted by t_s")
+        order = np.argsort(t, kind="stable")
+        t, deg = t[order], deg[order]
+    same_row = np.concatenate([[False], (np.diff(t) == 0) & ((deg[1:] == deg[:-1]) | ~np.isfinite(deg[1:]))])
+    if same_row.any():
+        notes.append(f"{int(same_row.sum())} repeated row(s) dropped")
+        t, deg = t[~same_row], deg[~same_row]
+    repeated = np.concatenate([[False], np.diff(t) == 0])
+    if repeated.sum() > MAX_REPEATED_TIME_FRACTION * max(t.size, 1):
+        raise InputError(
+            f"{source}: {int(repeated.sum())} of {t.size} rows repeat an earlier time with another angle; "
+            "export t_s with more decimals"
+        )
+    finite = np.isfinite(deg)
+    flag = np.where(repeated, "duplicate", np.where(finite, "ok", "lost"))
+    if repeated.any():
+        notes.append(f"{int(repeated.sum())} row(s) at an already used time flagged duplicate")
+    if (~finite).any():
+        notes.append(f"{int((~finite).sum())} missing angle(s) flagged lost")
+    table_out, info = angle_record(
+        t,
+        np.radians(np.where(finite, deg, np.nan)),
+        finite.astype(float),
+        flag,
+        vertical_deg=vertical_deg,
+        length_m=length_m,
+        source=source,
+    )
+    info.notes = notes
+    return table_out, info

@@ -1,0 +1,331 @@
+"""What to film next: the 95 % half-width each coefficient would have if one more trial were added.
+
+A group's least-squares estimate x̂ (coefficients, then θ0, θ̇0, δ per trial) has, trials independent,
+
+    Cov = B⁻¹ M B⁻¹,   B = Σ_k J_kᵀ J_k,   M = Σ_k J_kᵀ Ω_k J_k,
+
+J_k = ∂θ_k/∂x the sensitivities of trial k's kept samples and Ω_k its AR(p) residual-noise covariance
+(the sandwich of :func:`pendulum.fit.uncertainty.sandwich_covariance`, whose bias correction is carried over
+per coefficient as the ratio of the reported to the formula's variance). A candidate trial — released
+at rest from θ_rel on one of the group's rigs, or on a rig the user describes (another arm length or
+payload) — adds its own J_c, simulated with today's estimates and sampled as the group's records
+(release transient left out), Ω_c (the median trial's noise model) and three nuisance columns; a new
+rig adds its own rig-level coefficients. The systematic part (rig tolerances, pivot) is common to every
+trial and carried unchanged: half-width = 1.96 √(σ_stat² + σ_sys²). A coefficient whose σ_sys dominates
+does not shrink with more trials; the input behind it is named. The model is assumed right.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import pandas as pd
+
+from pendulum.design.candidates import (
+    DRAG_COEFFICIENT,
+    Candidate,
+    Information,
+    candidate_sensitivities,
+    half_widths,
+    median_noise,
+    today,
+    with_trial,
+)
+from pendulum.design.separation import separations
+from pendulum.fit.group import GroupFit, GroupProblem, ordered, start_values
+from pendulum.model.effects import ADDED_MASS, TERMS
+from pendulum.model.physics import SimulationDiverged
+from pendulum.model.rig import Rig
+
+DEFAULT_RELEASES_DEG = (5.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0, 75.0)
+ROW_COLUMNS = [
+    "rig",
+    "described_rig",
+    "release_deg",
+    "coefficient",
+    "value",
+    "halfwidth95_today",
+    "halfwidth95_predicted",
+    "gain",
+]
+
+
+COEFFICIENT_WORDS = {
+    ADDED_MASS: "the added mass m_a",
+    DRAG_COEFFICIENT: "the drag coefficient C_d",
+    "drag_area_m2": "the drag area C_d·A",
+    "linear_damping_nm_s": "the linear damping c",
+    "friction_torque_nm": "the bearing friction τ_f",
+    "history_coefficient_kg_per_sqrt_s": "the history coefficient K_h",
+    "restoring_torque_correction": "the restoring-torque correction ε",
+}
+INPUT_WORDS = {
+    "mass_kg": "the rig's mass",
+    "length_m": "the arm length",
+    "frontal_area_m2": "the frontal area",
+    "displaced_volume_m3": "the displaced volume",
+    "fluid_density_kg_m3": "the water's density",
+    "body_inertia_kg_m2": "the body's moment of inertia",
+    "gravity_m_s2": "gravity",
+}
+
+
+def coefficient_words(label: str) -> str:
+    """``drag_coefficient`` → "the drag coefficient C_d"; a rig's own coefficient keeps its ``[rig]``."""
+    base, _, rig = label.partition("[")
+    words = COEFFICIENT_WORDS.get(base, base)
+    return words + (f" of rig {rig.rstrip(']')}" if rig else "")
+
+
+def input_words(key: str) -> str:
+    """An error-budget input in words (``pivot_px (axis 1)`` → "the pivot position")."""
+    base = key.split("[")[0]
+    if base.startswith("pivot"):
+        return "the pivot position"
+    return INPUT_WORDS.get(base, base)
+
+
+@dataclass(frozen=True)
+class DesignOptions:
+    """Config ``design``: what to ask of the next trials."""
+
+    coefficients: tuple[str, ...] = (ADDED_MASS, DRAG_COEFFICIENT)  # the ones the user cares about
+    releases_deg: tuple[float, ...] = DEFAULT_RELEASES_DEG  # candidate releases (both signs)
+    rigs: tuple[tuple[str, dict], ...] = ()  # described rigs: (name, rig values overriding the group's first)
+    target_relative_halfwidth: float = 0.02  # 95 % half-width / value wanted for each coefficient above
+    recommend: int = 3  # how many next trials to recommend
+    max_trials: int = 50  # beyond this many further trials a target counts as out of reach
+
+    @classmethod
+    def from_config(cls, block: dict | None) -> DesignOptions:
+        block = dict(block or {})
+        return cls(
+            coefficients=tuple(block.get("coefficients", cls.coefficients)),
+            releases_deg=tuple(float(r) for r in block.get("releases_deg", cls.releases_deg)),
+            rigs=tuple(sorted((name, dict(v)) for name, v in (block.get("rigs") or {}).items())),
+            target_relative_halfwidth=float(block.get("target_relative_halfwidth", cls.target_relative_halfwidth)),
+            recommend=int(block.get("recommend", cls.recommend)),
+        )
+
+
+def fit_final_model(group, discovery: dict, settings) -> GroupFit:
+    """Discovery's final model refitted to the group (its nuisances and kept samples from the baseline fits)."""
+    values, nuisance, masks = start_values(group.records, group.rigs, group.starts)
+    problem = GroupProblem(group.records, group.rigs, ordered(discovery["final_terms"]), masks, settings.max_step_s)
+    labels = dict(zip(problem.labels, problem.columns, strict=True))
+    values.update({labels[k]: v["value"] for k, v in discovery["parameters"].items() if k in labels})
+    return problem.solve(problem.start(values, nuisance), settings)
+
+
+def design_table(rows: list[dict]) -> pd.DataFrame:
+    return pd.DataFrame(rows, columns=ROW_COLUMNS)
+
+
+def _largest_input(entry: dict) -> tuple[str, float]:
+    budget = entry.get("error_budget") or {}
+    if not budget:
+        return "", 0.0
+    key = max(budget, key=lambda k: abs(budget[k]))
+    return key, abs(float(budget[key]))
+
+
+MIN_GAIN = 0.01  # a recommended trial narrows the widest target interval by at least this share
+
+
+def _reducible(entry: dict) -> float:
+    return entry["relative_halfwidth95"] - entry["floor_relative_halfwidth95"]
+
+
+def _widest(widths: dict, targets) -> float:
+    return max(widths[c]["relative_halfwidth95"] for c in targets)
+
+
+def _score(widths: dict, targets: tuple[str, ...]) -> float:
+    """The widest reducible relative half-width among the targets (what a further trial can still shrink)."""
+    parts = [_reducible(widths[c]) for c in targets if c in widths]
+    return max(parts) if parts else 0.0
+
+
+def _rig_values(rig: Rig) -> dict:
+    return {name: getattr(rig, name) for name in rig.__dataclass_fields__}
+
+
+def _sentence(name: str, today_entry: dict, after: dict, cand: Candidate) -> str:
+    where = f"on the described rig {cand.rig}" if cand.hypothetical else f"on rig {cand.rig}"
+    return (
+        f"release from {cand.release_deg:+g}° {where}: {coefficient_words(name)} ±{_fmt(today_entry['halfwidth95'])}"
+        f" → ±{_fmt(after['halfwidth95'])} (95 %)"
+    )
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.3g}"
+
+
+class Designer:
+    """Candidates' sensitivities computed once; information updated trial by trial."""
+
+    def __init__(self, fit: GroupFit, parameters: dict, settings, options: DesignOptions):
+        problem = fit.problem
+        self.fit, self.options, self.parameters = fit, options, parameters
+        self.settings_max_ar, self.release_skip_s = settings.max_ar_order, settings.release_skip_s
+        self.info, noise, self.ratio = today(fit, settings.max_ar_order)
+        self.noise = median_noise(noise)
+        self.values = {label: float(fit.x[j]) for j, label in enumerate(problem.labels)}
+        self.systematic = {k: float(v.get("stderr_systematic", 0.0)) for k, v in parameters.items()}
+        self.area = {"m2": problem.records[0].rig.frontal_area_m2}
+        self.now = self.widths(self.info)
+        self.targets = tuple(c for c in options.coefficients if c in self.now)
+        base = _rig_values(problem.records[0].rig)
+        self.described = {name: Rig.from_mapping({**base, **vals}) for name, vals in options.rigs}
+        self.sensitivities = {}
+        for rig, hypothetical in [(r, False) for r in problem.rigs] + [(r, True) for r in self.described]:
+            for release in options.releases_deg:
+                for sign in (-1.0, 1.0):
+                    cand = Candidate(rig, sign * release, hypothetical)
+                    try:
+                        self.sensitivities[cand] = candidate_sensitivities(
+                            fit, cand, self.described.get(rig), settings.release_skip_s
+                        )
+                    except SimulationDiverged:
+                        continue
+
+    def widths(self, info: Information) -> dict:
+        return half_widths(info, self.ratio, self.systematic, self.values, self.area)
+
+    def added(self, info: Information, cand: Candidate) -> Information:
+        columns, jac = self.sensitivities[cand]
+        return with_trial(info, columns, jac, self.noise)
+
+    def best(self, info: Information, targets) -> tuple[Candidate, Information, dict]:
+        scored = []
+        for cand in self.sensitivities:
+            after = self.added(info, cand)
+            widths = self.widths(after)
+            scored.append((_score(widths, targets), abs(cand.release_deg), cand.rig, cand, after, widths))
+        scored.sort(key=lambda s: s[:3])
+        _, _, _, cand, after, widths = scored[0]
+        return cand, after, widths
+
+
+def design_group(
+    fit: GroupFit, parameters: dict, settings, options: DesignOptions, indistinguishable: list[dict] | None = None
+) -> tuple[dict, list[dict]]:
+    """The design document and its table rows (one per candidate trial and coefficient).
+
+    ``parameters``: the reported coefficient entries of this model (value, stderr_systematic, error_budget),
+    as discovery's ``parameters`` for its final model.
+    """
+    d = Designer(fit, parameters, settings, options)
+    rows = []
+    for cand in d.sensitivities:
+        for name, entry in d.widths(d.added(d.info, cand)).items():
+            today_half = d.now[name]["halfwidth95"]
+            rows.append(
+                {
+                    "rig": cand.rig,
+                    "described_rig": cand.hypothetical,
+                    "release_deg": cand.release_deg,
+                    "coefficient": name,
+                    "value": entry["value"],
+                    "halfwidth95_today": today_half,
+                    "halfwidth95_predicted": entry["halfwidth95"],
+                    "gain": today_half / entry["halfwidth95"] if entry["halfwidth95"] else math.inf,
+                }
+            )
+    recommendations, info = [], d.info
+    for _ in range(options.recommend if d.targets else 0):
+        before = d.widths(info)
+        cand, after, widths = d.best(info, d.targets)
+        if _score(before, d.targets) - _score(widths, d.targets) < MIN_GAIN * _widest(before, d.targets):
+            break  # no candidate shrinks what the targets' widths are made of: their tolerances
+        info = after
+        widest = max(d.targets, key=lambda c: _reducible(before[c]))
+        recommendations.append(
+            {
+                "rig": cand.rig,
+                "described_rig": cand.hypothetical,
+                "release_deg": cand.release_deg,
+                "predicted": {c: widths[c]["halfwidth95"] for c in d.targets},
+                "sentence": _sentence(widest, before[widest], widths[widest], cand),
+            }
+        )
+    if d.targets and not recommendations:
+        limits = sorted({input_words(_largest_input(d.parameters.get(c, {}))[0]) for c in d.targets} - {""})
+        recommendations.append(
+            {
+                "rig": None,
+                "described_rig": False,
+                "release_deg": None,
+                "predicted": {c: d.now[c]["halfwidth95"] for c in d.targets},
+                "sentence": (
+                    "no further trial narrows "
+                    + " or ".join(coefficient_words(c) for c in d.targets)
+                    + " by 1 % or more: their intervals are set by the rig values' tolerances (largest: "
+                    + ", ".join(limits)
+                    + "); measure those more precisely"
+                ),
+            }
+        )
+    return {
+        "model_terms": list(fit.problem.terms),
+        "model": " + ".join(TERMS[t].label for t in fit.problem.terms) or "added mass only",
+        "trials": [r.trial for r in fit.problem.records],
+        "rigs": fit.problem.rigs,
+        "described_rigs": dict(options.rigs),
+        "targets": list(d.targets),
+        "target_relative_halfwidth95": options.target_relative_halfwidth,
+        "today": d.now,
+        "recommendations": recommendations,
+        "to_target": {c: _to_target(d, c) for c in d.targets},
+        "separating": separations(d, indistinguishable or []),
+        "method": (
+            "sandwich covariance (trials independent, AR(p) noise) with one more simulated trial per candidate; "
+            "the systematic part carried unchanged; the model assumed right"
+        ),
+    }, rows
+
+
+def _to_target(d: Designer, name: str) -> dict:
+    """Further trials (each the best for this coefficient) until its relative half-width reaches the target."""
+    target = d.options.target_relative_halfwidth
+    entry = d.now[name]
+    out = {"target_relative_halfwidth95": target, "relative_halfwidth95_today": entry["relative_halfwidth95"]}
+    if entry["relative_halfwidth95"] <= target:
+        return {
+            **out,
+            "further_trials": 0,
+            "reachable": True,
+            "sentence": f"{coefficient_words(name)} is already within ±{100 * target:g} %",
+        }
+    if entry["floor_relative_halfwidth95"] >= target:
+        key, shift = _largest_input(d.parameters.get(name, {}))
+        return {
+            **out,
+            "further_trials": None,
+            "reachable": False,
+            "limited_by": key,
+            "sentence": (
+                f"±{100 * target:g} % for {coefficient_words(name)} cannot be reached by more trials: it is limited "
+                f"by {input_words(key)} ({key}; its tolerance alone moves it by ±{_fmt(shift)}, 1σ): measure "
+                f"{input_words(key)} more precisely"
+            ),
+        }
+    info = d.info
+    for n in range(1, d.options.max_trials + 1):
+        _, info, widths = d.best(info, (name,))
+        if widths[name]["relative_halfwidth95"] <= target:
+            return {
+                **out,
+                "further_trials": n,
+                "reachable": True,
+                "sentence": f"{n} further trial(s) bring {coefficient_words(name)} within ±{100 * target:g} %",
+            }
+    return {
+        **out,
+        "further_trials": None,
+        "reachable": False,
+        "sentence": f"{coefficient_words(name)} does not reach ±{100 * target:g} % within "
+        f"{d.options.max_trials} further trials",
+    }

@@ -1,0 +1,268 @@
+"""Where a fitted model and the measured swing disagree: residual structure, noise floor, extinction-curve screen.
+
+Plain functions on a :class:`pendulum.fit.group.GroupFit`; :mod:`pendulum.discovery.selection` turns them into a ranked
+list of candidate effects and decides by refitting, with the null distribution of its likelihood ratio
+(the boundary mixture, at the end of this module).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from scipy.optimize import brentq, nnls
+
+from pendulum.angles.swings import sample_noise_rad
+from pendulum.fit.decay import half_cycles
+from pendulum.fit.group import GroupFit
+from pendulum.model.effects import TERMS
+
+WHITENESS_SPACING_S = 0.2  # residuals thinned to this spacing before the whiteness test (tracker noise decorrelates)
+WHITENESS_MAX_LAGS = 20
+
+
+def noise_floor_rad(record, noise_deg: float | None = None) -> float:
+    """σ of the record's sample noise: the angles stage's ``noise_deg`` (fifth differences), else recomputed.
+
+    A record quantised by its tracker (integer-pixel clicks) can have most third differences
+    exactly zero; when at least a quarter are, the floor is at least the quantisation step's
+    uniform σ, step/√12 (the step: the median gap between the distinct values). A record of
+    continuous values has no such step: the gap between its distinct values is only how densely
+    the samples fill the swing (a 60° swing of 600 samples: 0.2°, whose /√12 is four times a
+    tracker's 0.005°).
+    """
+    sigma = math.radians(noise_deg) if noise_deg is not None else sample_noise_rad(record.theta_rad)
+    theta = np.asarray(record.theta_rad, float)
+    theta = theta[np.isfinite(theta)]
+    d3 = np.diff(theta, 3)
+    if d3.size == 0 or np.mean(np.abs(d3) < 1e-12) < 0.25:
+        return sigma
+    steps = np.diff(np.unique(np.round(theta, 12)))
+    quantum = float(np.median(steps)) if steps.size else 0.0
+    return max(sigma, quantum / math.sqrt(12))
+
+
+def whiteness(fit: GroupFit, spacing_s: float = WHITENESS_SPACING_S, max_lags: int = WHITENESS_MAX_LAGS) -> dict:
+    """Ljung–Box test of the residuals thinned to ``spacing_s``, summed over trials (χ² with Σ lags dof).
+
+    Thinning to 0.2 s leaves tracker noise (correlated over a few frames) nearly white while a
+    model error, smooth over a swing, stays strongly autocorrelated.
+    """
+    q, dof = 0.0, 0
+    for k, r in enumerate(fit.residuals):
+        t = fit.problem.records[k].time_s[fit.problem.masks[k]]
+        step = max(1, int(round(spacing_s / max(float(np.median(np.diff(t))), 1e-9))))
+        x = r[::step] - r[::step].mean()
+        n = x.size
+        lags = min(max_lags, n // 5)
+        if lags < 1 or not np.any(x):
+            continue
+        denom = float(x @ x)
+        acf = np.array([float(x[h:] @ x[:-h]) / denom for h in range(1, lags + 1)])
+        q += float(n * (n + 2) * np.sum(acf**2 / (n - np.arange(1, lags + 1))))
+        dof += lags
+    p = float(stats.chi2.sf(q, dof)) if dof else 1.0
+    return {"ljung_box_q": q, "dof": dof, "p_value": p, "spacing_s": spacing_s}
+
+
+def _lag_correlation(r: np.ndarray, lag: int) -> float:
+    r = r - r.mean()
+    if lag <= 0 or lag >= r.size or not np.any(r):
+        return 0.0
+    return float(r[lag:] @ r[:-lag] / (r @ r))
+
+
+def residual_diagnostics(fit: GroupFit) -> dict:
+    """Residual against time, angle and velocity; its spectrum and autocorrelation (pooled over trials).
+
+    ``against``: correlation of the residual with the shapes the candidate torques leave
+    (sgn θ̇, θ̇, θ̇|θ̇|, θ) and the residual RMS by quarter of the record and by third of |θ| and
+    |θ̇|; ``spectrum``: frequency of the residual's strongest periodogram peak over the swing
+    frequency; ``autocorrelation``: at one sample and at half a swing period.
+    """
+    shapes = {"sign_velocity": [], "velocity": [], "velocity_squared": [], "angle": []}
+    pooled, time_bins, angle_bins, speed_bins, peaks, lag1, lag_half = [], [], [], [], [], [], []
+    for k, r in enumerate(fit.residuals):
+        record, mask = fit.problem.records[k], fit.problem.masks[k]
+        t = record.time_s[mask]
+        theta = fit.trial_curve(k)[mask] - fit.nuisance(k)[2]
+        omega = np.gradient(theta, t)
+        for key, shape in zip(shapes, (np.sign(omega), omega, omega * np.abs(omega), theta), strict=True):
+            shapes[key].append(shape)
+        pooled.append(r)
+        time_bins.append(np.minimum((4 * (t - t[0]) / max(t[-1] - t[0], 1e-9)).astype(int), 3))
+        angle_bins.append(_terciles(np.abs(theta)))
+        speed_bins.append(_terciles(np.abs(omega)))
+        dt = float(np.median(np.diff(t)))
+        period = (
+            2
+            * math.pi
+            / math.sqrt(
+                record.rig.restoring_torque_nm
+                / float(fit.problem.models[k].inertia_kg_m2(fit.problem.physical(fit.x, k)))
+            )
+        )
+        spectrum = np.abs(np.fft.rfft(r - r.mean())) ** 2
+        freq = np.fft.rfftfreq(r.size, dt)
+        peaks.append(float(freq[1:][np.argmax(spectrum[1:])] * period) if r.size > 4 else math.nan)
+        lag1.append(_lag_correlation(r, 1))
+        lag_half.append(_lag_correlation(r, int(round(period / 2 / dt))))
+    residual = np.concatenate(pooled)
+
+    def binned(bins):
+        b = np.concatenate(bins)
+        return [float(np.sqrt(np.mean(residual[b == i] ** 2))) if np.any(b == i) else None for i in range(b.max() + 1)]
+
+    against = {}
+    for key, parts in shapes.items():
+        s = np.concatenate(parts)
+        against[key] = float(np.corrcoef(s, residual)[0, 1]) if np.std(s) > 0 and np.std(residual) > 0 else 0.0
+    return {
+        "correlation_with": against,
+        "rms_by_time_quarter_rad": binned(time_bins),
+        "rms_by_angle_tercile_rad": binned(angle_bins),
+        "rms_by_speed_tercile_rad": binned(speed_bins),
+        "spectrum_peak_over_swing_frequency": peaks,
+        "autocorrelation_lag1": lag1,
+        "autocorrelation_half_period": lag_half,
+    }
+
+
+def _terciles(values: np.ndarray) -> np.ndarray:
+    edges = np.quantile(values, [1 / 3, 2 / 3])
+    return np.searchsorted(edges, values, side="right")
+
+
+def _model_and_params(fit: GroupFit, k: int):
+    return fit.problem.models[k], fit.problem.physical(fit.x, k)
+
+
+def measured_half_cycles(fit: GroupFit) -> pd.DataFrame:
+    """Half cycles of every trial's measured record about the fit's rest offset, with the trial's name."""
+    tables = []
+    for k, record in enumerate(fit.problem.records):
+        model, params = _model_and_params(fit, k)
+        mask = fit.problem.masks[k]
+        table = half_cycles(
+            record.time_s[mask],
+            record.theta_rad[mask],
+            fit.nuisance(k)[2],
+            model,
+            params,
+            record.characteristic_length_m,
+            1e-6,
+        )
+        table.insert(0, "trial", record.trial)
+        tables.append(table)
+    return pd.concat(tables, ignore_index=True)
+
+
+def predicted_half_cycles(fit: GroupFit) -> pd.DataFrame:
+    """The same half-cycle analysis on the fitted (noise-free) curves: the model's extinction curve."""
+    tables = []
+    for k, record in enumerate(fit.problem.records):
+        model, params = _model_and_params(fit, k)
+        curve = fit.trial_curve(k)
+        table = half_cycles(
+            record.time_s, curve, fit.nuisance(k)[2], model, params, record.characteristic_length_m, 1e-6, 1e-5
+        )
+        table.insert(0, "trial", record.trial)
+        tables.append(table)
+    return pd.concat(tables, ignore_index=True)
+
+
+def extinction_screen(fit: GroupFit, candidates) -> list[dict]:
+    """Fast screen: how much each candidate's extinction signature improves a fit of the measured ΔA(A).
+
+    The pooled half cycles (ΔA against Ā, each trial about its fitted rest offset) are fitted by
+    non-negative least squares with the baseline terms' powers of Ā (0: Coulomb, 1: linear or
+    history, 2: quadratic), then with the candidate's power added; the score is the fraction of
+    the remaining sum of squares the candidate removes, and the implied coefficient is its
+    library inverse (:meth:`Term.coefficient_from_loss`). Terms with the same power tie: the
+    screen only ranks, the refits decide. Conservative terms (restoring correction) have no
+    extinction signature and rank last.
+    """
+    cycles = measured_half_cycles(fit)
+    if len(cycles) < 3:
+        return [{"effect": c, "score": None, "reason": "fewer than 3 half cycles"} for c in candidates]
+    amp = cycles.mean_amplitude_rad.to_numpy()
+    loss = cycles.amplitude_loss_rad.to_numpy()
+    base_powers = sorted(
+        {TERMS[t].extinction_power for t in fit.problem.terms if TERMS[t].extinction_power is not None}
+    )
+
+    def residual_ss(powers):
+        if not powers:
+            return float(loss @ loss), np.zeros(0)
+        design = np.column_stack([amp**p for p in powers])
+        scale = np.abs(design).max(axis=0)
+        solution, norm = nnls(design / scale, loss)
+        return float(norm**2), solution / scale
+
+    ss0, _ = residual_ss(base_powers)
+    k0 = 0
+    model, params = _model_and_params(fit, k0)
+    rig = fit.problem.records[k0].rig
+    inertia = float(model.inertia_kg_m2(params))
+    omega0 = math.sqrt(rig.restoring_torque_nm / inertia)
+    out = []
+    for name in candidates:
+        term = TERMS[name]
+        if term.extinction_power is None:
+            out.append({"effect": name, "score": 0.0, "reason": "no extinction signature (conservative)"})
+            continue
+        powers = sorted(set(base_powers) | {term.extinction_power})
+        ss1, solution = residual_ss(powers)
+        loss_coefficient = float(solution[powers.index(term.extinction_power)])
+        out.append(
+            {
+                "effect": name,
+                "score": 1 - ss1 / ss0 if ss0 > 0 else 0.0,
+                "extinction_power": term.extinction_power,
+                "implied_coefficient": term.coefficient_from_loss(rig, inertia, omega0, loss_coefficient),
+            }
+        )
+    return sorted(out, key=lambda e: -(e["score"] or 0.0))
+
+
+def period_drift(fit: GroupFit) -> dict:
+    """Half period against amplitude, measured and as the fitted model has it: slope and mean difference.
+
+    A missing conservative effect (a wrong restoring torque, an added mass changing with the
+    frequency) shows as a period the model gets wrong at every amplitude or as a wrong slope.
+    """
+    measured, predicted = measured_half_cycles(fit), predicted_half_cycles(fit)
+    out = {}
+    for label, table in (("measured", measured), ("model", predicted)):
+        if len(table) >= 3:
+            slope = np.polyfit(table.mean_amplitude_rad**2, table.half_period_s, 1)[0]
+            out[f"{label}_slope_s_per_rad2"] = float(slope)
+            out[f"{label}_mean_half_period_s"] = float(table.half_period_s.mean())
+    return out
+
+
+# ---------------------------------------------------------------------------
+# The statistics of the evidence (pendulum.discovery.selection)
+
+
+def mixture_p_value(statistic: float, d: int, bounded: bool) -> float:
+    """P(Λ ≥ statistic) under no effect: Σ_k C(d,k)/2^d χ²_k for d coefficients at a bound 0, else χ²_d."""
+    if statistic <= 0:
+        return 1.0
+    if not bounded:
+        return float(stats.chi2.sf(statistic, d))
+    return float(sum(math.comb(d, k) / 2**d * stats.chi2.sf(statistic, k) for k in range(1, d + 1)))
+
+
+def critical_value(level: float, d: int, bounded: bool) -> float:
+    """The Λ whose p-value is ``level``."""
+    return brentq(lambda x: mixture_p_value(x, d, bounded) - level, 1e-9, 1e4)
+
+
+def null_distribution(d: int, bounded: bool) -> str:
+    """The name of the null distribution of Λ."""
+    if not bounded:
+        return f"χ²_{d}"
+    return "½χ²_0 + ½χ²_1" if d == 1 else f"Σ_k C({d},k)/2^{d} χ²_k"

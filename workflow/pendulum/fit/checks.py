@@ -1,0 +1,185 @@
+"""Is a fitted angle record a clean swing, and do the rig values and the record agree? Warnings, not errors.
+
+Garbage in (:func:`record_checks`): too few usable samples, a rest angle far from a known vertical,
+residuals that jump far beyond the record's noise. A wrong model (:func:`misfit_warning`): smooth
+residuals far above the noise. Rig values that cannot match the measured period (:func:`rig_checks`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pendulum.fit.records import AngleRecord
+from pendulum.fit.uncertainty import lag1_autocorrelation
+from pendulum.model.rig import Rig
+
+# Garbage in (issue 12): thresholds of :func:`record_checks`.
+MIN_USABLE_FRACTION = 0.5  # of the samples after the release transient: less, and pieces of the swing are fitted
+MAX_REST_OFFSET_DEG = 2.0  # with the vertical given or estimated from the swings the rest angle is ≈ 0
+MAX_ROUGHNESS_RATIO = 5.0  # RMS over robust σ of the residual's third differences; Gaussian noise: ≈ 1
+MIN_NOISE_TRIPLES = 20  # fewer runs of four consecutive samples: the noise cannot be told from jumps
+
+
+def noise_differences(time_s: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Third differences over four consecutive samples, scaled to the noise: z ~ N(0, σ²) for white noise σ.
+
+    z = Σ w_j x_j / √(Σ w_j²), w the third divided difference's weights 1/Π_{k≠j}(t_j − t_k) (on a regular
+    grid ∝ (−1, 3, −3, 1), so z = Δ³x/√20; uneven (variable-frame-rate) grids are handled exactly).
+    Smooth motion adds ≈ x‴ h³/√20, negligible at video rates. Consecutive: no interval longer than
+    1.5× the median interval; a gap (flagged or dropped frames) breaks a run and no difference spans it.
+    """
+    t, x = np.asarray(time_s, float), np.asarray(values, float)
+    if t.size < 4:
+        return np.empty(0)
+    dt = np.diff(t)
+    regular = (dt > 0) & (dt <= 1.5 * float(np.median(dt)))
+    ok = np.flatnonzero(regular[:-2] & regular[1:-1] & regular[2:])
+    if ok.size == 0:
+        return np.empty(0)
+    points = t[ok[:, None] + np.arange(4)[None, :]]
+    weights = np.ones_like(points)
+    for j in range(4):
+        for k in range(4):
+            if k != j:
+                weights[:, j] /= points[:, j] - points[:, k]
+    samples = x[ok[:, None] + np.arange(4)[None, :]]
+    return (weights * samples).sum(axis=1) / np.sqrt((weights**2).sum(axis=1))
+
+
+def record_noise_rad(time_s: np.ndarray, theta_rad: np.ndarray) -> float:
+    """The record's sample noise σ: robust (MAD) σ of :func:`noise_differences`.
+
+    0 when fewer than :data:`MIN_NOISE_TRIPLES` differences exist.
+    """
+    z = noise_differences(time_s, theta_rad)
+    if z.size < MIN_NOISE_TRIPLES:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(z - np.median(z))))
+
+
+def record_checks(record: AngleRecord, mask: np.ndarray, residual: np.ndarray, rest_offset_rad: float) -> dict:
+    """Signs that a fitted record is not a clean swing of the marker, each against a stated threshold.
+
+    * ``usable_fraction``: fitted samples over the record's samples after the release transient
+      (flagged, missing, repeated and outlier samples are unusable); below
+      :data:`MIN_USABLE_FRACTION` the fit rests on pieces of the swing, typically those where the
+      tracker followed something else.
+    * ``rest_offset_deg`` (checked when the vertical is known: a record tracked from video, whose
+      vertical was given or estimated from the swings): beyond :data:`MAX_REST_OFFSET_DEG` the
+      angles are not about the pendulum's vertical (wrong pivot or wrong object).
+    * ``roughness_ratio``: RMS over robust σ of the residual's third differences on consecutive
+      samples (:func:`noise_differences`). A pendulum moves smoothly and a wrong model leaves
+      smooth residuals, so with noise alone the ratio is ≈ 1; above :data:`MAX_ROUGHNESS_RATIO` the
+      record jumps by far more than its noise (the track hopping between objects). With fewer than
+      :data:`MIN_NOISE_TRIPLES` runs of consecutive samples the noise, and so the residual against
+      it, cannot be judged.
+
+    ``problems``: one sentence per failed check (empty: nothing found).
+    """
+    after_transient = record.n_samples + record.dropped.get("flagged_or_missing", 0)
+    after_transient += record.dropped.get("repeated_time", 0)
+    fraction = residual.size / max(after_transient, 1)
+    d3 = noise_differences(record.time_s[mask], residual)
+    robust = float(1.4826 * np.median(np.abs(d3 - np.median(d3)))) if d3.size else 0.0
+    rough = float(np.sqrt(np.mean(d3**2))) / robust if robust > 0 and d3.size >= MIN_NOISE_TRIPLES else None
+    vertical_known = record.arm_radius_px is not None
+    offset_deg = math.degrees(rest_offset_rad)
+    rms = float(np.sqrt(np.mean(residual**2))) if residual.size else 0.0
+    noise = robust
+    problems = []
+    name = f"trial {record.trial}"
+    if fraction < MIN_USABLE_FRACTION:
+        problems.append(
+            f"{name}: only {fraction:.0%} of the samples after the release are usable ({residual.size} of "
+            f"{after_transient}; at least {MIN_USABLE_FRACTION:.0%} needed): the fit rests on pieces of the swing, "
+            "often where the tracker followed something else; check the track and its flags"
+        )
+    if vertical_known and abs(offset_deg) > MAX_REST_OFFSET_DEG:
+        problems.append(
+            f"{name}: fitted rest angle {offset_deg:+.1f}° from the vertical (more than {MAX_REST_OFFSET_DEG:g}°): "
+            "the angles are not about the pendulum's vertical (wrong object tracked, wrong pivot_px or vertical_deg)"
+        )
+    if d3.size < MIN_NOISE_TRIPLES:
+        problems.append(
+            f"{name}: only {d3.size} runs of four consecutive samples (at least {MIN_NOISE_TRIPLES} needed): the "
+            "record's noise cannot be estimated, so its residual RMS cannot be judged against it"
+        )
+    elif rough is not None and rough > MAX_ROUGHNESS_RATIO:
+        problems.append(
+            f"{name}: the residuals jump: their sample-to-sample changes have {rough:.0f}× the RMS their noise "
+            f"({math.degrees(noise):.2g}°) gives (more than {MAX_ROUGHNESS_RATIO:g}×; residual RMS "
+            f"{math.degrees(rms):.3g}°): the track hops between objects or mis-tracks; check the track"
+        )
+    return {
+        "usable_fraction": fraction,
+        "rest_offset_deg": offset_deg,
+        "vertical_known": vertical_known,
+        "noise_deg": math.degrees(noise) if d3.size >= MIN_NOISE_TRIPLES else None,
+        "rms_over_noise": rms / noise if noise > 0 and d3.size >= MIN_NOISE_TRIPLES else None,
+        "roughness_ratio": rough,
+        "thresholds": {
+            "min_usable_fraction": MIN_USABLE_FRACTION,
+            "max_rest_offset_deg": MAX_REST_OFFSET_DEG,
+            "max_roughness_ratio": MAX_ROUGHNESS_RATIO,
+        },
+        "problems": problems,
+    }
+
+
+def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
+    """Warnings when the measured period and the rig values cannot both be right."""
+    bare = 2 * math.pi * math.sqrt(rig.pivot_inertia_kg_m2 / rig.restoring_torque_nm)
+    measured = float(np.median([s["period_s"] for s in starts]))
+    out = []
+    if added_mass["at_bound"]:
+        out.append(
+            f"measured small-amplitude period {measured:.4g} s is shorter than the rig values allow with no added "
+            f"mass ({bare:.4g} s): length_m or body_inertia_kg_m2 overstate the pendulum's own inertia"
+        )
+    elif added_mass["value"] > 5 * rig.mass_kg:
+        out.append(
+            f"fitted added mass is {added_mass['value'] / rig.mass_kg:.0f}× the body mass (period {measured:.4g} s "
+            f"against {bare:.4g} s for the rig alone): check length_m, mass_kg and the record's time base"
+        )
+    return out
+
+
+def rig_period_problem(record: AngleRecord, period_s: float, added_mass_lower_kg: float) -> str | None:
+    """A sentence when the record's small-amplitude period lies outside what the rig values allow, else None.
+
+    With the added mass at its lower bound the rig swings fastest: T_min = 2π √((I_p + m_a,min L²) / τ_g),
+    τ_g = (m g − ρ V g) L; a shorter measured period, or no restoring torque at all, means the rig values
+    (length, mass, volume, fluid) are not this pendulum's.
+    """
+    rig = record.rig
+    inertia = rig.pivot_inertia_kg_m2 + added_mass_lower_kg * rig.length_m**2
+    fastest = 2 * math.pi * math.sqrt(max(inertia, 1e-12) / rig.restoring_torque_nm)
+    if not math.isfinite(period_s) or period_s >= 0.98 * fastest:
+        return None
+    return (
+        f"trial {record.trial}: its period {period_s:.4g} s is shorter than its rig values allow "
+        f"({fastest:.4g} s at the least added mass): its values (length_m, mass_kg, displaced_volume_m3, "
+        "fluid_density_kg_m3) are not this pendulum's; give the trial's rig in config or its sidecar"
+    )
+
+
+MISFIT_RATIO = 5.0  # residual RMS over the record's sample-to-sample noise above which the model is called wrong
+
+
+def misfit_warning(record: AngleRecord, residual: np.ndarray) -> list[str]:
+    """A model that misses physics leaves smooth residuals far above the record's noise (third-difference σ).
+
+    Its coefficients then absorb the missing effect and no interval covers that; say so. On tracked
+    video with the right model the ratio is 1–3.
+    """
+    floor = record_noise_rad(record.time_s, record.theta_rad)  # runs of consecutive samples: gaps span nothing
+    rms = float(np.sqrt(np.mean(residual**2)))
+    if floor <= 0 or rms <= MISFIT_RATIO * floor:
+        return []
+    return [
+        f"trial {record.trial}: residual RMS {math.degrees(rms):.3g}° is {rms / floor:.0f}× the record's noise "
+        f"({math.degrees(floor):.2g}°) and smooth (lag-1 {lag1_autocorrelation(residual):.2f}): the model misses "
+        "a systematic effect; its coefficients absorb it and their intervals do not cover that error"
+    ]

@@ -1,0 +1,188 @@
+"""Angle records as the fitter uses them, and the numerical settings of a fit."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from pendulum.angles.record import InputError
+from pendulum.angles.swings import swing_extrema
+from pendulum.model.rig import Rig
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """Numerical choices of a fit (config ``fitting``)."""
+
+    release_skip_s: float = 0.25  # samples before this (time since release) are not fitted
+    max_step_s: float = 0.02  # RK4 step limit of the simulation inside the fit
+    outlier_sigmas: float = 6.0  # one pass: samples further than this (robust σ) are dropped, refit
+    identifiable_max_relative_stderr: float = 0.5  # above: flagged not identifiable
+    consistency_alpha: float = 0.05
+    max_ar_order: int = 10  # highest order of the residual-noise AR model behind the intervals
+    added_mass_lower_kg: float = 0.0  # < 0 only for calibration swings (e.g. in air): an inertia correction
+
+
+# Standard uncertainty (1σ) of each measured rig value, relative to the value, used when a
+# rig's ``tolerances`` block does not state it (absolute values there override these).
+DEFAULT_RELATIVE_TOLERANCES = {
+    "mass_kg": 0.002,  # kitchen/lab scale on a few kg
+    "length_m": 0.002,  # tape measure, pivot to centre of the body: ≈1.5 mm on 0.76 m
+    "frontal_area_m2": 0.02,  # from drawings or a photograph
+    "displaced_volume_m3": 0.01,  # from CAD or displacement
+    "body_inertia_kg_m2": 0.02,  # from CAD or a bifilar swing (only when given)
+    "fluid_density_kg_m3": 0.002,  # fresh water 0–30 °C
+    "gravity_m_s2": 0.0,
+}
+WATER_KINEMATIC_VISCOSITY_M2_S = 1.0e-6  # 20 °C
+# Rig values the model takes when a rig does not state them (Rig's defaults): filled in before a fit, so
+# that their default tolerances (fluid density 0.2 %) enter the error budget as for a stated value.
+RIG_DEFAULTS = {
+    "fluid_density_kg_m3": Rig.__dataclass_fields__["fluid_density_kg_m3"].default,
+    "gravity_m_s2": Rig.__dataclass_fields__["gravity_m_s2"].default,
+}
+
+
+def with_rig_defaults(rig_values: dict) -> dict:
+    """``rig_values`` with :data:`RIG_DEFAULTS` for the ones not stated (or null)."""
+    return {**rig_values, **{k: v for k, v in RIG_DEFAULTS.items() if rig_values.get(k) is None}}
+
+
+def rig_tolerances(rig_values: dict, stated: dict | None = None) -> dict:
+    """Absolute 1σ uncertainty of every rig value that enters the model: stated, else the default fraction."""
+    stated = stated or {}
+    out = {}
+    for name, fraction in DEFAULT_RELATIVE_TOLERANCES.items():
+        value = rig_values.get(name)
+        if value is None and name == "body_inertia_kg_m2":
+            continue  # point mass: I_p = m L² follows mass and length
+        if name in stated:
+            out[name] = float(stated[name])
+        elif value is not None:
+            out[name] = fraction * abs(float(value))
+    return out
+
+
+@dataclass
+class AngleRecord:
+    """The samples of one trial that a fit uses (valid, after the release transient).
+
+    Besides the samples it carries what the systematic error budget needs: the
+    rig values as stated with their 1σ ``tolerances``, and the geometry of the
+    angle measurement (marker arm radius in pixels and the covariance of an
+    estimated pivot, both None for angle tables that did not come from a track).
+    """
+
+    trial: str
+    rig: Rig
+    time_s: np.ndarray  # since release
+    theta_rad: np.ndarray
+    characteristic_length_m: float
+    dropped: dict = field(default_factory=dict)
+    rig_values: dict = field(default_factory=dict)
+    tolerances: dict = field(default_factory=dict)
+    arm_radius_px: float | None = None
+    pivot_covariance_px2: list | None = None
+    vertical_rad: float = 0.0  # image angle of the vertical: θ_image = θ + vertical
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.time_s.size)
+
+
+def characteristic_length_m(rig_values: dict) -> float:
+    """D of the Keulegan–Carpenter number: given, else the diameter of a disc of the frontal area."""
+    given = rig_values.get("characteristic_length_m")
+    if given:
+        return float(given)
+    return math.sqrt(4 * float(rig_values["frontal_area_m2"]) / math.pi)
+
+
+def _no_sample_after_the_transient(where: str, usable_time_s: np.ndarray, n_flagged: int, skip_s: float):
+    """Raise the InputError for a record with no usable sample at or after ``release_skip_s``."""
+    if usable_time_s.size == 0:
+        raise InputError(
+            f"{where}: no usable angle sample: all {n_flagged} rows are flagged or lack a time or an angle"
+        )
+    raise InputError(
+        f"{where}: record too short to fit: its {usable_time_s.size} usable angle samples span "
+        f"{usable_time_s.min():.3g} to {usable_time_s.max():.3g} s after the release, all before the release "
+        f"transient ends (fitting.release_skip_s = {skip_s:g} s); is the time column in seconds, and does the "
+        "record run past the release?"
+    )
+
+
+def load_record(
+    table: pd.DataFrame,
+    trial: str,
+    rig_values: dict,
+    settings: FitSettings,
+    *,
+    tolerances: dict | None = None,
+    angle_info: dict | None = None,
+    source: str | None = None,
+) -> AngleRecord:
+    """Angle-CSV rows (``time_s``, ``theta_rad``, ``flag``) → the samples to fit.
+
+    ``tolerances``: the rig's stated 1σ uncertainties (config ``rigs.<rig>.tolerances``;
+    values not stated take :data:`DEFAULT_RELATIVE_TOLERANCES`; None: the rig values
+    are exact, no systematic budget — for records generated from known values);
+    ``angle_info``: the angles stage's JSON (arm radius, pivot covariance, vertical);
+    ``source``: the angle file, named in errors. A record with fewer than 30
+    usable samples or less than about one period (two swing extrema) after the
+    release transient raises :class:`~pendulum.angles.record.InputError` ("record too short").
+    """
+    where = f"{source} (trial {trial})" if source else f"trial {trial}"
+    rig_values = with_rig_defaults(rig_values)
+    for column in ("time_s", "theta_rad"):
+        if column not in table.columns:
+            raise InputError(f"{where}: angle table lacks column {column!r}")
+    t = pd.to_numeric(table.time_s, errors="coerce").to_numpy(float)
+    th = pd.to_numeric(table.theta_rad, errors="coerce").to_numpy(float)
+    ok = np.isfinite(t) & np.isfinite(th)
+    if "flag" in table.columns:
+        ok &= table.flag.to_numpy(object) == "ok"
+    n_flagged = int((~ok).sum())
+    early = t < settings.release_skip_s
+    use = ok & ~early
+    if not use.any():
+        _no_sample_after_the_transient(where, t[ok], n_flagged, settings.release_skip_s)
+    t, th = t[use], th[use]
+    order = np.argsort(t, kind="stable")
+    t, th = t[order], th[order]
+    keep = np.concatenate([[True], np.diff(t) > 0])  # repeated time stamps: keep the first
+    t, th = t[keep], th[keep]
+    if t.size < 30:
+        raise InputError(
+            f"{where}: record too short to fit: only {t.size} usable angle samples after the release transient "
+            "(at least 30 needed)"
+        )
+    n_extrema = swing_extrema(th).size
+    if n_extrema < 2:
+        raise InputError(
+            f"{where}: record too short to fit: {t[-1] - t[0]:.3g} s after the release transient "
+            f"with {n_extrema} swing {'extremum' if n_extrema == 1 else 'extrema'}, less than one full period "
+            "(2 needed); record a longer swing"
+        )
+    rig = Rig.from_mapping(rig_values)
+    info = angle_info or {}
+    return AngleRecord(
+        trial,
+        rig,
+        t,
+        th,
+        characteristic_length_m(rig_values),
+        dropped={
+            "flagged_or_missing": n_flagged,
+            "release_transient": int((early & ok).sum()),
+            "repeated_time": int((~keep).sum()),
+        },
+        rig_values=dict(rig_values),
+        tolerances={} if tolerances is None else rig_tolerances(rig_values, tolerances),
+        arm_radius_px=info.get("arm_radius_px"),
+        pivot_covariance_px2=info.get("pivot_covariance_px2"),
+        vertical_rad=math.radians(info.get("vertical_deg") or 0.0),
+    )

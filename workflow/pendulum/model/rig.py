@@ -1,0 +1,52 @@
+"""A pendulum rig's measured (not fitted) properties: mass, arm length, frontal area, displaced volume, fluid."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+STANDARD_GRAVITY_M_S2 = 9.81
+
+
+@dataclass(frozen=True)
+class Rig:
+    """Measured (not fitted) properties of one pendulum rig."""
+
+    mass_kg: float
+    length_m: float
+    frontal_area_m2: float
+    displaced_volume_m3: float = 0.0
+    fluid_density_kg_m3: float = 1000.0
+    gravity_m_s2: float = STANDARD_GRAVITY_M_S2
+    body_inertia_kg_m2: float | None = None  # None: point mass, I_p = m L²
+
+    def __post_init__(self):
+        for name in ("mass_kg", "length_m", "frontal_area_m2"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"rig value {name} must be positive, got {getattr(self, name)!r}")
+        if self.restoring_torque_nm <= 0:
+            raise ValueError(
+                f"rig is not a pendulum: weight {self.mass_kg * self.gravity_m_s2:.3g} N does not "
+                f"exceed buoyancy {self.buoyancy_n:.3g} N"
+            )
+
+    @property
+    def buoyancy_n(self) -> float:
+        """B = ρ g V."""
+        return self.fluid_density_kg_m3 * self.gravity_m_s2 * self.displaced_volume_m3
+
+    @property
+    def restoring_torque_nm(self) -> float:
+        """(m g − B) L: the restoring torque per unit sin θ."""
+        return (self.mass_kg * self.gravity_m_s2 - self.buoyancy_n) * self.length_m
+
+    @property
+    def pivot_inertia_kg_m2(self) -> float:
+        """I_p, the body's moment of inertia about the pivot (m L² by default)."""
+        if self.body_inertia_kg_m2 is not None:
+            return self.body_inertia_kg_m2
+        return self.mass_kg * self.length_m**2
+
+    @classmethod
+    def from_mapping(cls, values: dict) -> Rig:
+        known = {f for f in cls.__dataclass_fields__}
+        return cls(**{k: v for k, v in values.items() if k in known})

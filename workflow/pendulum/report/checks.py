@@ -1,0 +1,431 @@
+"""The sections a reader checks the results by: header, truth, tracking quality, failed trials, provenance."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pendulum.report.data import ReportData, failure_text, is_ok, problem_text, record_problems, true_value
+from pendulum.report.format import (
+    COEFFICIENTS,
+    esc,
+    estimate_cell,
+    fmt,
+    garbage_badge,
+    is_finite,
+    png_data_uri,
+    table_html,
+    td,
+    with_minus_sign,
+)
+
+NOTES_STYLE = "max-width:22em;min-width:14em"  # one note a line, wider than Table 3's warning column
+# Frames-stage warnings that :func:`frame_notes` says in its own words (video.probe's sentences).
+_NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
+
+
+def marker_text(tracks: dict) -> str:
+    """The marker the tracker followed (tracks JSON ``marker``): polarity and radius, and whether detection found
+    them (``detection`` present: config and sidecar left polarity or radius to it) or they were given."""
+    method = tracks.get("method") or {}
+    if method.get("used") == "body":
+        radius = (tracks.get("body") or {}).get("radius_px")
+        size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
+        return f"body{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto")
+    marker = tracks.get("marker") or {}
+    if not marker:
+        return "—"
+    radius = marker.get("marker_radius_px")
+    size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
+    return f"{marker.get('polarity', '?')}{size}, " + ("detected" if tracks.get("detection") else "given")
+
+
+def frame_notes(frames: dict) -> list[str]:
+    """What is notable about a video's frames (the frames stage's summary.json), as short notes; [] if clean.
+
+    A trimmed clip's discarded packets, a variable frame rate, rotation metadata (frames used as stored),
+    a bit depth above 8, dropped frames and duplicate time stamps; then every other warning of the
+    stage (truncated or damaged file, stated rate unlike the frames'), without its path prefix.
+    """
+    notes = []
+    if frames.get("discarded_packets"):
+        notes.append(f"trimmed clip: {frames['discarded_packets']} packet(s) before the first shown frame discarded")
+    if frames.get("variable_frame_rate"):
+        interval = frames.get("frame_interval_s")
+        details = [f"{frames['irregular_intervals']} irregular intervals"] if frames.get("irregular_intervals") else []
+        details += [f"median {fmt(1e3 * interval, 3)} ms"] if is_finite(interval) else []
+        notes.append("variable frame rate" + (f" ({', '.join(details)})" if details else ""))
+    if is_finite(frames.get("rotation_deg")) and float(frames["rotation_deg"]) % 360:
+        notes.append(f"rotation metadata {float(frames['rotation_deg']):g}°: frames used as stored")
+    if is_finite(frames.get("bit_depth")) and int(frames["bit_depth"]) > 8:
+        pixel_format = f" ({frames['pixel_format']})" if frames.get("pixel_format") else ""
+        notes.append(f"{int(frames['bit_depth'])}-bit{pixel_format}")
+    for key, text in (("dropped_frames", "dropped frame(s)"), ("duplicate_timestamps", "duplicate time stamp(s)")):
+        if frames.get(key):
+            notes.append(f"{frames[key]} {text}")
+    prefix = f"{frames.get('video')}: "
+    for warning in frames.get("warnings") or []:
+        if not any(k in warning for k in _NOTED):
+            notes.append(warning.removeprefix(prefix))
+    return notes
+
+
+def changes_text(dirty: bool | None, files: list | None, shown: int = 5) -> str:
+    """The provenance table's 'uncommitted changes': no, unknown, or yes with the files that differ."""
+    if dirty is None:
+        return "unknown"
+    if not dirty:
+        return "no"
+    if not files:
+        return "yes"
+    more = f" and {len(files) - shown} more" if len(files) > shown else ""
+    return "yes: " + ", ".join(files[:shown]) + more
+
+
+def failure_cell(document: dict | None, said: set[str], span: int = 1) -> str:
+    """A failed stage's cell in a trial's row: its failure sentence, or "—" when the row says it already
+    (a later stage that failed because an earlier one did carries the same sentence); adds it to ``said``."""
+    text = failure_text(document)
+    if text in said:
+        return td("—", "na", span=span)
+    said.add(text)
+    return td(esc(text), "na fail", span=span)
+
+
+CALIBRATION_MODELS = ("rational", "fisheye")  # the lens models view.calibrate_lens compares
+
+
+def calibration_rows(calibration: dict) -> list[list[str]]:
+    """One row per camera setup (``results/calibration/<setup>.json``): lens model chosen, held-out reprojection
+    RMS of each model (px), focal length (px), plane board and its tilt (°), views used (held out)."""
+    rows = []
+    for setup, doc in sorted(calibration.items()):
+        if not is_ok(doc):
+            rows.append([td(esc(setup)), td(esc(failure_text(doc)), "na fail", span=6)])
+            continue
+        models = doc.get("models") or {}
+        held_out = [
+            td(esc(fmt((models.get(m) or {}).get("held_out_rms_px"), 3)), "num" if m in models else "na")
+            for m in CALIBRATION_MODELS
+        ]
+        focal = doc.get("focal_length_px")
+        views, held = doc.get("views"), doc.get("held_out_views")
+        plane = doc.get("plane")
+        rows.append(
+            [
+                td(esc(setup)),
+                td(esc(doc.get("chosen_model") or "none (ideal lens)")),
+                *held_out,
+                td(esc(", ".join(fmt(f, 4) for f in focal)) if focal else "—", "num" if focal else "na"),
+                td(esc(f"yes, tilt {fmt(plane.get('plane_tilt_deg'), 2)}°") if plane else "no", "num"),
+                td(
+                    (f"{len(views)}" + (f" ({len(held)} held out)" if held else "")) if views else "—",
+                    "num" if views else "na",
+                ),
+            ]
+        )
+    return rows
+
+
+class CheckSections(ReportData):
+    """What was built from which code, the synthetic truth, tracking quality, failures and provenance."""
+
+    def header(self) -> str:
+        p = self.provenance
+        commit = p.get("commit")
+        built = (
+            f"Code: commit <code>{esc(commit[:12])}</code> of {esc(str(p.get('commit_time_utc')))}"
+            + (' <span class="warn">with uncommitted changes</span>' if p.get("dirty") else "")
+            if commit
+            else 'Code: <span class="warn">version not recorded (not built from a git commit)</span>'
+        )
+        n_failed = len(self.failed_trials())
+        n_garbage = sum(bool(self.trial_problems(t)) for t in self.trials)
+        return (
+            "<header><h1>Free-decay pendulum: added mass and drag coefficient</h1>"
+            f'<p class="subtitle">{len(self.trials)} trial(s) on {len(self.rig_names)} rig(s), '
+            f"{len(self.variants)} model variant(s) fitted side by side"
+            + (f', <span class="warn">{n_failed} trial(s) failed</span>' if n_failed else "")
+            + (
+                f', <span class="warn">{n_garbage} trial(s) on unreliable records</span> {garbage_badge()}'
+                if n_garbage
+                else ""
+            )
+            + f". {built}.</p>"
+            '<p class="subtitle">Equation of motion: (I<sub>p</sub> + m<sub>a</sub>L²) θ̈ = −(mg − B) L sin θ '
+            "− ½ρC<sub>d</sub>AL³ θ̇|θ̇| − c θ̇ − τ<sub>f</sub> sgn θ̇; each variant keeps a subset of the "
+            "damping terms. Intervals are 95 % (statistical and rig-value systematic errors combined).</p></header>"
+        )
+
+    def truth_section(self) -> str:
+        """Joint estimates against the synthetic truth: error in standard errors, coverage of the 95 % intervals."""
+        if not self.truth:
+            return (
+                "<p>No trial has a truth file (<code>truth_dir</code>, written only for synthetic renders), so "
+                "the estimates are not checked against known values here.</p>"
+            )
+        rows, seen = [], set()
+        garbage = [t for t in self.trial_order() if t in self.truth and self.trial_problems(t)]
+        for rig in self.rig_names:
+            trials = [t for t in self.rig_trials(rig) if t in self.truth]
+            if not trials:
+                continue
+            for v in self.order:
+                joint = self.joint.get((v, rig))
+                if not is_ok(joint):
+                    continue
+                for name, entry in joint["parameters"].items():
+                    truth = self._truth_text(trials, name)
+                    values = {true_value(self.truth[t], name) for t in trials} - {None}
+                    if len(values) != 1:
+                        continue
+                    true = values.pop()
+                    z = (entry["value"] - true) / entry["stderr"] if entry.get("stderr") else float("nan")
+                    inside = entry["ci95"][0] <= true <= entry["ci95"][1]
+                    clean = [t for t in trials if not record_problems(self.fits.get((v, t)))]
+                    covered = sum(
+                        1
+                        for t in clean
+                        if is_ok(self.fits.get((v, t)))
+                        and name in self.fits[(v, t)]["parameters"]
+                        and self.fits[(v, t)]["parameters"][name]["ci95"][0]
+                        <= true
+                        <= self.fits[(v, t)]["parameters"][name]["ci95"][1]
+                    )
+                    n_fit = sum(1 for t in clean if is_ok(self.fits.get((v, t))))
+                    first = (rig, v) not in seen
+                    seen.add((rig, v))
+                    rows.append(
+                        [
+                            td(esc(rig) if first else ""),
+                            td(esc(v) if first else "", "vname"),
+                            td(f"{COEFFICIENTS[name][1]}, {COEFFICIENTS[name][0]}"),
+                            td(esc(truth), "num"),
+                            estimate_cell(entry),
+                            td(
+                                esc(with_minus_sign(f"{z:+.2f}" if abs(z) >= 0.005 else "0.00"))
+                                if is_finite(z)
+                                else "—",
+                                "num",
+                            ),
+                            td("yes" if inside else '<span class="warn">no</span>'),
+                            td(f"{covered} of {n_fit}", "num"),
+                        ]
+                    )
+        header = [
+            "rig",
+            "variant",
+            "coefficient",
+            "truth",
+            "joint estimate (95 %)",
+            "(estimate − truth)/σ",
+            "truth inside",
+            "per-trial intervals covering truth",
+        ]
+        caption = self.table_caption(
+            "The synthetic experiment: each variant's joint estimate against the true value the videos were "
+            "rendered with, the error in units of the estimate's combined standard error σ, and how many of the "
+            "per-trial 95 % intervals cover the truth. Only a variant that contains every effect of the simulation "
+            "can be expected to cover it."
+            + (
+                f" The per-trial fits on unreliable records ({esc(', '.join(garbage))}) are not counted."
+                if garbage
+                else ""
+            )
+        )
+        return table_html(header, rows, caption=caption, table_id="truth-table")
+
+    def calibration_table(self) -> str:
+        """Table: each camera setup's calibration (lens model chosen by held-out error, focal length, plane)."""
+        header = [
+            "camera setup",
+            "lens model chosen",
+            "held-out reprojection RMS, rational (px)",
+            "held-out reprojection RMS, fisheye (px)",
+            "focal length f<sub>x</sub>, f<sub>y</sub> (px)",
+            "plane board",
+            "views used",
+        ]
+        caption = self.table_caption(
+            "Camera calibration (results/calibration/&lt;setup&gt;.json): the lens model chosen by the RMS "
+            "reprojection error of checkerboard views held out of the fit (the rational model only when more than "
+            "5 % below the fisheye's), the focal length of the chosen model, and whether a board held in the swing "
+            "plane gave the plane's homography (its tilt against the image plane). Views used: checkerboard views "
+            "found in the lens clip (in brackets, how many of them were held out for the choice)."
+        )
+        return table_html(header, calibration_rows(self.calibration), caption=caption, table_id="calibration-table")
+
+    def tracking_section(self) -> str:
+        """Per trial: frames, flags by kind, samples used; then the contact sheets."""
+        rows, sheets, attrs = [], [], []
+        variant_for = {t: self.recommended(self.trials[t]["rig"]) for t in self.trials}
+        for trial in self.trial_order():
+            frames, tracks, angles = (self.docs.get((trial, k)) for k in ("frames", "tracks", "angles"))
+            kind = self.trials[trial].get("kind", "video")
+            said: set[str] = set()  # a failure propagated to the later stages is said once, where it happened
+            if kind != "video":
+                frame_cells = [td("angle table (no video)", "na", span=4)]
+            elif not is_ok(frames):
+                frame_cells = [failure_cell(frames, said, span=4)]
+            else:
+                fps = frames.get("mean_fps") if is_finite(frames.get("mean_fps")) else frames.get("nominal_fps")
+                variable = ' <span class="warn">variable</span>' if frames.get("variable_frame_rate") else ""
+                frame_cells = [
+                    td(str(frames.get("n_frames", "—")), "num"),
+                    td(esc(fmt(fps, 4)) + variable, "num"),
+                    td(
+                        str(frames.get("dropped_frames", "—")),
+                        "num" + (" fail" if frames.get("dropped_frames") else ""),
+                    ),
+                    td(
+                        str(frames.get("duplicate_timestamps", "—")),
+                        "num" + (" fail" if frames.get("duplicate_timestamps") else ""),
+                    ),
+                ]
+            marker_cell = td(esc(marker_text(tracks)) if kind == "video" and is_ok(tracks) else "—", "na")
+            if kind != "video":
+                flag_cell = td("—", "na")
+            elif is_ok(tracks):
+                flags = tracks.get("flags") or {}
+                bad = {k: n for k, n in sorted(flags.items()) if k != "ok" and n}
+                flag_cell = td(f"ok {flags.get('ok', 0)}" + "".join(f", {esc(k)} {n}" for k, n in bad.items()))
+            else:
+                flag_cell = failure_cell(tracks, said)
+            if is_ok(angles):
+                angle_cells = [
+                    td(str(angles.get("n_samples", "—")), "num"),
+                    td(str(angles.get("n_flagged", "—")), "num"),
+                    td(esc(fmt(angles.get("noise_deg"), 2)), "num"),
+                ]
+            else:
+                angle_cells = [failure_cell(angles, said, span=3)]
+            fit = self.fits.get((variant_for[trial], trial)) if variant_for[trial] else None
+            fitted = td(str(fit["n_samples"]), "num") if is_ok(fit) else td("—", "na")
+            notes = [esc(n) for n in frame_notes(frames)] if kind == "video" and is_ok(frames) else []
+            method = (tracks or {}).get("method") or {}
+            if kind == "video" and is_ok(tracks) and method.get("used") == "body":
+                notes.append(esc(f"tracked the body: {method.get('reason', '')}"))
+            notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
+            problems = record_problems(fit) or self.trial_problems(trial)
+            if problems:
+                found = problem_text(trial, problems[0], first_clause=True)
+                notes.insert(0, f"{garbage_badge(problems[0])} {esc(found)}")
+            rows.append(
+                [td(esc(trial)), td(self.angle_label(trial), "num")]
+                + frame_cells
+                + [marker_cell, flag_cell]
+                + angle_cells
+                + [fitted, f'<td class="warncell notes" style="{NOTES_STYLE}">' + "<br>".join(notes) + "</td>"]
+            )
+            attrs.append({"data-trial": trial, **({"data-notes": str(len(notes))} if notes else {})})
+            files = self.files.get("trials", {}).get(trial, {})
+            # the track drawn over the key frames where the track exists, else the plain contact sheet
+            sheet = files.get("track_sheet") if is_ok(tracks) else None
+            sheet = sheet if sheet and Path(sheet).is_file() else files.get("contact_sheet")
+            if sheet and Path(sheet).is_file():
+                sheets.append((trial, Path(sheet).read_bytes(), is_ok(frames)))
+        header = [
+            "trial",
+            "release",
+            "frames",
+            "fps",
+            "dropped",
+            "duplicate time stamps",
+            "marker",
+            "tracker flags by kind",
+            "angle samples",
+            "flagged",
+            "angle noise (°)",
+            "samples fitted",
+            "notes",
+        ]
+        caption = self.table_caption(
+            "Tracking quality per trial: frames in the video (from the container: dropped frames and duplicate time "
+            "stamps), the marker followed (polarity and radius; “detected” when config and sidecar left them to the "
+            "marker detection, “given” otherwise; “body”: the swinging object's silhouette was tracked, where no "
+            "marker disk is usable or `method: body` says so), the tracker's flags by kind (flagged frames are never "
+            "interpolated), the angle samples from "
+            "release to rest and how many of them are flagged, the angle record's noise (σ from the fifth "
+            "differences of the whole record: Table 2's record noise), and the samples the "
+            "recommended variant's fit used (after the release transient and outliers). fps: mean rate of the "
+            "frames the decoder yields (“variable”: a variable-frame-rate file, every frame keeps its own time "
+            "stamp). Notes: only what is notable — a trimmed clip's discarded packets, rotation metadata, more than "
+            "8 bits, dropped or duplicate frames, other warnings of the frames stage, and a record that failed the "
+            "fit's garbage checks."
+        )
+        out = table_html(header, rows, caption=caption, table_id="tracking-table", row_attrs=attrs)
+        if self.calibration:
+            out += self.calibration_table()
+        if sheets:
+            caption = self.figure_caption(
+                "Contact sheets: key frames of each video with the track drawn over them (grey: the tracked path; "
+                "a green ring: the position tracked at that frame, red where flagged), for a visual check that the "
+                "track sits on the pendulum, and of the scene and lighting."
+            )
+            items = "".join(
+                f'<figure class="sheet"><img src="{png_data_uri(data)}" alt="contact sheet of {esc(t)}">'
+                f"<figcaption>{esc(t)}{'' if ok else ' (failed)'}</figcaption></figure>"
+                for t, data, ok in sheets
+            )
+            out += f'<div class="sheets">{items}</div><p class="figcaption">{caption}</p>'
+        return out
+
+    def failures_section(self) -> str:
+        """Failed or skipped trials with the stage, the reason and the log to read."""
+        failed = self.failed_trials()
+        n = len(self.trials)
+        if failed.empty:
+            return (
+                f"<p>All {n} trial(s) succeeded at every stage (<code>results/status/trials.csv</code>).</p>"
+                + self.renamed_note()
+            )
+        rows = [
+            [
+                td(esc(str(r.trial))),
+                td(esc(str(r.stage))),
+                td(esc(str(r.reason))),
+                td(f"<code>{esc(str(r.log))}</code>"),
+            ]
+            for r in failed.itertuples()
+        ]
+        caption = self.table_caption(
+            f"{len(failed)} of {n} trial(s) failed and are missing from the tables and the joint fits above: the "
+            "stage where each failed, the reason and the log to read."
+        )
+        return (
+            table_html(["trial", "stage", "reason", "log"], rows, caption=caption, table_id="failed-table")
+            + self.renamed_note()
+        )
+
+    def renamed_note(self) -> str:
+        """The files whose names are not their trials' names (spaces, brackets, accents made ``_``)."""
+        renamed = []
+        for trial, info in sorted(self.trials.items()):
+            source = str((info or {}).get("source") or "")
+            stem = source.rsplit("/", 1)[-1].rsplit(".", 1)[0]
+            if source and stem != trial:
+                renamed.append(f"<code>{esc(source.rsplit('/', 1)[-1])}</code> → <code>{esc(trial)}</code>")
+        if not renamed:
+            return ""
+        return (
+            "<p>Trials named after files whose names hold spaces, brackets or other signs (each run of them is "
+            "<code>_</code> in a trial's name and its results' file names): " + "; ".join(renamed) + ".</p>"
+        )
+
+    def provenance_section(self) -> str:
+        """Commit, configuration digest, fit settings and package versions."""
+        p = self.provenance
+        items = [
+            ("commit", f"<code>{esc(str(p.get('commit') or 'not a git work tree'))}</code>"),
+            ("commit time (UTC)", esc(str(p.get("commit_time_utc") or "—"))),
+            ("uncommitted changes", esc(changes_text(p.get("dirty"), p.get("dirty_files")))),
+            ("configuration SHA-256", f"<code>{esc(str(p.get('config_sha256') or '—'))}</code>"),
+            ("Python", esc(str(p.get("python") or "—"))),
+        ]
+        items += [(f"{esc(k)}", esc(str(v or "not installed"))) for k, v in sorted((p.get("packages") or {}).items())]
+        items += [(f"fitting.{esc(k)}", esc(str(v))) for k, v in sorted(self.fitting.items())]
+        rows = [[td(k), td(v)] for k, v in items]
+        caption = self.table_caption(
+            "Provenance: the code version, the digest of the configuration as used, the fit settings and the "
+            "versions of the packages the results depend on."
+        )
+        return table_html(["item", "value"], rows, caption=caption, table_id="provenance-table")

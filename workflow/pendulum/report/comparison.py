@@ -1,0 +1,350 @@
+"""Which variant to trust: the summary box and the model comparison.
+
+The summary box recommends, per rig, the joint fit of the best-supported
+variant with its consistency verdict and the warnings that matter; the model
+comparison sets the variants side by side (RMS, ΔAIC/ΔBIC, consistency) and
+weighs the evidence for each added term.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pendulum.model.effects import TERMS
+from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
+from pendulum.report.format import (
+    COEFFICIENTS,
+    TERM_LABELS,
+    UNRELIABLE_STYLE,
+    esc,
+    estimate_cell,
+    estimate_parts,
+    fmt,
+    garbage_badge,
+    is_finite,
+    table_html,
+    td,
+)
+
+
+class ComparisonSections(ReportData):
+    """The summary box (recommended coefficients per rig) and the model comparison with term-by-term evidence."""
+
+    def summary_box(self) -> str:
+        """Recommended coefficients per rig (joint fit of the best-supported variant), verdict, warnings."""
+        boxes = []
+        for rig in self.rig_names:
+            trials = self.rig_trials(rig)
+            if not trials:
+                continue
+            best = self.best.get(rig)
+            if best is None:
+                boxes.append(
+                    f'<section class="summary-box"><h3>Rig {esc(rig)}</h3><p class="warn">No joint fit succeeded: '
+                    "no coefficients can be recommended. See the failed trials below.</p></section>"
+                )
+                continue
+            variant = best["variant"]
+            joint = self.joint.get((variant, rig), {})
+            truths = [self.truth.get(t) for t in trials if t in self.truth]
+            header = ["coefficient", "estimate", "95 % interval"] + (["truth (synthetic)"] if truths else [])
+            rows = []
+            joint_problems = record_problems(joint)
+            for name, entry in joint.get("parameters", {}).items():
+                symbol, label, unit = COEFFICIENTS.get(name, (esc(name), name, ""))
+                value, qualifier = estimate_parts(entry)
+                row = [td(f"{label}, {symbol} ({unit})" if unit != "–" else f"{label}, {symbol}")]
+                if joint_problems:  # garbage in: struck, grey, never a plain number
+                    row += [
+                        f'<td class="num unreliable" style="{UNRELIABLE_STYLE}"><s>{esc(value)}</s></td>',
+                        f'<td class="num unreliable" style="{UNRELIABLE_STYLE}"><s>{esc(qualifier)}</s> '
+                        f"{garbage_badge(joint_problems[0])}</td>",
+                    ]
+                else:
+                    row += [td(f"<b>{esc(value)}</b>", "num"), td(esc(qualifier), "num")]
+                if truths:
+                    row.append(td(esc(self._truth_text(trials, name)), "num"))
+                rows.append(row)
+            table = table_html(header, rows, caption="", table_id=f"recommended-{rig}")
+            others = [v for v in self.order if v != variant and (v, rig) in self.joint and is_ok(self.joint[(v, rig)])]
+            delta = "; ".join(f"{esc(v)} +{fmt(best['delta_aic'].get(v), 3)}" for v in others if v in best["delta_aic"])
+            bic_note = "BIC agrees" if best["bic_best"] == variant else f"BIC prefers {esc(best['bic_best'])}"
+            basis = f"Chosen by the lowest {esc(best['basis'])}" + (f" (ΔAIC: {delta}; {bic_note})." if delta else ".")
+            warnings = self._summary_warnings(rig, variant, joint, best)
+            warn_html = (
+                '<ul class="warnings">' + "".join(f"<li>{w}</li>" for w in warnings) + "</ul>"
+                if warnings
+                else "<p>No warnings.</p>"
+            )
+            boxes.append(
+                f'<section class="summary-box" id="summary-{esc(rig)}">'
+                f"<h3>Recommended coefficients — rig {esc(rig)}: joint fit of {len(joint.get('trials', {}))} "
+                f"trial(s), variant {esc(self.variant_label(variant))}</h3>{table}"
+                f'<p class="basis">{basis}</p>'
+                f'<p class="verdict"><b>Consistency:</b> {self._verdict_sentence(rig, variant)}</p>'
+                f"<p><b>Warnings that matter:</b></p>{warn_html}</section>"
+            )
+        return "".join(boxes) or '<p class="warn">No trials: nothing to report.</p>'
+
+    def _verdict_sentence(self, rig: str, variant: str) -> str:
+        joint = self.joint.get((variant, rig), {})
+        consistency = joint.get("consistency") or {}
+        verdict = consistency.get("verdict", "not tested")
+        n = len(joint.get("trials", {}))
+        scale = {
+            name: p.get("scale_factor")
+            for name, p in (consistency.get("parameters") or {}).items()
+            if is_finite(p.get("scale_factor"))
+        }
+        worst = max(scale, key=scale.get) if scale else None
+        others = [
+            f"{esc(v)}: {esc((self.joint[(v, rig)].get('consistency') or {}).get('verdict', 'not tested'))}"
+            for v in self.order
+            if v != variant and is_ok(self.joint.get((v, rig)))
+        ]
+        sentence = (
+            f"under the {esc(variant)} model the {n} trial(s) are <b>{esc(verdict)}</b> "
+            f"({esc(consistency.get('explanation', ''))}"
+            + (
+                f"; largest scale factor S = {fmt(scale[worst], 2)} for {esc(COEFFICIENTS.get(worst, ('', worst))[1])}"
+                if worst
+                else ""
+            )
+            + ")"
+            + (f"; for comparison, {'; '.join(others)}" if others else "")
+            + "."
+        )
+        return sentence[0].upper() + sentence[1:]
+
+    def _summary_warnings(self, rig: str, variant: str, joint: dict, best: dict) -> list[str]:
+        out = []
+        failed = self.failed_trials()
+        failed = failed[failed.trial.isin(self.rig_trials(rig))]
+        if len(failed):
+            names = ", ".join(esc(t) for t in failed.trial)
+            out.append(
+                f'<span class="warn">{len(failed)} trial(s) failed and are not in the fit: {names}</span> '
+                '(see <a href="#failed-trials">Failed trials</a>).'
+            )
+        joint_problems = record_problems(joint)
+        if joint_problems:
+            out.append(
+                f'{garbage_badge()} <span class="warn">The recommended joint fit itself rests on an unreliable '
+                f"record: its coefficients are not measurements</span> ({esc(joint_problems[0])})."
+            )
+        unreliable, n_fits = self.unreliable_fits(self.rig_trials(rig))
+        if unreliable:
+            trials = sorted({t for _, t in unreliable}, key=self.rig_trials(rig).index)
+            items = "; ".join(f"<b>{esc(t)}</b>: {esc(problem_text(t, self.trial_problems(t)[0]))}" for t in trials)
+            out.append(
+                f'{garbage_badge()} <span class="warn">{len(unreliable)} of {n_fits} fits rest on unreliable '
+                f"records</span> (garbage in; coefficients struck through in Table 3, the joint fits leave these "
+                f"trials out): {items}."
+            )
+        said = set(failed.trial) | {t for _, t in unreliable}
+        left_out = {
+            t: r
+            for t, r in self.left_out(rig).items()
+            if not (t in said and (r[0].startswith("unreliable record") or t in set(failed.trial)))
+        }
+        if left_out:
+            items = "; ".join(
+                f"{esc(t)}"
+                + ("" if len(vs) == len(self.order) else f" (by {esc(', '.join(vs))})")
+                + f" — {esc(reason)}"
+                for t, (reason, vs) in left_out.items()
+            )
+            out.append(f"Left out of the joint fits: {items}.")
+        if not best["comparable"]:
+            out.append("The variants' joint fits used different samples: their AIC values are not strictly comparable.")
+        for name, entry in joint.get("parameters", {}).items():
+            if entry.get("at_bound"):
+                out.append(
+                    f"{esc(COEFFICIENTS.get(name, ('', name))[1])} is at its lower bound: "
+                    "an upper limit, not a measurement."
+                )
+            elif entry.get("identifiable") is False:
+                out.append(f"{esc(COEFFICIENTS.get(name, ('', name))[1])} is not identifiable from these records.")
+        if (joint.get("consistency") or {}).get("verdict") == "inconsistent":
+            out.append(
+                "The per-trial estimates disagree beyond their intervals: the joint interval is widened by S, "
+                "but the model may miss physics."
+            )
+        for w in joint.get("warnings", []):
+            if "lower bound" not in w and "not identifiable" not in w:  # said above, in words
+                out.append(esc(w))
+        per_trial = [  # other than the garbage-in problems, said above
+            t
+            for t in self.rig_trials(rig)
+            if is_ok(self.fits.get((variant, t)))
+            and set(self.fits[(variant, t)].get("warnings", [])) - set(record_problems(self.fits[(variant, t)]))
+        ]
+        if per_trial:
+            out.append(
+                f"Per-trial {esc(variant)} fits with warnings: {', '.join(esc(t) for t in per_trial)} (Table 3)."
+            )
+        if not self.provenance.get("commit"):
+            out.append("Not built from a git commit: the code version of these results is not recorded.")
+        elif self.provenance.get("dirty"):
+            out.append("The work tree had uncommitted changes: the commit does not fully identify the code.")
+        return out
+
+    def model_comparison(self) -> str:
+        """Per rig: RMS, AIC/BIC and consistency per variant, and the evidence for each added term."""
+        out = []
+        for rig in self.rig_names:
+            best = self.best.get(rig)
+            trials = self.rig_trials(rig)
+            rows, attrs = [], []
+            for v in self.order:
+                joint = self.joint.get((v, rig))
+                if not is_ok(joint):
+                    rows.append([td(esc(v)), td(esc(failure_text(joint)), "na fail", span=8)])
+                    attrs.append({"data-variant": v})
+                    continue
+                clean = [t for t in trials if is_ok(self.fits.get((v, t))) and not record_problems(self.fits[(v, t)])]
+                lag1 = [self.fits[(v, t)]["trials"][t].get("residual_lag1_autocorrelation") for t in clean]
+                lag1 = [x for x in lag1 if is_finite(x)]
+                ratio = [
+                    self.fits[(v, t)]["rms_deg"] / self.docs[(t, "angles")]["noise_deg"]
+                    for t in clean
+                    if is_ok(self.fits.get((v, t)))
+                    and is_ok(self.docs.get((t, "angles")))
+                    and is_finite(self.docs[(t, "angles")].get("noise_deg"))
+                    and self.docs[(t, "angles")]["noise_deg"] > 0
+                ]
+                consistency = joint.get("consistency") or {}
+                s_max = max(
+                    (
+                        p.get("scale_factor")
+                        for p in (consistency.get("parameters") or {}).values()
+                        if is_finite(p.get("scale_factor"))
+                    ),
+                    default=None,
+                )
+                problems = record_problems(joint)
+                rows.append(
+                    [
+                        td(
+                            (f"<b>{esc(v)}</b>" if best and v == best["variant"] else esc(v))
+                            + (f" {garbage_badge(problems[0])}" if problems else "")
+                        ),
+                        td(esc(", ".join(TERM_LABELS.get(t, t) for t in self.variants[v]) or "—")),
+                        td(str(joint.get("n_parameters", "—")), "num"),
+                        td(esc(fmt(joint["rms_deg"], 2)), "num"),
+                        td(esc(fmt(float(np.median(ratio)), 2)) if ratio else "—", "num"),
+                        td(esc(fmt(float(np.median(lag1)), 2)) if lag1 else "—", "num"),
+                        td(esc(fmt(best["delta_aic"].get(v), 3)) if best and v in best["delta_aic"] else "—", "num"),
+                        td(esc(fmt(best["delta_bic"].get(v), 3)) if best and v in best["delta_bic"] else "—", "num"),
+                        td(
+                            esc(consistency.get("verdict", "—"))
+                            + (f" (S<sub>max</sub> = {esc(fmt(s_max, 2))})" if s_max else "")
+                        ),
+                    ]
+                )
+                attrs.append({"data-variant": v})
+            unreliable = sorted({t for _, t in self.unreliable_fits(trials)[0]}, key=trials.index)
+            header = [
+                "variant",
+                "damping terms",
+                "parameters",
+                "joint RMS (°)",
+                "RMS / noise (median)",
+                "residual lag-1 autocorr. (median)",
+                "ΔAIC",
+                "ΔBIC",
+                "consistency",
+            ]
+            caption = self.table_caption(
+                f"Model comparison, rig {esc(rig)}: per variant the joint fit's RMS residual, the per-trial RMS over "
+                "the record's noise, the lag-1 autocorrelation of the per-trial residuals, ΔAIC and ΔBIC against "
+                f"the best variant ({esc(best['basis']) if best else 'no fits'}), and the consistency of the per-trial "
+                "estimates. Caveat: AIC and BIC treat the samples as independent; the residuals are autocorrelated "
+                "(lag-1 up to the value shown), so the effective number of samples is smaller and the differences "
+                "overstate the evidence. Read them with the RMS against the noise and the consistency across trials."
+                + (
+                    f" The medians leave out the per-trial fits on unreliable records ({esc(', '.join(unreliable))}), "
+                    "as the joint fits do."
+                    if unreliable
+                    else ""
+                )
+            )
+            out.append(table_html(header, rows, caption=caption, table_id=f"model-comparison-{rig}", row_attrs=attrs))
+            out.append(self._term_evidence(rig, best))
+        return "".join(out)
+
+    def term_evidence_rows(self, rig: str, best: dict | None) -> list[dict]:
+        """Each added term: nested variant pair, ΔAIC, ΔBIC, RMS ratio, the joint coefficient, a verdict."""
+        rows = []
+        for v in self.order:
+            parent = nested_parent(self.variants, v)
+            if parent is None:
+                continue
+            child, base = self.joint.get((v, rig)), self.joint.get((parent, rig))
+            if not (is_ok(child) and is_ok(base)):
+                continue
+            term = (set(self.variants[v]) - set(self.variants[parent])).pop()
+            name = TERMS[term].parameter
+            entry = child["parameters"].get(name, {})
+            same = child.get("samples_digest") == base.get("samples_digest")
+            d_aic, d_bic = base["aic"] - child["aic"], base["bic"] - child["bic"]
+            rms_ratio = base["rms_deg"] / child["rms_deg"] if child["rms_deg"] else float("inf")
+            if not same:
+                verdict = "not comparable: the two fits used different samples"
+            elif entry.get("at_bound"):
+                verdict = "not supported: the coefficient stays at its bound"
+            elif entry.get("identifiable") is False:
+                verdict = "not supported: the coefficient is not identifiable"
+            elif d_bic > 10 and rms_ratio > 1.2:
+                verdict = f"supported: the RMS falls {fmt(rms_ratio, 2)}× and ΔBIC > 10"
+            elif d_bic > 10:
+                verdict = "weak: ΔBIC > 10 but the RMS hardly changes (autocorrelated residuals inflate ΔBIC)"
+            else:
+                verdict = "not supported"
+            rows.append(
+                {
+                    "term": term,
+                    "parent": parent,
+                    "variant": v,
+                    "delta_aic": d_aic,
+                    "delta_bic": d_bic,
+                    "rms_ratio": rms_ratio,
+                    "entry": entry,
+                    "verdict": verdict,
+                }
+            )
+        return rows
+
+    def _term_evidence(self, rig: str, best: dict | None) -> str:
+        evidence = self.term_evidence_rows(rig, best)
+        if not evidence:
+            return "<p>No nested variants to compare term by term.</p>"
+        rows = [
+            [
+                td(esc(TERM_LABELS.get(e["term"], e["term"]))),
+                td(f"{esc(e['parent'])} → {esc(e['variant'])}"),
+                td(esc(fmt(e["delta_aic"], 3)), "num"),
+                td(esc(fmt(e["delta_bic"], 3)), "num"),
+                td(esc(fmt(e["rms_ratio"], 3)), "num"),
+                estimate_cell(e["entry"]),
+                td(esc(e["verdict"])),
+            ]
+            for e in evidence
+        ]
+        header = [
+            "added term",
+            "variants",
+            "AIC drop",
+            "BIC drop",
+            "RMS ratio (before/after)",
+            "coefficient (joint, 95 %)",
+            "evidence",
+        ]
+        caption = self.table_caption(
+            f"Evidence for each added term, rig {esc(rig)}: the drop of the joint fits' AIC and BIC when the term "
+            "is added to the nested simpler variant, the ratio of their RMS residuals and the term's joint "
+            "coefficient. "
+            "A term is called supported when its coefficient is clear of its bound, the RMS falls by more than 20 % "
+            "and BIC drops by more than 10."
+        )
+        return table_html(header, rows, caption=caption, table_id=f"term-evidence-{rig}")

@@ -1,0 +1,348 @@
+"""Real footage's world, rendered: a shaded body on a faint thread before a wall, with known truth.
+
+Learned from the real clips (``../shared/data/real-video/redapple_480p.mov`` measured: a light wall
+of grey 161–199 with a lighting gradient of ~20 grey levels across the frame; an apple of radius
+~20 px, grey 56–96 from its shading and skin; two soft shadows of it on the wall 30–45 px below,
+blurred by σ ≈ 8 px, ~10 grey levels deep; a thread a few grey levels darker than the wall; the
+pivot far above the frame; the swing under way in the first frame; the phone creeping ~13 px over
+21 s), not from guesses. A render is compared with the real clip side by side
+(``tests/benchmarks/body_study.py --compare``) before it is trusted.
+
+The pendulum's angle comes from the same physics as every render and every fit
+(:func:`pendulum.synthetic.experiment.true_angle_rad`). The body is a disk of radius R in the image (a sphere's
+silhouette), its inside drawn from its look (:class:`WallBody`): ``apple`` (dark, shaded from above,
+mottled skin), ``two_tone`` (a bright patterned top half over a dark bottom half, as the held-out
+ball), ``pattern`` (a printed checker); ``spin_deg_per_s`` turns the look about the thread (the
+silhouette stays a disk). Coverage is exact to 1/16 px² (4×4 supersampling at the sub-pixel centre),
+exposure blur is the mean of sub-exposures no more than 1.5 px apart.
+
+The scene (:class:`Wall`): the wall's grey and gradient, a soft static dark band (a shadow across
+the wall), soft shadows that follow the body, the thread, slow exposure drift (auto-exposure),
+defocus, camera creep (the whole picture, pivot included, moving in the image), and a mid-swing
+start (the first frame ``start_s`` after the release). Truth per frame: ``theta_rad`` and the body
+centre's exposure-mean image position ``marker_x_px``, ``marker_y_px``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+import pandas as pd
+
+from pendulum.synthetic.experiment import true_angle_rad, write_video
+from pendulum.synthetic.specs import TrialSpec
+
+
+@dataclass(frozen=True)
+class WallBody:
+    look: str = "apple"  # apple, two_tone or pattern
+    radius_px: float = 20.0
+    level: float = 75.0  # mean grey (the two-tone ball's dark half)
+    other_level: float = 215.0  # two_tone: the top half's grey; pattern: the light squares'
+    texture: float = 20.0  # grey amplitude of shading and skin
+    spin_deg_per_s: float = 0.0  # the look turning about the thread
+
+    def __post_init__(self):
+        if self.look not in ("apple", "two_tone", "pattern"):
+            raise ValueError(f"body look must be apple, two_tone or pattern, got {self.look!r}")
+
+
+@dataclass(frozen=True)
+class Wall:
+    level: float = 183.0
+    gradient: float = 20.0  # grey levels of lighting falloff across the frame (brighter bottom right)
+    band_depth: float = 0.0  # a soft static dark band across the wall (grey levels); 0: none
+    band_y_px: float = 180.0
+    band_width_px: float = 40.0  # Gaussian σ of the band
+    band_angle_deg: float = 10.0
+    vignette: float = 8.0  # the frame's centre this much brighter than its sides
+    shadows: tuple = ((27.0, 58.0), (75.0, 58.0))  # offsets (px) of soft shadows that follow the body
+    shadow_depth: float = 12.0
+    shadow_blur_px: float = 8.0
+    thread_depth: float = 40.0  # the thread (or rod) this much darker than the wall ...
+    thread_width_px: int = 1  # ... and this wide
+    exposure_drift: float = 0.0  # auto-exposure gain swinging by ± this fraction ...
+    exposure_drift_period_s: float = 9.0  # ... over this period
+    defocus_px: float = 0.0  # Gaussian σ of the whole picture
+    creep_px: tuple = (0.0, 0.0)  # the picture moves by this much over the clip (camera creeping)
+    start_s: float = 0.0  # the first frame is this long after the release (mid-swing start)
+
+
+@dataclass
+class WallTrial:
+    spec: TrialSpec
+    body: WallBody = field(default_factory=WallBody)
+    wall: Wall = field(default_factory=Wall)
+
+
+def _wall_image(spec: TrialSpec, wall: Wall) -> np.ndarray:
+    cam = spec.camera
+    h, w = cam.height_px, cam.width_px
+    rng = np.random.default_rng(spec.seed + 31)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    img = wall.level + wall.gradient * (yy / h - 0.5) + wall.vignette * (1 - 4 * (xx / w - 0.5) ** 2)
+    small = rng.standard_normal((h // 80 + 2, w // 80 + 2)).astype(np.float32)
+    img += 1.0 * cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)  # paint's unevenness
+    if wall.band_depth:
+        a = math.radians(wall.band_angle_deg)
+        u = yy * math.cos(a) - xx * math.sin(a) - wall.band_y_px
+        img -= wall.band_depth * np.exp(-0.5 * (u / wall.band_width_px) ** 2)
+    return img
+
+
+def _body_patch(body: WallBody, cx: float, cy: float, spin_rad: float, swing_rad: float):
+    """(x0, y0, grey, coverage) of the body disk at sub-pixel centre (cx, cy), its look turned by the swing."""
+    r = body.radius_px
+    x0, y0 = int(math.floor(cx - r - 2)), int(math.floor(cy - r - 2))
+    size = int(math.ceil(2 * r + 5))
+    sub = (np.arange(4) + 0.5) / 4
+    gy, gx = np.mgrid[0:size, 0:size].astype(np.float32)
+    sx, sy = np.meshgrid(sub, sub)
+    fx = (gx[..., None] + sx.ravel() - (cx - x0)).reshape(size, size, 16)
+    fy = (gy[..., None] + sy.ravel() - (cy - y0)).reshape(size, size, 16)
+    inside = fx**2 + fy**2 <= r * r
+    coverage = inside.mean(axis=2)
+    u = (gx + 0.5 - (cx - x0)) / r  # body frame: across and along the thread
+    v = (gy + 0.5 - (cy - y0)) / r
+    cs, sn = math.cos(swing_rad), math.sin(swing_rad)
+    across, along = u * cs - v * sn, u * sn + v * cs
+    rho2 = np.clip(across**2 + along**2, 0, 1)
+    spun = across * math.cos(spin_rad) + np.sqrt(1 - rho2) * math.sin(spin_rad)  # a sphere's surface turning
+    t = body.texture
+    if body.look == "apple":
+        # lit from above left: a lighter cap, a darker underside and rim, a mottled skin turning with it
+        grey = body.level - 0.6 * t * along - 0.3 * t * across + 0.3 * t * np.sin(7 * spun + 3 * along) - 0.4 * t * rho2
+    elif body.look == "two_tone":
+        top = along < 0
+        grey = np.where(top, body.other_level + t * np.sin(9 * spun) * np.cos(5 * along), body.level - 0.5 * t * along)
+    else:
+        grey = np.where(
+            (np.floor(3 * spun + 3) + np.floor(3 * along + 3)) % 2 == 0, body.other_level, body.level
+        ) + 0.3 * t * (-along)
+    return x0, y0, grey.astype(np.float32), coverage.astype(np.float32)
+
+
+def _shadow_patch(body: WallBody, wall: Wall, cx: float, cy: float):
+    """(x0, y0, darkening) of one soft shadow centred at (cx, cy): a disk blurred by σ, depth at its centre."""
+    r, s = body.radius_px, wall.shadow_blur_px
+    reach = r + 3 * s
+    x0, y0 = int(math.floor(cx - reach)), int(math.floor(cy - reach))
+    size = int(math.ceil(2 * reach + 2))
+    gy, gx = np.mgrid[0:size, 0:size].astype(np.float32)
+    dist = np.hypot(gx + 0.5 - (cx - x0), gy + 0.5 - (cy - y0))
+    from scipy.special import ndtr
+
+    return x0, y0, (wall.shadow_depth * ndtr((r - dist) / max(s, 1e-3))).astype(np.float32)
+
+
+def _paste(canvas: np.ndarray, x0: int, y0: int, patch: np.ndarray, op):
+    h, w = canvas.shape
+    ph, pw = patch.shape[:2]
+    a0, b0 = max(x0, 0), max(y0, 0)
+    a1, b1 = min(x0 + pw, w), min(y0 + ph, h)
+    if a0 >= a1 or b0 >= b1:
+        return
+    op(canvas[b0:b1, a0:a1], (slice(b0 - y0, b1 - y0), slice(a0 - x0, a1 - x0)))
+
+
+def _theta(spec: TrialSpec, times_s: np.ndarray) -> np.ndarray:
+    """θ at ``times_s`` (any shape), integrated on a grid that is dense from the release on (a mid-swing start
+    leaves no long first step to the integrator)."""
+    times_s = np.asarray(times_s, float)
+    lead = np.arange(0.0, float(times_s.min()), 0.25 / spec.camera.fps)
+    theta = true_angle_rad(spec, np.concatenate([lead, times_s.reshape(-1)]))
+    return theta[lead.size :].reshape(times_s.shape)
+
+
+def render_wall_trial(trial: WallTrial, progress=None) -> tuple[list, pd.DataFrame]:
+    """Every frame (uint8 grey) and the per-frame truth (module docstring)."""
+    spec, body, wall = trial.spec, trial.body, trial.wall
+    cam = spec.camera
+    n = int(round(spec.duration_s * cam.fps))
+    video_t = np.arange(n) / cam.fps
+    exposure = cam.exposure_fraction / cam.fps
+    arm = cam.marker_arm_px
+    roll = math.radians(cam.roll_deg)
+    # sub-exposures no more than blur_step_px apart at the fastest swing
+    omega = np.gradient(_theta(spec, video_t + wall.start_s), video_t) if n > 1 else np.zeros(1)
+    k = max(cam.exposure_subsamples, int(math.ceil(float(np.max(np.abs(omega))) * arm * exposure / cam.blur_step_px)))
+    offsets = ((np.arange(k) + 0.5) / k - 0.5) * exposure
+    sub_t = video_t[:, None] + offsets[None, :]
+    theta = _theta(spec, sub_t + wall.start_s)
+    creep = np.asarray(wall.creep_px, float)
+    shift = (sub_t / max(spec.duration_s, 1e-9))[..., None] * creep  # the picture's displacement (n, k, 2)
+    phi = theta + roll
+    px = cam.pivot_px[0] + shift[..., 0]
+    py = cam.pivot_px[1] + shift[..., 1]
+    bx = px + arm * np.sin(phi)
+    by = py + arm * np.cos(phi)
+    truth = pd.DataFrame(
+        {
+            "frame": np.arange(n),
+            "time_s": video_t,
+            "theta_rad": _theta(spec, video_t + wall.start_s),
+            "marker_x_px": bx.mean(axis=1),
+            "marker_y_px": by.mean(axis=1),
+        }
+    )
+    base = _wall_image(spec, wall)
+    h, w = base.shape
+    rng = np.random.default_rng(spec.seed + 15485863)
+    noise_bank = [rng.standard_normal(base.shape).astype(np.float32) * cam.noise_sigma for _ in range(4)]
+    frames = []
+    accum = np.empty_like(base)
+    for i in range(n):
+        accum.fill(0.0)
+        for j in range(k):
+            dx, dy = shift[i, j]
+            if dx or dy:
+                canvas = cv2.warpAffine(
+                    base,
+                    np.float32([[1, 0, dx], [0, 1, dy]]),
+                    (w, h),
+                    flags=cv2.INTER_LINEAR,
+                    borderMode=cv2.BORDER_REFLECT,
+                )
+            else:
+                canvas = base.copy()
+            x, y = float(bx[i, j]), float(by[i, j])
+            for ox, oy in wall.shadows:
+                sx0, sy0, dark = _shadow_patch(body, wall, x + ox, y + oy)
+
+                def darken(view, idx, dark=dark):
+                    view -= dark[idx]
+
+                _paste(canvas, sx0, sy0, dark, darken)
+            if wall.thread_depth:
+                end = (x - body.radius_px * math.sin(phi[i, j]), y - body.radius_px * math.cos(phi[i, j]))
+                layer = np.zeros_like(canvas)
+                cv2.line(
+                    layer,
+                    (int(round(px[i, j] * 16)), int(round(py[i, j] * 16))),
+                    (int(round(end[0] * 16)), int(round(end[1] * 16))),
+                    1.0,
+                    wall.thread_width_px,
+                    cv2.LINE_AA,
+                    4,
+                )
+                canvas -= wall.thread_depth * layer
+            spin = math.radians(body.spin_deg_per_s) * float(sub_t[i, j] + wall.start_s)
+            x0, y0, grey, cover = _body_patch(body, x, y, spin, float(phi[i, j]))
+
+            def blend(view, idx, grey=grey, cover=cover):
+                view += cover[idx] * (grey[idx] - view)
+
+            _paste(canvas, x0, y0, grey, blend)
+            accum += canvas
+        frame = accum / k
+        if wall.exposure_drift:
+            frame *= 1 + wall.exposure_drift * math.sin(2 * math.pi * video_t[i] / wall.exposure_drift_period_s)
+        if wall.defocus_px > 0:
+            frame = cv2.GaussianBlur(frame, (0, 0), wall.defocus_px)
+        frame += noise_bank[i % 4] if i % 2 == 0 else np.flip(noise_bank[i % 4], axis=1)
+        frames.append(np.clip(np.rint(frame), 0, 255).astype(np.uint8))
+        if progress and (i % 100 == 0 or i == n - 1):
+            progress(f"{spec.name}: rendered frame {i + 1}/{n}")
+    return frames, truth
+
+
+def write_wall_trial(trial: WallTrial, video_dir, truth_dir=None) -> tuple:
+    """Render and encode ``<name>.mp4`` (H.264, the camera's crf); the truth to ``<name>.csv`` in ``truth_dir``."""
+    from pathlib import Path
+
+    frames, truth = render_wall_trial(trial)
+    cam = trial.spec.camera
+    video = Path(video_dir) / f"{trial.spec.name}.mp4"
+    write_video(frames, video, cam.fps, cam.crf, cam.preset)
+    if truth_dir is not None:
+        truth.to_csv(Path(truth_dir) / f"{trial.spec.name}.csv", index=False)
+    return video, truth
+
+
+# A body on a string in air, as the real clips are: the apple decays from 22° to 19° in 21 s.
+STRING_RIG = {
+    "mass_kg": 0.18,
+    "length_m": 1.0,
+    "frontal_area_m2": 0.0045,
+    "displaced_volume_m3": 0.0002,
+    "fluid_density_kg_m3": 1.2,
+    "gravity_m_s2": 9.81,
+}
+STRING_TRUTH = {"added_mass_kg": 0.0001, "drag_area_m2": 0.0025, "linear_damping_nm_s": 0.0004}
+STRING_EFFECTS = ["quadratic_drag", "linear_damping"]
+
+
+def random_wall_trial(seed: int, rig: dict = STRING_RIG, truth: dict = STRING_TRUTH, effects=STRING_EFFECTS):
+    """A scene of real footage's faults drawn at random (the body study's scenes)."""
+    from pendulum.synthetic.specs import Camera
+
+    rng = np.random.default_rng(seed)
+    width, height = [(640, 360), (960, 540)][int(rng.integers(0, 2))]
+    fps = float(rng.choice([30.0, 60.0]))
+    look = str(rng.choice(["apple", "two_tone", "pattern"]))
+    radius = float(rng.uniform(15, 40)) * width / 640
+    arm = float(rng.uniform(1.0, 2.2)) * height
+    pivot_y = float(rng.uniform(0.25, 0.55)) * height - arm  # the body in the upper half to the middle
+    pivot_x = width / 2 + float(rng.uniform(-0.1, 0.1)) * width
+    # a release of 8–30°, kept so the whole swing stays in the frame
+    room = min(pivot_x, width - pivot_x) - radius - 12
+    amplitude = min(float(rng.uniform(8, 30)), math.degrees(math.asin(min(room / arm, 1.0))))
+    # a swing of at least four body radii each way (a pendulum test's swing; a body that hardly leaves its
+    # place holds its own pixels in most frames and has no static scene behind it)
+    amplitude = max(amplitude, math.degrees(math.asin(min(4 * radius / arm, 1.0))))
+    level = float(rng.uniform(40, 110)) if look != "pattern" else float(rng.uniform(30, 80))
+    camera = Camera(
+        width_px=width,
+        height_px=height,
+        fps=fps,
+        pivot_px=(pivot_x, pivot_y),
+        marker_arm_px=arm,
+        marker_radius_px=radius,
+        roll_deg=float(rng.uniform(-1, 1)),
+        exposure_fraction=float(rng.uniform(0.2, 0.6)),
+        noise_sigma=float(rng.uniform(1.0, 3.0)),
+        crf=int(rng.integers(18, 24)),
+    )
+    spec = TrialSpec(
+        name=f"wall_{seed}",
+        release_deg=float(rng.choice([-1, 1])) * amplitude,
+        rig=rig,
+        truth=truth,
+        effects=effects,
+        seed=seed,
+        hold_s=0.0,
+        duration_s=8.0,
+        camera=camera,
+    )
+    wall = Wall(
+        level=float(rng.uniform(150, 215)),
+        gradient=float(rng.uniform(0, 35)),
+        band_depth=float(rng.choice([0.0, rng.uniform(20, 60)])),
+        band_y_px=float(rng.uniform(0.3, 0.7)) * height,
+        band_width_px=float(rng.uniform(0.05, 0.15)) * height,
+        band_angle_deg=float(rng.uniform(-20, 20)),
+        vignette=float(rng.uniform(0, 12)),
+        shadows=tuple(
+            (float(rng.uniform(-4, 4)) * radius, float(rng.uniform(1.5, 3.5)) * radius)
+            for _ in range(int(rng.integers(0, 3)))
+        ),
+        shadow_depth=float(rng.uniform(5, 20)),
+        shadow_blur_px=float(rng.uniform(0.2, 0.5)) * radius,
+        thread_depth=float(rng.uniform(5, 40)),
+        exposure_drift=float(rng.uniform(0, 0.06)),
+        defocus_px=float(rng.choice([0.0, rng.uniform(0.5, 2.0)])),
+        creep_px=(float(rng.uniform(-6, 6)), float(rng.uniform(-6, 6))) if rng.uniform() < 0.5 else (0.0, 0.0),
+        start_s=float(rng.uniform(0, 3)),
+    )
+    body = WallBody(
+        look=look,
+        radius_px=radius,
+        level=level,
+        other_level=float(rng.uniform(170, 240)),
+        texture=float(rng.uniform(4, 16)),
+        spin_deg_per_s=float(rng.uniform(-10, 10)),  # the real apple turns ≤ 48° in 21 s: up to 4× that
+    )
+    return WallTrial(spec, body, wall)

@@ -1,0 +1,311 @@
+"""Arcs in sparse blob detections: RANSAC circle tracks, their swing statistics and continuity.
+
+The blobs come from :mod:`pendulum.tracking.spots` (one list over all samples, full-resolution pixels).
+A track is the set of blobs, at most one per sample, on a circle |‖p − c‖ − R| ≤ tol with sizes
+alike; it is judged by its span, its reversals (the angle about c changes direction), the balance of
+its moves both ways, whether a circle fits it clearly better than a line, and (for the chosen
+track) which of its blobs one object can have visited in turn. Another track's blobs are parts of the
+same pendulum when they keep their place in the frame turning with it (rotated about its pivot by
+minus its angle in the same sample).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Blobs:
+    """Every blob found in the samples, one entry per blob (parallel arrays)."""
+
+    sample: np.ndarray  # index of the sample (0 = first)
+    sign: np.ndarray  # +1 brighter than the background, −1 darker
+    x: np.ndarray  # full-resolution pixels
+    y: np.ndarray
+    r: np.ndarray  # radius estimate, full-resolution pixels
+    s: np.ndarray  # DoG response (grey levels)
+
+
+def circle_through(p1, p2, p3):
+    """Centre and radius of the circle through three points, or None when they lie on a line."""
+    (ax, ay), (bx, by), (cx, cy) = p1, p2, p3
+    d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
+    if abs(d) < 1e-9:
+        return None
+    a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
+    ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
+    uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
+    return ux, uy, math.hypot(ax - ux, ay - uy)
+
+
+def fit_circle(x, y):
+    """Algebraic (Kåsa) least-squares circle: centre and radius."""
+    a = np.column_stack([x, y, np.ones_like(x)])
+    b = x * x + y * y
+    (p, q, c), *_ = np.linalg.lstsq(a, b, rcond=None)
+    cx, cy = p / 2, q / 2
+    return cx, cy, math.sqrt(max(c + cx * cx + cy * cy, 0.0))
+
+
+@dataclass
+class ArcTrack:
+    """Blobs on one circle (at most one per sample) and how they move along it."""
+
+    sign: int
+    cx: float
+    cy: float
+    arm: float
+    members: np.ndarray  # blob indices, one per sample
+    radius: float  # median blob radius
+    strength: float  # median response
+    reversals: int
+    span_px: float  # arc length covered
+    curved: bool  # a circle fits clearly better than a straight line
+    balance: float  # moves one way over moves the other (≤ 1): ~1 for a swing, small for creep-and-jump-back
+
+    @property
+    def support(self) -> float:
+        return len(self.members) * self.strength
+
+    def describe(self, n_samples: int) -> str:
+        kind = "bright" if self.sign > 0 else "dark"
+        return (
+            f"a {kind} spot (radius ≈ {self.radius:.0f} px) on an arc about ({self.cx:.0f}, {self.cy:.0f}) px "
+            f"(arm {self.arm:.0f} px) in {len(self.members)} of {n_samples} sampled frames"
+        )
+
+
+def arc_inliers(blobs: Blobs, cand: np.ndarray, cx, cy, arm, radius, tol):
+    d = np.abs(np.hypot(blobs.x[cand] - cx, blobs.y[cand] - cy) - arm)
+    ok = (d <= tol) & (blobs.r[cand] <= 2.2 * radius) & (blobs.r[cand] >= radius / 2.2)
+    idx = cand[ok]
+    # one blob per sample: the one nearest the circle
+    order = np.lexsort((d[ok], blobs.sample[idx]))
+    idx = idx[order]
+    first = np.ones(idx.size, bool)
+    first[1:] = blobs.sample[idx][1:] != blobs.sample[idx][:-1]
+    return idx[first]
+
+
+def moves(angles: np.ndarray, noise: float) -> tuple[int, float]:
+    """Direction changes of a sequence (steps below ``noise`` ignored), and how evenly it moves both ways.
+
+    Each move is a change of at least ``noise`` from the last anchor; the balance is
+    min(n_up, n_down) / max(n_up, n_down) over the moves: about 1 for a swing (out and back alike),
+    small for a path that creeps one way and jumps back (a rising bubble that starts again).
+    """
+    count, direction, anchor = 0, 0, angles[0] if angles.size else 0.0
+    ups = downs = 0
+    for a in angles[1:]:
+        step = a - anchor
+        if abs(step) <= noise:
+            continue
+        d = 1 if step > 0 else -1
+        ups, downs = ups + (d > 0), downs + (d < 0)
+        if direction and d != direction:
+            count += 1
+        direction, anchor = d, a
+    return count, (min(ups, downs) / max(ups, downs) if max(ups, downs) else 0.0)
+
+
+def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclude=None, iterations: int = 1500):
+    """Best arc track per sign (RANSAC), then refit; tracks that move back and forth only."""
+    h, w = shape
+    max_arm = 2.0 * math.hypot(h, w)
+    tracks = []
+    for sign in (1, -1):
+        cand = np.flatnonzero((blobs.sign == sign) & (np.ones(blobs.sign.size, bool) if exclude is None else ~exclude))
+        if cand.size < 6 or np.unique(blobs.sample[cand]).size < 6:
+            continue
+        weights = blobs.s[cand] / blobs.s[cand].sum()
+        best = None
+        for _ in range(iterations):
+            pick = rng.choice(cand, size=3, replace=False, p=weights)
+            if np.unique(blobs.sample[pick]).size < 3:
+                continue
+            rs = sorted(blobs.r[pick])
+            radius = float(rs[1])
+            if rs[2] > 2.2 * rs[0]:
+                continue
+            pts = list(zip(blobs.x[pick], blobs.y[pick], strict=True))
+            if min(math.dist(pts[i], pts[j]) for i, j in ((0, 1), (0, 2), (1, 2))) < 1.5 * radius:
+                continue
+            circle = circle_through(*pts)
+            if circle is None or not 3 * radius <= circle[2] <= max_arm:
+                continue
+            tol = max(1.5 * scale, 0.35 * radius)
+            idx = arc_inliers(blobs, cand, circle[0], circle[1], circle[2], radius, tol)
+            score = blobs.s[idx].sum()
+            if best is None or score > best[0]:
+                best = (score, circle, radius, tol)
+        if best is None:
+            continue
+        score, (cx, cy, arm), radius, tol = best
+        idx = arc_inliers(blobs, cand, cx, cy, arm, radius, tol)
+        for _ in range(2):  # refit on the inliers, kept while it holds as much response (inliers of other objects pull)
+            if idx.size < 5:
+                break
+            circle = fit_circle(blobs.x[idx], blobs.y[idx])
+            r_refit = float(np.median(blobs.r[idx]))
+            refit = arc_inliers(blobs, cand, *circle, r_refit, tol)
+            if blobs.s[refit].sum() < score:
+                break
+            (cx, cy, arm), radius, idx, score = circle, r_refit, refit, blobs.s[refit].sum()
+        if idx.size < 5 or not arm <= max_arm:
+            continue
+        tracks.append(arc_track(blobs, idx, sign, (cx, cy, arm), scale, radius))
+    return tracks
+
+
+def arc_track(blobs: Blobs, idx: np.ndarray, sign: int, circle, scale: int, radius: float | None = None) -> ArcTrack:
+    """The track of blobs ``idx`` on ``circle`` (cx, cy, arm): its span, reversals and whether it is curved.
+
+    ``radius``: the spot's radius (default: the median blob radius).
+    """
+    cx, cy, arm = circle
+    idx = idx[np.argsort(blobs.sample[idx])]
+    radius = float(np.median(blobs.r[idx])) if radius is None else radius
+    x, y = blobs.x[idx], blobs.y[idx]
+    angles = np.unwrap(np.arctan2(x - cx, y - cy))
+    span = float(angles.max() - angles.min()) * arm
+    # a straight line through the same points: residual RMS against the circle's
+    centred = np.column_stack([x - x.mean(), y - y.mean()])
+    line_rms = float(np.linalg.svd(centred, compute_uv=False)[-1] / math.sqrt(len(x)))
+    circle_rms = float(np.sqrt(np.mean((np.hypot(x - cx, y - cy) - arm) ** 2)))
+    curved = line_rms > 2.0 * circle_rms + 0.5 * scale
+    noise = max(0.5 * radius, 1.0 * scale) / arm
+    reversals, balance = moves(angles, noise)
+    return ArcTrack(sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), reversals, span, curved, balance)
+
+
+def continuous_members(blobs: Blobs, track: ArcTrack, scale: int) -> tuple[np.ndarray, float]:
+    """The track's members that one object can have visited in turn, and the step allowed per sample there.
+
+    A swing's steps between samples reach about 1.4 × their median (a sinusoid: peak over median of
+    |sin|); a blob of another object on the same circle (a static spot held in the first samples, a
+    second object crossing the arc) is reached by a jump there and back. The members split at steps
+    longer than the local limit max(3.5 × the median moving step within ±6 steps, 1.5 r) (moving:
+    longer than 1.5 pyramid pixels; local, as a swing decays); the largest piece is kept, and another
+    piece joins when the kept members next to it, at most eight samples away, are within the limit
+    (twice the limit over a gap) of its ends on every side where there are such members. Returns the
+    kept members and the limit at the first of them.
+    """
+    m = track.members
+    if m.size < 5:
+        return m, math.inf
+    sample, x, y = blobs.sample[m], blobs.x[m], blobs.y[m]
+    gaps = np.diff(sample)
+    steps = np.hypot(np.diff(x), np.diff(y))
+    moving = (gaps == 1) & (steps > 1.5 * scale)
+    if moving.sum() < 5:
+        return m, math.inf
+    overall = float(np.median(steps[moving]))
+    limits = np.empty(steps.size)
+    for i in range(steps.size):
+        near = steps[max(0, i - 6) : i + 7][moving[max(0, i - 6) : i + 7]]
+        limits[i] = max(3.5 * (float(np.median(near)) if near.size >= 3 else overall), 1.5 * track.radius)
+    piece = np.concatenate([[0], np.cumsum(steps > limits * np.maximum(gaps, 1))])
+    keep = piece == int(np.argmax(np.bincount(piece)))
+
+    def verdict(a: int | None, b: int) -> bool | None:
+        """Is member ``b`` reached from kept member ``a``? None: no kept member within eight samples."""
+        gap = None if a is None else abs(int(sample[b]) - int(sample[a]))
+        if gap is None or gap > 8:
+            return None
+        return bool(math.hypot(x[a] - x[b], y[a] - y[b]) <= limits[min(a, b, steps.size - 1)] * min(2, gap))
+
+    changed = True
+    while changed:  # grow outwards from the largest piece: a piece joins when reached on every side it has
+        changed = False
+        for p in range(int(piece.max()) + 1):
+            members = np.flatnonzero(piece == p)
+            if keep[members[0]]:
+                continue
+            before = np.flatnonzero(keep[: members[0]])
+            after = members[-1] + 1 + np.flatnonzero(keep[members[-1] + 1 :])
+            sides = [
+                verdict(before[-1] if before.size else None, members[0]),
+                verdict(after[0] if after.size else None, members[-1]),
+            ]
+            if True in sides and False not in sides:
+                keep[members] = changed = True
+    first = int(np.flatnonzero(keep)[0])
+    return m[keep], float(limits[min(first, steps.size - 1)])
+
+
+def _body_frame(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> tuple[np.ndarray, np.ndarray]:
+    """Where ``other``'s blobs sit in the frame turning with ``track``: (member positions, points).
+
+    Each blob is rotated about the track's pivot by minus the track's angle in the same sample
+    (members in samples without a track blob are left out).
+    """
+    angle = {int(blobs.sample[i]): math.atan2(blobs.x[i] - track.cx, blobs.y[i] - track.cy) for i in track.members}
+    rows, pts = [], []
+    for k, i in enumerate(other.members):
+        a = angle.get(int(blobs.sample[i]))
+        if a is None:
+            continue
+        dx, dy = blobs.x[i] - track.cx, blobs.y[i] - track.cy
+        c, s = math.cos(a), math.sin(a)
+        rows.append(k)
+        pts.append((dx * c - dy * s, dx * s + dy * c))  # rotate by −a (angle measured from +y towards +x)
+    return np.array(rows, int), np.array(pts, float).reshape(-1, 2)
+
+
+def attached(blobs: Blobs, other: ArcTrack, track: ArcTrack) -> bool:
+    """True when ``other`` keeps its place in the frame that turns with ``track`` (a part of the same body):
+    its blobs' places there (:func:`_body_frame`) lie within a few marker radii of one point."""
+    _, pts = _body_frame(blobs, other, track)
+    if len(pts) < 5:
+        return False
+    spread = np.median(np.hypot(*(pts - np.median(pts, axis=0)).T))
+    return bool(spread <= max(3 * track.radius, 0.05 * track.arm))
+
+
+def _distances(points: np.ndarray) -> np.ndarray:
+    """All pairwise Euclidean distances of (n, 2) points: an (n, n) array."""
+    return np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+
+
+def attached_members(blobs: Blobs, other: ArcTrack, track: ArcTrack, scale: int) -> np.ndarray:
+    """Which blobs of ``other`` are rigid parts of ``track``'s pendulum (bool per member).
+
+    Blobs that keep one place in the frame turning with the pendulum (:func:`_body_frame`;
+    at least five within tol = max(0.6 r, 0.02 arm, 1.5 px × sample scale)) while their image
+    positions move apart by more than 4 tol are parts of it, and so are blobs on the pendulum's
+    axis (|x| ≤ tol from the pivot to 3 r beyond the marker: the rod's or body's outline against
+    the scene). A second object that only passes one place now and then (at rest, or at one phase
+    of the swing) does not.
+    """
+    attached = np.zeros(len(other.members), bool)
+    rows_left, body_left = _body_frame(blobs, other, track)
+    tol = max(0.6 * other.radius, 0.02 * track.arm, 1.5 * scale)
+    if rows_left.size:
+        # on the line from the pivot through the marker (the rod, the body's axis): features of the
+        # pendulum's own outline, e.g. where the rod crosses a background stripe
+        x, y = body_left[:, 0], body_left[:, 1]
+        on_axis = (np.abs(x) <= tol) & (y >= -tol) & (y <= track.arm + 3 * track.radius)
+        attached[rows_left[on_axis]] = True
+        rows_left, body_left = rows_left[~on_axis], body_left[~on_axis]
+    while rows_left.size >= 5:
+        near = _distances(body_left) <= tol
+        centre = int(np.argmax(near.sum(axis=1)))
+        cluster = near[centre]
+        if cluster.sum() < 5:
+            break
+        members = other.members[rows_left[cluster]]
+        image = np.column_stack([blobs.x[members], blobs.y[members]])
+        moved = _distances(image).max()
+        if moved > 4 * tol:
+            attached[rows_left[cluster]] = True
+        rows_left, body_left = rows_left[~cluster], body_left[~cluster]
+    return attached
+
+
+def arc_tangent(x, y, track: ArcTrack):
+    rx, ry = x - track.cx, y - track.cy
+    norm = math.hypot(rx, ry) or 1.0
+    return (-ry / norm, rx / norm)

@@ -1,0 +1,123 @@
+"""What a finished track's motion tells: the exposure time from the streaks, the position at the frame
+time, and isolated jumps.
+
+The exposure's centroid is the mean position over the shutter-open time τ (in frame intervals),
+x̄ = x(t) + ẍ τ²/24 + O(τ⁴); a jump is a position farther from a cubic through its eight
+neighbours than max(floor, k σ), σ the robust spread of those leave-one-out residuals.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.ndimage import maximum_filter1d
+
+if TYPE_CHECKING:
+    from pendulum.tracking.settings import TrackerSettings
+
+
+def estimate_exposure_fraction(x, y, streak2, usable, min_step_px: float) -> float | None:
+    """Shutter-open fraction of the frame interval: streak length over the frame-to-frame step.
+
+    Median over usable frames whose step exceeds ``min_step_px`` (a short streak is lost
+    in the noise of its second moment); None when fewer than 10 such frames.
+    """
+    x, y, streak2 = (np.asarray(a, float) for a in (x, y, streak2))
+    step2 = np.full(x.size, np.nan)
+    both = usable[2:] & usable[:-2] & usable[1:-1]
+    step2[1:-1] = np.where(both, ((x[2:] - x[:-2]) ** 2 + (y[2:] - y[:-2]) ** 2) / 4.0, np.nan)
+    pick = np.isfinite(step2) & np.isfinite(streak2) & (step2 > min_step_px**2)
+    if pick.sum() < 10:
+        return None
+    ratio = np.median(streak2[pick] / step2[pick])
+    return float(np.sqrt(np.clip(ratio, 0.0, 1.0)))
+
+
+def exposure_centre_correction(x, usable, exposure_fraction: float) -> np.ndarray:
+    """Correction to add to a blurred marker's centroid to get its position at the frame time.
+
+    The centroid of the exposure is the mean position over the shutter-open time τ
+    (in frame intervals), centred on the frame time: x̄ = x(t) + ẍ τ²/24 + O(τ⁴). The
+    arc's curvature (x̄ lies inside the circle) and the angular acceleration (x̄ falls
+    short of the turning points) both enter through ẍ, here the track's central second
+    difference (its noise, ×τ²/24 ≈ 0.01, is negligible). Frames without two usable
+    neighbours get no correction.
+    """
+    x = np.asarray(x, float)
+    corr = np.zeros(x.size)
+    if x.size < 3:
+        return corr
+    both = usable[2:] & usable[:-2] & usable[1:-1]
+    d2 = x[2:] - 2.0 * x[1:-1] + x[:-2]
+    corr[1:-1] = np.where(both, -d2 * exposure_fraction**2 / 24.0, 0.0)
+    return corr
+
+
+def _leave_one_out_weights(half_window: int = 4, degree: int = 3) -> np.ndarray:
+    """Weights c_j predicting x_i = Σ c_j x_{i+j} from a cubic through the neighbours (j ≠ 0)."""
+    offsets = np.array([j for j in range(-half_window, half_window + 1) if j != 0], float)
+    design = np.vander(offsets, degree + 1, increasing=True)
+    weights = np.linalg.pinv(design)[0]  # value of the fitted polynomial at offset 0
+    full = np.zeros(2 * half_window + 1)
+    full[np.arange(2 * half_window + 1) != half_window] = weights
+    return full
+
+
+def _fill_gap_residuals(
+    resid: np.ndarray, x: np.ndarray, y: np.ndarray, ok: np.ndarray, half: int, where: np.ndarray
+) -> None:
+    """Leave-one-out residuals for usable frames next to unusable ones (where the fixed stencil has a hole).
+
+    The same prediction, a polynomial through the usable neighbours within ±half
+    frames (cubic with ≥ 6 of them, quadratic with 4–5), evaluated at the frame,
+    its residual scaled to the full stencil's noise; only frames in ``where``,
+    and frames with fewer usable neighbours stay unchecked.
+    """
+    full_noise2 = float(np.sum(_leave_one_out_weights(half) ** 2))
+    for i in np.flatnonzero(ok & ~np.isfinite(resid) & where):
+        offsets = np.array([j for j in range(-half, half + 1) if j and 0 <= i + j < x.size and ok[i + j]])
+        if offsets.size < 4:
+            continue
+        degree = 3 if offsets.size >= 6 else 2
+        design = np.vander(offsets.astype(float), degree + 1, increasing=True)
+        weights = np.linalg.pinv(design)[0]
+        # scaled to the full stencil's noise: a sparser prediction is noisier
+        scale = math.sqrt((1 + full_noise2) / (1 + float(weights @ weights)))
+        resid[i] = scale * math.hypot(x[i] - weights @ x[i + offsets], y[i] - weights @ y[i + offsets])
+
+
+def flag_jumps(x: np.ndarray, y: np.ndarray, usable: np.ndarray, settings: TrackerSettings) -> np.ndarray:
+    """Frames whose position departs from a cubic through their 8 neighbours (isolated jumps)."""
+    weights = _leave_one_out_weights()
+    half = len(weights) // 2
+    jumps = np.zeros(x.size, bool)
+    window = 2 * half + 1
+    # Frames beside lost/flagged ones are checked with a sparser stencil, but not frames beside a
+    # jump found here: that would cascade through a genuinely abrupt motion (the release).
+    near_gap = maximum_filter1d((~usable).astype(np.uint8), window) > 0
+    for _ in range(4):
+        ok = usable & ~jumps
+        xv = np.where(ok, x, np.nan)
+        yv = np.where(ok, y, np.nan)
+        rx = xv - np.convolve(xv, weights[::-1], mode="same")
+        ry = yv - np.convolve(yv, weights[::-1], mode="same")
+        resid = np.hypot(rx, ry)
+        near_jump = maximum_filter1d(jumps.astype(np.uint8), window) > 0
+        _fill_gap_residuals(resid, xv, yv, ok, half, near_gap & ~near_jump)
+        resid[:half] = resid[-half:] = np.nan
+        finite = np.isfinite(resid)
+        if finite.sum() < 10:
+            break
+        sigma = 1.4826 * np.median(np.abs(resid[finite]))
+        limit = max(settings.jump_floor_px, settings.jump_sigmas * sigma)
+        over = finite & (resid > limit)
+        if not over.any():
+            break
+        # Flag only the largest within ±half frames: a jump also disturbs its neighbours'
+        # predictions (most beside a gap, where the stencil extrapolates); the next pass sees the rest.
+        padded = np.where(finite, resid, 0.0)
+        local_max = over & (padded >= maximum_filter1d(padded, window, mode="constant"))
+        jumps |= local_max
+    return jumps

@@ -1,0 +1,91 @@
+"""Dot or body: which tracker follows a trial's pendulum, decided from the video and said.
+
+``method: marker`` measures a marker disk (:func:`pendulum.tracking.marker.track_video`), ``body``
+the swinging object's silhouette (:func:`pendulum.tracking.body.track_body`). ``auto`` (the default)
+tries the marker first: a disk that detection finds and that is usable in at least
+:data:`MARKER_USABLE_FRACTION` of the frames is the more precise measurement and is kept.
+Otherwise (no disk, an ambiguous one, or one whose signal leaves its band in many frames,
+as a shaded real body's does) the body is tracked too, and the track with more usable frames
+is taken. Either way the track's ``attrs["method"]`` says which, and why.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from pendulum.camera.video import VideoError
+from pendulum.tracking.body import track_body
+from pendulum.tracking.marker import track_video
+from pendulum.tracking.settings import TrackerSettings
+
+MARKER_USABLE_FRACTION = 0.9
+
+
+def usable_fraction(track: pd.DataFrame) -> float:
+    return float((track.flag == "ok").mean()) if len(track) else 0.0
+
+
+def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
+    """The track by ``settings.method`` (module docstring); ``attrs["method"]``: ``used``, ``reason``, ``tried``.
+
+    Raises :class:`~pendulum.camera.video.VideoError` when no method gives a record; the message holds
+    what each one said.
+    """
+    method = settings.method
+    if method == "marker":
+        track = track_video(path, settings, progress=progress)
+        track.attrs["method"] = {"used": "marker", "reason": "method: marker given in the settings", "tried": {}}
+        return track
+    if method == "body":
+        track = track_body(path, settings, progress=progress)
+        track.attrs["method"] = {"used": "body", "reason": "method: body given in the settings", "tried": {}}
+        return track
+    tried: dict[str, str] = {}
+    marker = None
+    try:
+        marker = track_video(path, settings, progress=progress)
+    except VideoError as error:
+        tried["marker"] = f"failed: {error}"
+    if marker is not None:
+        fraction = usable_fraction(marker)
+        tried["marker"] = f"usable in {100 * fraction:.1f} % of the frames"
+        if fraction >= MARKER_USABLE_FRACTION:
+            marker.attrs["method"] = {
+                "used": "marker",
+                "reason": f"a marker disk was found and is usable in {100 * fraction:.1f} % of the frames",
+                "tried": tried,
+            }
+            return marker
+    if progress:
+        progress(f"{path}: marker {tried['marker']}; tracking the swinging body itself")
+    try:
+        body = track_body(path, settings, progress=progress)
+    except VideoError as error:
+        tried["body"] = f"failed: {error}"
+        if marker is not None:
+            marker.attrs["method"] = {
+                "used": "marker",
+                "reason": f"the body could not be tracked; the marker is {tried['marker']}",
+                "tried": tried,
+            }
+            return marker
+        raise VideoError(
+            f"{path}: neither a marker disk nor the body could be followed. Marker: {tried['marker'][8:]} "
+            f"Body: {tried['body'][8:]}"
+        ) from error
+    body_fraction = usable_fraction(body)
+    tried["body"] = f"usable in {100 * body_fraction:.1f} % of the frames"
+    if marker is not None and usable_fraction(marker) >= body_fraction:
+        marker.attrs["method"] = {
+            "used": "marker",
+            "reason": f"the marker disk is usable in as many frames as the body ({tried['marker']})",
+            "tried": tried,
+        }
+        return marker
+    why = "no marker disk could be followed" if marker is None else f"the marker disk is {tried['marker']}"
+    body.attrs["method"] = {
+        "used": "body",
+        "reason": f"{why}; the body's silhouette is {tried['body']}",
+        "tried": tried,
+    }
+    return body

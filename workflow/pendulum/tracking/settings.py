@@ -1,0 +1,63 @@
+"""The tracker's settings and the flags a tracked frame can carry: what every module of the stage takes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+FLAGS = ("ok", "occluded", "glare", "jump", "duplicate", "edge", "lost")
+
+
+@dataclass(frozen=True)
+class TrackerSettings:
+    # None: found by :func:`pendulum.tracking.detection.detect_marker` (so is "auto" polarity); given values win.
+    marker_radius_px: float | None = 10.0
+    polarity: str = "bright"  # "bright" marker on a darker scene, "dark" on a brighter one, or "auto"
+    start_px: tuple[float, float] | None = None  # a hint where the marker is in the first frame
+    min_signal_ratio: float = 0.9  # marker signal below this fraction of normal: "occluded"
+    max_signal_ratio: float = 1.12  # above this: "glare"
+    jump_floor_px: float = 1.0  # smallest leave-one-out residual that counts as a jump
+    jump_sigmas: float = 6.0
+    reacquire_after_frames: int = 10
+    max_centroid_disagreement_px: float = 0.4  # linear vs thresholded centroid; more: "occluded"
+    # the linear centroid moves more than this when its mask shrinks from r + 2.5 to r + 1 px: something of
+    # the marker's grey in the margin (which the thresholded centroid does not tell): "occluded"
+    max_margin_shift_px: float = 0.25
+    max_width_ratio: float = 1.15  # spot wider across the motion than this × normal (width²): "occluded"
+    min_acquire_score: float = 0.75  # disk-template correlation a spot needs to be taken for the marker
+    min_usable_fraction: float = 0.3  # fewer "ok" frames than this: the video cannot give a record
+    centroid: str = "linear"  # "linear": Σ (I − b) x in a soft streak mask; "threshold": Σ max(I − T, 0) x
+    # Shutter-open time / frame interval, for the exposure-centre correction; None: measured
+    # from the streaks (needs ≥ 10 frames moving more than half a marker radius, else 0.5),
+    # 0: no correction.
+    exposure_fraction: float | None = None
+
+    max_unresolved: float = 0.03  # share of the marker over scene of its own grey, unmeasurable: "occluded"
+    max_lost_step_radii: float = 2.0  # search window growth per lost frame, in marker radii (bounded, see below)
+    # The normal signal and width² as smooth functions of the marker's angle on its arc (lens
+    # magnification, vignetting, lighting falloff), fitted to the ok frames (see ArcReference);
+    # False: the first frames' values everywhere.
+    reference_along_arc: bool = True
+    # "marker": a marker disk; "body": the swinging object's silhouette (pendulum.tracking.body); "auto": the marker
+    # where a good one is found, else the body (pendulum.tracking.method)
+    method: str = "auto"
+
+    def __post_init__(self):
+        if self.method not in ("auto", "marker", "body"):
+            raise ValueError(f"tracking method must be 'auto', 'marker' or 'body', got {self.method!r}")
+        if self.polarity not in ("bright", "dark", "auto"):
+            raise ValueError(f"marker polarity must be 'bright', 'dark' or 'auto', got {self.polarity!r}")
+        if self.centroid not in ("linear", "threshold"):
+            raise ValueError(f"centroid must be 'linear' or 'threshold', got {self.centroid!r}")
+        if self.marker_radius_px is not None and not self.marker_radius_px > 0:
+            raise ValueError("marker_radius_px must be positive")
+        if not 0 < self.min_acquire_score < 1:
+            raise ValueError("min_acquire_score must be between 0 and 1")
+
+    @classmethod
+    def from_config(cls, values: dict) -> TrackerSettings:
+        """Settings from config.yaml's ``tracking`` block (or a trial's merged settings): lists become tuples."""
+        return cls(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in values.items()})
+
+    @property
+    def needs_detection(self) -> bool:
+        return self.polarity == "auto" or self.marker_radius_px is None
