@@ -119,3 +119,51 @@ def test_the_separating_trial_lets_discovery_name_the_history_force(seed):
     assert separating["rig"] == "short_arm" and separating["described_rig"], separating
     assert separating["separation_sigma"] > separating["separation_sigma_today"], separating
     assert result["named_after"] == ["history_force"], result
+
+
+def test_measurement_advice_reaches_the_target_it_names():
+    """The advised tolerances, put back into the budget, give exactly the target half-width (an independent sum)."""
+    from pendulum.design.tolerances import measurement_advice
+    from pendulum.fit.uncertainty import Z95
+
+    value, stat = 2.5, 0.01
+    budget = {"displaced_volume_m3": -0.117, "fluid_density_kg_m3": -0.029, "mass_kg": 0.024, "length_m": -0.008}
+    tolerances = {
+        "paper": {"displaced_volume_m3": 2e-5, "fluid_density_kg_m3": 2.0, "mass_kg": 0.005, "length_m": 1e-3}
+    }
+    sys_ = math.sqrt(sum(v * v for v in budget.values()))
+    entry = {
+        "value": value,
+        "stderr_statistical": stat,
+        "floor_relative_halfwidth95": Z95 * sys_ / value,
+    }
+    advice = measurement_advice(
+        "added_mass_kg", "the added mass", entry, {"error_budget": budget}, 0.02, tolerances, {}
+    )
+    assert advice["limited_by"] == "displaced_volume_m3"
+    assert [m["input"] for m in advice["measure"]] == ["displaced_volume_m3", "fluid_density_kg_m3", "mass_kg"]
+    shifts = dict(budget)
+    for item in advice["measure"]:
+        shifts[item["input"]] *= item["to_1sigma"] / tolerances["paper"][item["input"]]
+    half = Z95 * math.sqrt(stat**2 + sum(v * v for v in shifts.values()))
+    assert half == pytest.approx(0.02 * value, rel=1e-9)
+    assert "the default share of its value; state yours under rigs.paper.tolerances" in advice["sentence"]
+    assert "Measuring the displaced volume to ±" in advice["sentence"]
+
+
+def test_bad_requests_are_warned_about_and_the_rest_is_designed(small_group):
+    options = DesignOptions(
+        coefficients=("drag_area_m2", "history_coefficient_kg_per_sqrt_s"),
+        releases_deg=(20.0,),
+        rigs=(("light", {"mass_kg": 1.0}), ("paper", {"length_m": 0.5}), ("short", {"length_m": 0.4})),
+        recommend=1,
+    )
+    document, rows = design_group(small_group, {}, FitSettings(), options)
+    warnings = " | ".join(document["warnings"])
+    assert "design.coefficients: history_coefficient_kg_per_sqrt_s is not a coefficient" in warnings
+    assert "design.rigs.light" in warnings and "not a pendulum" in warnings
+    assert "design.rigs.paper: a rig of the group has this name" in warnings
+    assert {r["rig"] for r in rows} == {"paper", "short"}  # the good described rig is still designed
+    assert document["targets"] == ["drag_area_m2"] and document["recommendations"]
+    ranks = sorted(r["rank"] for r in rows if r["coefficient"] == "drag_area_m2")
+    assert ranks == list(range(1, len(ranks) + 1))

@@ -19,6 +19,7 @@ from pendulum.discovery.diagnosis import critical_value, mixture_p_value
 from pendulum.discovery.findings import plus_minus, separating_experiments
 from pendulum.discovery.selection import Discovery
 from pendulum.fit.records import FitSettings, load_record
+from pendulum.report.design import design_figure, today_table
 from pendulum.synthetic.records import hidden_effect_table
 from workflow_run import copy_project, run
 
@@ -159,6 +160,11 @@ def test_one_body_on_two_rigs_names_the_history_force_and_leaves_out_a_failed_tr
         rows = table[table.coefficient == name]
         assert (rows.halfwidth95_predicted <= rows.halfwidth95_today * (1 + 1e-9)).all()
     assert 1 <= len(design["recommendations"]) <= 3 and all(r["sentence"] for r in design["recommendations"])
+    # the report's section draws it: one line per rig (the described one dashed) in each target's panel
+    png = design_figure(design, table)
+    assert png and png.startswith(b"\x89PNG")
+    html = today_table(design, lambda text: f"<caption>{text}</caption>")
+    assert "added mass" in html and "drag coefficient" in html
     # a body naming a rig that does not exist stops the run before any job, naming it
     config["bodies"] = {"rov": ["paper_rig", "shortarm"]}
     (work / "config.yaml").write_text(yaml.safe_dump(config))

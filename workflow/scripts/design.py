@@ -22,7 +22,12 @@ def work():
         raise ValueError(f"group {name}: no trial could be fitted, so there is nothing to design from")
     fit = fit_final_model(group, discovery, settings)
     options = DesignOptions.from_config(sm.params.design)
-    document, rows = design_group(fit, discovery["parameters"], settings, options, discovery.get("indistinguishable"))
+    stated = {entry["name"]: dict(entry.get("tolerances") or {}) for entry in sm.params.trial_rigs.values()}
+    document, rows = design_group(
+        fit, discovery["parameters"], settings, options, discovery.get("indistinguishable"), stated
+    )
+    for warning in document["warnings"]:
+        log.warning("group %s: %s", name, warning)
     for item in document["recommendations"] + document["separating"]:
         log.info("group %s: %s", name, item["sentence"])
     write_csv(design_table(rows), sm.output.table)

@@ -33,6 +33,7 @@ from pendulum.design.candidates import (
     with_trial,
 )
 from pendulum.design.separation import separations
+from pendulum.design.tolerances import input_words, measurement_advice
 from pendulum.fit.group import GroupFit, GroupProblem, ordered, start_values
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import SimulationDiverged
@@ -48,6 +49,7 @@ ROW_COLUMNS = [
     "halfwidth95_today",
     "halfwidth95_predicted",
     "gain",
+    "rank",
 ]
 
 
@@ -60,15 +62,6 @@ COEFFICIENT_WORDS = {
     "history_coefficient_kg_per_sqrt_s": "the history coefficient K_h",
     "restoring_torque_correction": "the restoring-torque correction ε",
 }
-INPUT_WORDS = {
-    "mass_kg": "the rig's mass",
-    "length_m": "the arm length",
-    "frontal_area_m2": "the frontal area",
-    "displaced_volume_m3": "the displaced volume",
-    "fluid_density_kg_m3": "the water's density",
-    "body_inertia_kg_m2": "the body's moment of inertia",
-    "gravity_m_s2": "gravity",
-}
 
 
 def coefficient_words(label: str) -> str:
@@ -76,14 +69,6 @@ def coefficient_words(label: str) -> str:
     base, _, rig = label.partition("[")
     words = COEFFICIENT_WORDS.get(base, base)
     return words + (f" of rig {rig.rstrip(']')}" if rig else "")
-
-
-def input_words(key: str) -> str:
-    """An error-budget input in words (``pivot_px (axis 1)`` → "the pivot position")."""
-    base = key.split("[")[0]
-    if base.startswith("pivot"):
-        return "the pivot position"
-    return INPUT_WORDS.get(base, base)
 
 
 @dataclass(frozen=True)
@@ -166,9 +151,12 @@ def _fmt(value: float) -> str:
 class Designer:
     """Candidates' sensitivities computed once; information updated trial by trial."""
 
-    def __init__(self, fit: GroupFit, parameters: dict, settings, options: DesignOptions):
+    def __init__(self, fit: GroupFit, parameters: dict, settings, options: DesignOptions, stated=None):
         problem = fit.problem
         self.fit, self.options, self.parameters = fit, options, parameters
+        self.warnings: list[str] = []
+        self.stated = dict(stated or {})
+        self.tolerances = {rig: dict(problem.records[problem.rig_of.index(rig)].tolerances) for rig in problem.rigs}
         self.settings_max_ar, self.release_skip_s = settings.max_ar_order, settings.release_skip_s
         self.info, noise, self.ratio = today(fit, settings.max_ar_order)
         self.noise = median_noise(noise)
@@ -177,8 +165,13 @@ class Designer:
         self.area = {"m2": problem.records[0].rig.frontal_area_m2}
         self.now = self.widths(self.info)
         self.targets = tuple(c for c in options.coefficients if c in self.now)
-        base = _rig_values(problem.records[0].rig)
-        self.described = {name: Rig.from_mapping({**base, **vals}) for name, vals in options.rigs}
+        for name in options.coefficients:
+            if name not in self.now:
+                self.warnings.append(
+                    f"design.coefficients: {name} is not a coefficient of discovery's final model "
+                    f"({' + '.join(problem.terms) or 'added mass only'}), so nothing is designed for it"
+                )
+        self.described = self._described(options, problem)
         self.sensitivities = {}
         for rig, hypothetical in [(r, False) for r in problem.rigs] + [(r, True) for r in self.described]:
             for release in options.releases_deg:
@@ -190,6 +183,23 @@ class Designer:
                         )
                     except SimulationDiverged:
                         continue
+
+    def _described(self, options: DesignOptions, problem) -> dict[str, Rig]:
+        """The rigs of config ``design.rigs``: the group's first rig with the values given; one that is not a
+        rig (not a pendulum, a group rig's name) is left out with a warning, the others are designed."""
+        base = _rig_values(problem.records[0].rig)
+        out = {}
+        for name, vals in options.rigs:
+            if name in problem.rigs:
+                self.warnings.append(
+                    f"design.rigs.{name}: a rig of the group has this name; give the described rig another name"
+                )
+                continue
+            try:
+                out[name] = Rig.from_mapping({**base, **vals})
+            except ValueError as error:
+                self.warnings.append(f"design.rigs.{name} ({problem.rigs[0]}'s values with {vals}): {error}; left out")
+        return out
 
     def widths(self, info: Information) -> dict:
         return half_widths(info, self.ratio, self.systematic, self.values, self.area)
@@ -210,14 +220,19 @@ class Designer:
 
 
 def design_group(
-    fit: GroupFit, parameters: dict, settings, options: DesignOptions, indistinguishable: list[dict] | None = None
+    fit: GroupFit,
+    parameters: dict,
+    settings,
+    options: DesignOptions,
+    indistinguishable: list[dict] | None = None,
+    stated_tolerances: dict | None = None,
 ) -> tuple[dict, list[dict]]:
     """The design document and its table rows (one per candidate trial and coefficient).
 
     ``parameters``: the reported coefficient entries of this model (value, stderr_systematic, error_budget),
     as discovery's ``parameters`` for its final model.
     """
-    d = Designer(fit, parameters, settings, options)
+    d = Designer(fit, parameters, settings, options, stated_tolerances)
     rows = []
     for cand in d.sensitivities:
         for name, entry in d.widths(d.added(d.info, cand)).items():
@@ -234,6 +249,10 @@ def design_group(
                     "gain": today_half / entry["halfwidth95"] if entry["halfwidth95"] else math.inf,
                 }
             )
+    for name in {r["coefficient"] for r in rows}:  # 1: the candidate leaving this coefficient's narrowest interval
+        mine = sorted((r for r in rows if r["coefficient"] == name), key=lambda r: r["halfwidth95_predicted"])
+        for rank, row in enumerate(mine, start=1):
+            row["rank"] = rank
     recommendations, info = [], d.info
     for _ in range(options.recommend if d.targets else 0):
         before = d.widths(info)
@@ -242,13 +261,14 @@ def design_group(
             break  # no candidate shrinks what the targets' widths are made of: their tolerances
         info = after
         widest = max(d.targets, key=lambda c: _reducible(before[c]))
+        again = any((r["rig"], r["release_deg"]) == (cand.rig, cand.release_deg) for r in recommendations)
         recommendations.append(
             {
                 "rig": cand.rig,
                 "described_rig": cand.hypothetical,
                 "release_deg": cand.release_deg,
                 "predicted": {c: widths[c]["halfwidth95"] for c in d.targets},
-                "sentence": _sentence(widest, before[widest], widths[widest], cand),
+                "sentence": _sentence(widest, before[widest], widths[widest], cand) + (" (again)" if again else ""),
             }
         )
     if d.targets and not recommendations:
@@ -280,6 +300,7 @@ def design_group(
         "recommendations": recommendations,
         "to_target": {c: _to_target(d, c) for c in d.targets},
         "separating": separations(d, indistinguishable or []),
+        "warnings": d.warnings,
         "method": (
             "sandwich covariance (trials independent, AR(p) noise) with one more simulated trial per candidate; "
             "the systematic part carried unchanged; the model assumed right"
@@ -300,18 +321,10 @@ def _to_target(d: Designer, name: str) -> dict:
             "sentence": f"{coefficient_words(name)} is already within ±{100 * target:g} %",
         }
     if entry["floor_relative_halfwidth95"] >= target:
-        key, shift = _largest_input(d.parameters.get(name, {}))
-        return {
-            **out,
-            "further_trials": None,
-            "reachable": False,
-            "limited_by": key,
-            "sentence": (
-                f"±{100 * target:g} % for {coefficient_words(name)} cannot be reached by more trials: it is limited "
-                f"by {input_words(key)} ({key}; its tolerance alone moves it by ±{_fmt(shift)}, 1σ): measure "
-                f"{input_words(key)} more precisely"
-            ),
-        }
+        advice = measurement_advice(
+            name, coefficient_words(name), entry, d.parameters.get(name, {}), target, d.tolerances, d.stated
+        )
+        return {**out, "further_trials": None, "reachable": False, **advice}
     info = d.info
     for n in range(1, d.options.max_trials + 1):
         _, info, widths = d.best(info, (name,))

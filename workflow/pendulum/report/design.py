@@ -4,6 +4,8 @@ and ``.csv``: per candidate trial and coefficient, the predicted 95 % half-width
 
 from __future__ import annotations
 
+import re
+
 import pandas as pd
 
 from pendulum.design.next_trials import coefficient_words
@@ -70,7 +72,7 @@ def today_table(document: dict, caption) -> str:
             f'<td class="num">{fmt(e["value"], 4)}</td>'
             f'<td class="num">±{fmt(e["halfwidth95"], 3)} ({fmt(100 * e["relative_halfwidth95"], 2)} %)</td>'
             f'<td class="num">±{fmt(1.959963984540054 * e["stderr_systematic"], 3)}</td>'
-            f"<td>{esc(sentence(target.get('sentence', '')))}</td>"
+            f"<td>{design_text(target.get('sentence', ''))}</td>"
             "</tr>"
         )
     head = (
@@ -82,6 +84,23 @@ def today_table(document: dict, caption) -> str:
         f"<table>{caption('Today’s intervals and what more trials can do')}"
         f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>"
     )
+
+
+SYMBOL = re.compile(r"\b([A-Za-zτ])_([A-Za-z])\b")
+
+
+def design_text(text: str) -> str:
+    """A design sentence as HTML: capitalised, a full stop, symbols with subscripts (C_d → C<sub>d</sub>)."""
+    text = sentence(text.strip())
+    if text and text[-1] not in ".!?":
+        text += "."
+    return SYMBOL.sub(r"\1<sub>\2</sub>", esc(text))
+
+
+def _informative(document: dict, table: pd.DataFrame) -> bool:
+    """Whether some candidate narrows a target's interval by 1 % or more (else every line lies on today's)."""
+    rows = table[table.coefficient.isin(document.get("targets", []))]
+    return bool(len(rows)) and bool((rows.halfwidth95_predicted < 0.99 * rows.halfwidth95_today).any())
 
 
 class DesignSections(ReportData):
@@ -99,16 +118,25 @@ class DesignSections(ReportData):
                 out.append(head + f'<p class="warn">{esc(sentence(failure_text(document)))}</p>')
                 continue
             table = read_table(paths["table"])
-            items = "".join(f"<li>{esc(sentence(r['sentence']))}</li>" for r in document["recommendations"])
+            items = "".join(f"<li>{design_text(r['sentence'])}</li>" for r in document["recommendations"])
+            items += "".join(f"<li>{design_text(r['sentence'])}</li>" for r in document.get("separating", []))
             model = document.get("model") or " + ".join(document.get("model_terms", []))
             out.append(
                 head + f"<p>For discovery’s final model ({esc(model)}), fitted to {len(document.get('trials', []))} "
                 "trial(s): the 95 % half-width each coefficient would have with one more trial, released at rest "
                 "from the angle on the x-axis (the model assumed right; the tolerances’ part carried unchanged).</p>"
-                + f'<p class="discovery-verdict"><b>Next:</b></p><ol>{items}</ol>'
+                + f'<div class="discovery-verdict design-next"><b>Next:</b><ol>{items}</ol></div>'
                 + today_table(document, self.table_caption)
             )
-            png = design_figure(document, table)
+            if document.get("warnings"):
+                warned = "".join(f"<li>{design_text(w)}</li>" for w in document["warnings"])
+                out.append(f'<p class="warn">The design’s warnings:</p><ul>{warned}</ul>')
+            png = design_figure(document, table) if _informative(document, table) else None
+            if png is None and not table.empty:
+                out.append(
+                    '<p class="table-note">No figure: every candidate trial leaves these intervals as they are '
+                    "(within 1 %): the tolerances set them.</p>"
+                )
             if png:
                 out.append(
                     figure_html(

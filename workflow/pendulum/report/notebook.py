@@ -94,7 +94,11 @@ figure.sheet { margin: 0; }
 figure.sheet img { width: 100%; height: auto; display: block; border: 1px solid var(--rule); }
 figure.sheet figcaption { text-align: center; }
 details.fit-warnings { font-size: 0.82rem; color: var(--muted); margin: -8px 0 16px; }
-p.discovery-verdict { border-left: 4px solid #0072B2; background: #f3f8fc; padding: 6px 12px; max-width: 1060px; }
+div.design-next { margin-bottom: 14px; }
+div.design-next ol { margin: 4px 0 2px 0; }
+p.discovery-verdict, div.discovery-verdict {
+  border-left: 4px solid #0072B2; background: #f3f8fc; padding: 6px 12px; max-width: 1060px;
+}
 p.discovery-ending { border-left: 4px solid var(--warn); padding: 4px 12px; max-width: 1060px; }
 details.fit-warnings li { margin: 2px 0; }
 @media print {

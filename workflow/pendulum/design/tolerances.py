@@ -1,0 +1,117 @@
+"""What no further trial narrows: the rig values' tolerances behind a coefficient's interval, and how precisely
+they would have to be measured to reach a target width.
+
+A coefficient's systematic variance is Σ_i s_i², s_i its shift when input i moves by its 1σ tolerance u_i
+(the fits' error budget); the shift is linear in u_i. The 95 % half-width is 1.96 √(σ_stat² + Σ s_i²), so the
+target half-width T is reached with input i measured to u_i' = u_i √(T²/1.96² − σ_stat² − Σ_{j≠i} s_j²) / |s_i|
+when that root is real; otherwise input i alone cannot do it and the next largest is needed as well.
+"""
+
+from __future__ import annotations
+
+import math
+
+from pendulum.fit.uncertainty import Z95
+
+INPUT_WORDS = {
+    "mass_kg": ("the rig's mass", "kg"),
+    "length_m": ("the arm length", "m"),
+    "frontal_area_m2": ("the frontal area", "m²"),
+    "displaced_volume_m3": ("the displaced volume", "m³"),
+    "fluid_density_kg_m3": ("the water's density", "kg/m³"),
+    "body_inertia_kg_m2": ("the body's moment of inertia", "kg·m²"),
+    "gravity_m_s2": ("gravity", "m/s²"),
+}
+
+
+def split_key(key: str) -> tuple[str, str | None]:
+    """``displaced_volume_m3[short_arm]`` → (``displaced_volume_m3``, ``short_arm``)."""
+    base, _, rig = key.partition("[")
+    return base, (rig.rstrip("]") or None)
+
+
+def input_words(key: str) -> str:
+    """An error-budget input in words (``pivot_px (axis 1)`` → "the pivot position")."""
+    base, rig = split_key(key)
+    words = "the pivot position" if base.startswith("pivot") else INPUT_WORDS.get(base, (base, ""))[0]
+    return words + (f" of rig {rig}" if rig else "")
+
+
+SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _number(value: float, unit: str) -> str:
+    """±value in two significant digits, ×10ⁿ where plain digits would be long (±2.0×10⁻⁵ m³)."""
+    if value and not 1e-3 <= abs(value) < 1e4:
+        exponent = math.floor(math.log10(abs(value)))
+        text = f"{value / 10**exponent:.2g}×10{str(exponent).translate(SUPERSCRIPT)}"
+    else:
+        text = f"{value:.2g}"
+    return f"±{text} {unit}".rstrip()
+
+
+def _tolerance_text(key: str, tolerances: dict, stated: dict) -> str:
+    """Today's 1σ tolerance of an input, and whether it was stated or is the default share of the value."""
+    base, rig = split_key(key)
+    unit = INPUT_WORDS.get(base, ("", ""))[1]
+    rig_name = rig or next(iter(tolerances), None)
+    value = (tolerances.get(rig_name) or {}).get(base)
+    if value is None:
+        return ""
+    if base in (stated.get(rig_name) or {}):
+        return f"{_number(value, unit)}, 1σ, as stated"
+    return f"{_number(value, unit)}, 1σ: the default share of its value; state yours under rigs.{rig_name}.tolerances"
+
+
+def measurement_advice(
+    name: str, words: str, entry: dict, parameter: dict, target: float, tolerances: dict, stated: dict
+) -> dict:
+    """Why ``target`` (95 % half-width / value) cannot be reached by trials, and which inputs to measure how well.
+
+    ``entry``: today's (value, stderr_statistical, stderr_systematic); ``parameter``: the coefficient's reported
+    entry (``error_budget``: input → shift per 1σ); ``tolerances`` / ``stated``: rig → input → 1σ (all, stated).
+    """
+    value = abs(entry["value"])
+    budget = {k: abs(float(v)) for k, v in (parameter.get("error_budget") or {}).items() if v}
+    order = sorted(budget, key=lambda k: -budget[k])
+    if not order:
+        return {"limited_by": "", "measure": [], "sentence": f"±{100 * target:g} % for {words} cannot be reached"}
+    allowed = (target * value / Z95) ** 2 - entry["stderr_statistical"] ** 2
+    floor = 100 * entry["floor_relative_halfwidth95"]
+    first = order[0]
+    head = (
+        f"±{100 * target:g} % for {words} cannot be reached by more trials: the rig values' tolerances alone give "
+        f"±{floor:.2g} % (95 %), most of it from {input_words(first)}"
+    )
+    tolerance = _tolerance_text(first, tolerances, stated)
+    head += f" ({tolerance}: ±{100 * Z95 * budget[first] / value:.2g} %)" if tolerance else ""
+    # the fewest largest inputs that, measured better by one common factor f, bring the target within reach
+    total = sum(budget[k] ** 2 for k in order)
+    for n in range(1, len(order) + 1):
+        rest = total - sum(budget[k] ** 2 for k in order[:n])
+        if allowed - rest > 0:
+            break
+    else:
+        return {
+            "limited_by": first,
+            "measure": [],
+            "sentence": head + f"; the statistical part alone exceeds ±{100 * target:g} %",
+        }
+    chosen = order[:n]
+    factor = math.sqrt((allowed - rest) / sum(budget[k] ** 2 for k in chosen))
+    measure, steps = [], []
+    for key in chosen:
+        base, rig = split_key(key)
+        today_1s = (tolerances.get(rig or next(iter(tolerances), None)) or {}).get(base)
+        to = None if today_1s is None else today_1s * factor
+        measure.append({"input": key, "to_1sigma": to, "factor": factor})
+        unit = INPUT_WORDS.get(base, ("", ""))[1]
+        steps.append(input_words(key) + ("" if to is None else f" to {_number(to, unit)}"))
+    listing = steps[0] if len(steps) == 1 else ", ".join(steps[:-1]) + " and " + steps[-1]
+    times = f"{1 / factor:.2g}× as precisely" if factor > 0 else "exactly"
+    sentence = head + f". Measuring {listing} (1σ; {times} as today) would reach ±{100 * target:g} %"
+    return {
+        "limited_by": first,
+        "measure": measure,
+        "sentence": sentence,
+    }
