@@ -438,6 +438,7 @@ def test_the_report_renders_in_chromium_with_every_image_and_table3_complete(rep
         "extinction",
         "model-comparison",
         "discovery",
+        "design",
         "truth",
         "tracking",
         "failed-trials",

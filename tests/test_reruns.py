@@ -24,7 +24,7 @@ from conftest import DEMO_RAW, demo_trials
 from workflow_run import SNAKEMAKE, copy_project, digest, one_variant, planned_wildcards, run
 
 VARIANTS = ("friction", "linear", "quadratic")
-AGGREGATES = {"fit_joint", "fit_summary", "status_table", "check_trials", "all", "report", "discovery"}
+AGGREGATES = {"fit_joint", "fit_summary", "status_table", "check_trials", "all", "report", "discovery", "design"}
 
 
 def plan(project, *args) -> Counter:
