@@ -12,15 +12,19 @@ from __future__ import annotations
 import math
 
 from pendulum.fit.uncertainty import Z95
+from pendulum.model.rig import RIG_VALUE_UNITS
 
-INPUT_WORDS = {
-    "mass_kg": ("the rig's mass", "kg"),
-    "length_m": ("the arm length", "m"),
-    "frontal_area_m2": ("the frontal area", "m²"),
-    "displaced_volume_m3": ("the displaced volume", "m³"),
-    "fluid_density_kg_m3": ("the water's density", "kg/m³"),
-    "body_inertia_kg_m2": ("the body's moment of inertia", "kg·m²"),
-    "gravity_m_s2": ("gravity", "m/s²"),
+INPUT_WORDS = {  # error-budget input → (words in a sentence, unit)
+    key: (words, RIG_VALUE_UNITS[key])
+    for key, words in (
+        ("mass_kg", "the rig's mass"),
+        ("length_m", "the arm length"),
+        ("frontal_area_m2", "the frontal area"),
+        ("displaced_volume_m3", "the displaced volume"),
+        ("fluid_density_kg_m3", "the water's density"),
+        ("body_inertia_kg_m2", "the body's moment of inertia"),
+        ("gravity_m_s2", "gravity"),
+    )
 }
 
 

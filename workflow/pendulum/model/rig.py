@@ -5,6 +5,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 STANDARD_GRAVITY_M_S2 = 9.81
+RIG_VALUE_UNITS = {  # every rig value a rig or sidecar may state → its unit (tables, error budgets, advice)
+    "mass_kg": "kg",
+    "length_m": "m",
+    "frontal_area_m2": "m²",
+    "displaced_volume_m3": "m³",
+    "fluid_density_kg_m3": "kg/m³",
+    "gravity_m_s2": "m/s²",
+    "body_inertia_kg_m2": "kg·m²",
+    "characteristic_length_m": "m",
+    "kinematic_viscosity_m2_s": "m²/s",
+}
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ import html
 import math
 
 from pendulum.model.effects import ADDED_MASS
+from pendulum.model.rig import RIG_VALUE_UNITS
 
 # ---------------------------------------------------------------------------
 # Names, symbols and units
@@ -37,15 +38,18 @@ TERM_LABELS = {
     "coulomb_friction": "Coulomb friction",
 }
 RIG_LABELS = {  # rig value → (label, unit)
-    "mass_kg": ("mass m", "kg"),
-    "length_m": ("length L (pivot to body centre)", "m"),
-    "frontal_area_m2": ("frontal area A", "m²"),
-    "displaced_volume_m3": ("displaced volume V", "m³"),
-    "fluid_density_kg_m3": ("fluid density ρ", "kg/m³"),
-    "gravity_m_s2": ("gravity g", "m/s²"),
-    "body_inertia_kg_m2": ("body inertia about the pivot I_p", "kg·m²"),
-    "characteristic_length_m": ("characteristic length D (KC)", "m"),
-    "kinematic_viscosity_m2_s": ("kinematic viscosity ν", "m²/s"),
+    key: (label, RIG_VALUE_UNITS[key])
+    for key, label in (
+        ("mass_kg", "mass m"),
+        ("length_m", "length L (pivot to body centre)"),
+        ("frontal_area_m2", "frontal area A"),
+        ("displaced_volume_m3", "displaced volume V"),
+        ("fluid_density_kg_m3", "fluid density ρ"),
+        ("gravity_m_s2", "gravity g"),
+        ("body_inertia_kg_m2", "body inertia about the pivot I_p"),
+        ("characteristic_length_m", "characteristic length D (KC)"),
+        ("kinematic_viscosity_m2_s", "kinematic viscosity ν"),
+    )
 }
 # Okabe–Ito colours (distinct for colour-blind readers and in greyscale print by marker)
 PALETTE = ("#D55E00", "#E69F00", "#0072B2", "#009E73", "#CC79A7", "#56B4E9", "#F0E442", "#000000")
