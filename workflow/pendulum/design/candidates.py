@@ -79,10 +79,11 @@ def candidate_record(fit: GroupFit, rig: str, rig_values: Rig | None, release_de
     return record, (float(theta[1]), float(omega[1]), 0.0), params
 
 
-def candidate_sensitivities(fit: GroupFit, candidate: Candidate, rig_values: Rig | None, skip_s: float):
-    """The candidate's coefficient columns (parameter, rig) and its J_c (those columns, then θ0, θ̇0, δ)."""
+def candidate_sensitivities(fit: GroupFit, candidate: Candidate, made: tuple):
+    """The candidate's coefficient columns (parameter, rig) and its J_c (those columns, then θ0, θ̇0, δ);
+    ``made``: its :func:`candidate_record`."""
     problem = fit.problem
-    record, nuisance, params = candidate_record(fit, candidate.rig, rig_values, candidate.release_deg, skip_s)
+    record, nuisance, params = made
     single = GroupProblem([record], [candidate.rig], problem.terms, None, problem.max_step_s)
     x = np.array([params.get(p, 0.0) for p, _ in single.columns] + list(nuisance))
     return list(single.columns), single.jacobian(x)

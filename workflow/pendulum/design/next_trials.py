@@ -26,6 +26,7 @@ from pendulum.design.candidates import (
     DRAG_COEFFICIENT,
     Candidate,
     Information,
+    candidate_record,
     candidate_sensitivities,
     half_widths,
     median_noise,
@@ -173,16 +174,19 @@ class Designer:
                 )
         self.described = self._described(options, problem)
         self.sensitivities = {}
+        self.records = {}  # candidate → its simulated record, nuisance and coefficients (candidate_record)
         for rig, hypothetical in [(r, False) for r in problem.rigs] + [(r, True) for r in self.described]:
             for release in options.releases_deg:
                 for sign in (-1.0, 1.0):
                     cand = Candidate(rig, sign * release, hypothetical)
                     try:
-                        self.sensitivities[cand] = candidate_sensitivities(
-                            fit, cand, self.described.get(rig), settings.release_skip_s
+                        made = candidate_record(
+                            fit, rig, self.described.get(rig), cand.release_deg, self.release_skip_s
                         )
                     except SimulationDiverged:
                         continue
+                    self.records[cand] = made
+                    self.sensitivities[cand] = candidate_sensitivities(fit, cand, made)
 
     def _described(self, options: DesignOptions, problem) -> dict[str, Rig]:
         """The rigs of config ``design.rigs``: the group's first rig with the values given; one that is not a

@@ -7,10 +7,9 @@ import math
 
 import numpy as np
 
-from pendulum.design.candidates import Candidate, candidate_record
+from pendulum.design.candidates import Candidate
 from pendulum.fit.group import GroupProblem, ordered
 from pendulum.model.effects import TERMS
-from pendulum.model.physics import SimulationDiverged
 
 
 def _unexplained(rows: list[tuple[np.ndarray, np.ndarray]]) -> float:
@@ -78,8 +77,6 @@ def separations(d, groups: list[dict]) -> list[dict]:
                 if one_frequency and not cand.hypothetical:
                     continue
                 rows = _candidate_rows(d, cand, carried, rival, n_cols, scale)
-                if rows is None:
-                    continue
                 width = rows[0].shape[1]
                 padded = [(np.pad(j, ((0, 0), (0, width - n_cols))), s) for j, s in today_rows]
                 separation = math.sqrt(_unexplained([*padded, rows]))
@@ -119,14 +116,9 @@ def separations(d, groups: list[dict]) -> list[dict]:
 
 def _candidate_rows(d, cand: Candidate, carried: str, rival: GroupProblem, n_cols: int, scale: float):
     """The candidate's rival sensitivities (columns: today's rival columns, any new rig's own, then its θ0, θ̇0,
-    δ) and its signal of the carried effect, both times ``scale``; None if its simulation diverges."""
-    fit, problem = d.fit, d.fit.problem
-    try:
-        record, nuisance, params = candidate_record(
-            fit, cand.rig, d.described.get(cand.rig), cand.release_deg, d.release_skip_s
-        )
-    except SimulationDiverged:
-        return None
+    δ) and its signal of the carried effect, both times ``scale`` (its record as the designer simulated it)."""
+    problem = d.fit.problem
+    record, nuisance, params = d.records[cand]
     final = GroupProblem([record], [cand.rig], problem.terms, None, problem.max_step_s)
     x = np.array([params.get(p, 0.0) for p, _ in final.columns] + list(nuisance))
     off = x.copy()
