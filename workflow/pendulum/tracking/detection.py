@@ -55,6 +55,9 @@ from pendulum.tracking.arcs import (
 from pendulum.tracking.spots import (
     active_box,
     dog_blobs,
+    dog_pyramid,
+    foreground_pyramid,
+    full_scene,
     local_contrast,
     marker_free_background,
     quantile_backgrounds,
@@ -143,10 +146,13 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
             f"{path}: only {n} frames: too short to find the swinging marker; give tracking polarity, "
             "marker_radius_px and start_px in the trial's sidecar"
         )
+    stack = np.stack([img for _, img in small])
+    background, _, rows = _blob_rows(stack, scale)
+    scene = full_scene(full)
     outcomes = []
     for quantile in (0.5, BACKGROUND_QUANTILE):
         try:
-            outcomes.append(_detect(path, small, full, scale, first, seed, quantile))
+            outcomes.append(_detect(path, small, full, scale, first, seed, stack, background, rows[quantile], scene))
         except DetectionError as error:
             outcomes.append(error)
     started = [d for d in outcomes if isinstance(d, Detection) and d.start_px is not None]
@@ -201,10 +207,12 @@ def _off_vertical_deg(rest_deg: float) -> float:
     return min(abs(rest_deg), 180.0 - abs(rest_deg))
 
 
-def _detect(path, small, full, scale: int, first, seed: int, quantile: float) -> Detection:
-    """The swinging marker in the samples, spots sought against the ``quantile`` background (0.5: the median)."""
-    n = len(small)
-    stack = np.stack([img for _, img in small])
+def _blob_rows(stack: np.ndarray, scale: int) -> tuple[np.ndarray, float, dict[float, list]]:
+    """The samples' median scene, the blob threshold, and per search (0.5: against the median, both signs;
+    :data:`BACKGROUND_QUANTILE`: bright spots against the low quantile, dark ones against the high) the
+    blobs ``(sample, sign, x, y, r, s)``. Each sample's DoG pyramid is built once and serves every
+    background (:func:`pendulum.tracking.spots.dog_pyramid`)."""
+    n = len(stack)
     background = np.median(stack, axis=0).astype(np.float32)
     some = stack[:: max(1, n // 10), ::4, ::4].astype(np.float32) - background[None, ::4, ::4]
     noise = 1.4826 * float(np.median(np.abs(some)))
@@ -213,18 +221,25 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     # (a dark spot: a high one). A marker that swings little, or comes to rest, covers its pixels in
     # most samples: the median would hold it and hide it; the quantiles do while it is elsewhere in at
     # least that share of them.
-    if quantile == 0.5:
-        references = [(background, 0)]  # both signs against the median
-    else:
-        low, high = quantile_backgrounds(stack, quantile)
-        references = [(low, 1), (high, -1)]
-    rows = []
+    low, high = quantile_backgrounds(stack, BACKGROUND_QUANTILE)
+    searches = {
+        0.5: [(dog_pyramid(background), (1, -1))],
+        BACKGROUND_QUANTILE: [(dog_pyramid(low), (1,)), (dog_pyramid(high), (-1,))],
+    }
+    rows: dict[float, list] = {q: [] for q in searches}
     for k in range(n):
-        frame = stack[k].astype(np.float32)
-        for reference, wanted in references:
-            for sign, x, y, r, s in dog_blobs(frame - reference, scale, threshold, per_sign=8):
-                if wanted in (0, sign):
-                    rows.append((k, sign, x, y, r, s))
+        frame = dog_pyramid(stack[k].astype(np.float32))
+        for quantile, references in searches.items():
+            for reference, signs in references:
+                for sign, x, y, r, s in dog_blobs(foreground_pyramid(frame, reference), scale, threshold, 8, signs):
+                    rows[quantile].append((k, sign, x, y, r, s))
+    return background, threshold, rows
+
+
+def _detect(path, small, full, scale: int, first, seed: int, stack, background, rows: list, scene) -> Detection:
+    """The swinging marker in the samples, from the blobs ``rows`` of one search (:func:`_blob_rows`);
+    ``scene``: :func:`pendulum.tracking.spots.full_scene` of the full-size samples ``full``."""
+    n = len(small)
     where = f"{path}: "
     hint = (
         "give tracking polarity, marker_radius_px and start_px (the marker's centre in the first frame) "
@@ -336,7 +351,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
         best = cleaned
     # Full-resolution refinement: radius from samples on the arc, start in frame 0.
     positions = {small[int(blobs.sample[i])][0]: (blobs.x[i], blobs.y[i]) for i in best.members}
-    bg_full = marker_free_background(full, positions, best.radius)
+    bg_full = marker_free_background(full, positions, best.radius, scene=scene)
     # Judged where the scene is best known: in the outer half of the swing (a body moving with the
     # marker covers the middle of the swing in most frames, and so is part of the median there).
     angles = {f: math.atan2(x - best.cx, y - best.cy) for f, (x, y) in positions.items()}
@@ -347,7 +362,7 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     noise_full = 1.4826 * float(np.nanmedian(np.abs(diff - np.nanmedian(diff))))
     free = surround_is_scene(full, outer, bg_full, best.radius, max(5.0, 2.5 * noise_full))
     if free and np.isnan(bg_full).any():  # no body: the scene is seen closer to the marker (a narrow swing's middle)
-        closer = marker_free_background(full, positions, best.radius, reach_radii=1.2)
+        closer = marker_free_background(full, positions, best.radius, reach_radii=1.2, scene=scene)
         bg_full = np.where(np.isnan(bg_full), closer, bg_full)
 
     def scene_removed(image):
@@ -377,8 +392,12 @@ def _detect(path, small, full, scale: int, first, seed: int, quantile: float) ->
     if i is not None:
         tangent = arc_tangent(blobs.x[i], blobs.y[i], best)
         res = refine_spot(scene_removed(first), blobs.x[i], blobs.y[i], best.sign, radius, tangent)
-        if res is not None and math.dist(res[:2], (blobs.x[i], blobs.y[i])) > max(0.5 * radius, 2.0 * scale):
-            res = None  # the refinement ran off its spot (to a stripe, a rod): no marker-sized spot there
+        if res is not None and (
+            math.dist(res[:2], (blobs.x[i], blobs.y[i])) > max(0.5 * radius, 2.0 * scale)
+            or (radii and not 0.6 <= res[2] / radius <= 1.5)
+        ):  # the refinement ran off its spot (to a stripe, a rod, a body's edge): no marker-sized spot there
+            # (demo_p05's median search: a 17 px spot for the arc's 10 px marker, 4–6 px off its blob)
+            res = None
         if res is not None:
             if 0 in on_arc or held is not None:
                 start = (float(res[0]), float(res[1]))

@@ -69,21 +69,34 @@ def _peak_offset(response: np.ndarray, y: int, x: int, sign: int) -> tuple[float
     return offsets[0], offsets[1]
 
 
-def dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
-    """Peaks of the scale-normalised DoG of ``fg`` (both signs): list of (sign, x, y, r, s), full-res units."""
-    found = []
-    level_img = fg
-    level = 0
-    while min(level_img.shape) >= 24 and level < 4:
+def dog_pyramid(image: np.ndarray) -> list[list[np.ndarray]]:
+    """The DoG responses of ``image`` on each pyramid level: ``[[DoG_σ for σ in PYRAMID_SIGMAS] per level]``.
+
+    Every step (Gaussian blurs, differences, ``pyrDown``) is linear, so the pyramid of a foreground
+    F = I − B is the pyramid of I less that of B: one pyramid per frame serves every background.
+    """
+    levels = []
+    level_img = image.astype(np.float32, copy=False)
+    while min(level_img.shape) >= 24 and len(levels) < 4:
         blurred = [cv2.GaussianBlur(level_img, (0, 0), s) for s in PYRAMID_SIGMAS]
         blurred.append(cv2.GaussianBlur(level_img, (0, 0), PYRAMID_SIGMAS[-1] * 1.5))
-        dogs = [cv2.subtract(blurred[i], blurred[i + 1]) for i in range(len(PYRAMID_SIGMAS))]
+        levels.append([cv2.subtract(blurred[i], blurred[i + 1]) for i in range(len(PYRAMID_SIGMAS))])
+        level_img = cv2.pyrDown(level_img)
+    return levels
+
+
+def dog_blobs(fg, scale: int, threshold: float, per_sign: int, signs: tuple[int, ...] = (1, -1)):
+    """Peaks of the scale-normalised DoG of ``fg`` (an image, or its :func:`dog_pyramid`) of the given
+    ``signs``: list of (sign, x, y, r, s), full-res units."""
+    levels = dog_pyramid(fg) if isinstance(fg, np.ndarray) else fg
+    found = []
+    kernel = np.ones((3, 3), np.uint8)
+    for level, dogs in enumerate(levels):
         top, low = dogs[0], dogs[0]
         for dog in dogs[1:]:
             top, low = cv2.max(top, dog), cv2.min(low, dog)
-        kernel = np.ones((3, 3), np.uint8)
         f = scale * (1 << level)
-        for sign in (1, -1):
+        for sign in signs:
             best = top if sign > 0 else cv2.multiply(low, -1.0)
             peaks = (best >= cv2.dilate(best, kernel)) & (best > threshold)
             ys, xs = np.nonzero(peaks)
@@ -103,8 +116,6 @@ def dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
                         float(best[yy, xx]),
                     )
                 )
-        level_img = cv2.pyrDown(level_img)
-        level += 1
     # One blob per place: the strongest response suppresses weaker ones within its radius (any scale).
     found.sort(key=lambda b: -b[4])
     kept: list = []
@@ -112,9 +123,14 @@ def dog_blobs(fg: np.ndarray, scale: int, threshold: float, per_sign: int):
         if all(b[0] != k[0] or math.hypot(b[1] - k[1], b[2] - k[2]) > max(b[3], k[3]) for k in kept):
             kept.append(b)
     out = []
-    for sign in (1, -1):
+    for sign in signs:
         out.extend([b for b in kept if b[0] == sign][:per_sign])
     return out
+
+
+def foreground_pyramid(frame: list[list[np.ndarray]], reference: list[list[np.ndarray]]) -> list[list[np.ndarray]]:
+    """The DoG pyramid of I − B from those of I and B (:func:`dog_pyramid`)."""
+    return [[cv2.subtract(a, b) for a, b in zip(fa, fb, strict=True)] for fa, fb in zip(frame, reference, strict=True)]
 
 
 def quantile_backgrounds(stack: np.ndarray, quantile: float) -> tuple[np.ndarray, np.ndarray]:
@@ -210,7 +226,15 @@ def local_contrast(stack: np.ndarray, blobs: Blobs, track: ArcTrack, scale: int)
     return max(float(np.median(values)), 0.0) if values else 0.0
 
 
-def marker_free_background(frames, positions: dict, radius: float, reach_radii: float = 2.5) -> np.ndarray:
+def full_scene(frames) -> tuple[np.ndarray, np.ndarray]:
+    """The (n, h, w) float32 stack of ``frames`` [(index, image)] and its per-pixel median (computed once per clip)."""
+    images = np.stack([img for _, img in frames])
+    return images.astype(np.float32), np.median(images, axis=0).astype(np.float32)
+
+
+def marker_free_background(
+    frames, positions: dict, radius: float, reach_radii: float = 2.5, scene: tuple | None = None
+) -> np.ndarray:
     """Per-pixel median over ``frames`` [(index, image)] leaving out the marker's neighbourhood in each.
 
     ``positions``: frame index → marker centre (full resolution). Pixels within ``reach_radii`` r + 4 px
@@ -218,8 +242,9 @@ def marker_free_background(frames, positions: dict, radius: float, reach_radii: 
     nearly the scene's grey: a tighter reach takes it for the scene, so 1.2 r + 4 px only for a
     marker with no body); a pixel covered in every frame (a marker at rest there throughout, or
     the middle of a swing narrower than that reach) is NaN: the scene behind it is unknown.
+    ``scene``: :func:`full_scene` of ``frames``, when the caller has it.
     """
-    stack = np.stack([img for _, img in frames]).astype(np.float32)
+    stack, median = full_scene(frames) if scene is None else scene
     h, w = stack.shape[1:]
     reach = reach_radii * radius + 4.0
     near = np.zeros((h, w), np.uint8)
@@ -229,7 +254,7 @@ def marker_free_background(frames, positions: dict, radius: float, reach_radii: 
             x, y = positions[index]
             disks.append((k, x, y))
             cv2.circle(near, (int(round(x)), int(round(y))), int(math.ceil(reach)) + 1, 1, -1)
-    background = np.median(stack, axis=0)
+    background = median.copy()
     ys, xs = np.nonzero(near)
     if ys.size:
         values = stack[:, ys, xs]
