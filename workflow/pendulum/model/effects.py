@@ -9,7 +9,7 @@ with p its one coefficient (the model is linear in it), what the coefficient
 is called and measured in, its bounds, and how it shows in a free decay: the
 amplitude lost per half cycle as a power of the amplitude (the extinction
 curve ΔA(A)) and what it does to the period. ``explanation`` is the paragraph
-a report prints. The history force has no ``shape``: it acts through the
+a report prints. The history force has no ``basis``: it acts through the
 memory that :func:`pendulum.model.physics.simulate` carries.
 
 Small-damping energy balance over a half cycle of amplitude A (K = (m g − B)L,
@@ -31,16 +31,19 @@ from pendulum.model.rig import Rig
 class Term:
     """One candidate effect, linear in its coefficient.
 
-    ``shape(rig, theta, omega)`` returns the torque per unit coefficient, so the
-    term's torque is ``coefficient * shape`` (None for the history force, whose
-    torque depends on the past). ``coulomb`` marks the discontinuous sgn(θ̇)
-    term that the exact simulator treats with stick–slip.
+    The torque per unit coefficient is ``scale(rig) · b(θ, θ̇)`` with ``basis`` naming b in
+    :data:`BASES` (:meth:`shape`), so the term's torque is ``coefficient * shape``; the
+    history force has neither (its torque depends on the past). Terms of one basis add up
+    to one factor, which is how :func:`pendulum.model.physics.simulate` evaluates a model
+    in its inner loop. ``coulomb`` marks the discontinuous sgn(θ̇) term that the exact
+    simulator treats with stick–slip.
     """
 
     name: str
     parameter: str
     unit: str
-    shape: Callable | None
+    basis: str | None
+    scale: Callable[[Rig], float] | None = None
     coulomb: bool = False
     description: str = ""  # the torque, as an equation
     memory: bool = False  # the Basset–Boussinesq history force: simulate() carries its memory
@@ -52,6 +55,10 @@ class Term:
     period_signature: str = ""
     explanation: str = ""
     typical_scale: Callable | None = None  # rig → a magnitude of the coefficient (finite-difference steps only)
+
+    def shape(self, rig: Rig, theta, omega):
+        """Torque per unit coefficient, ``scale(rig) · b(θ, θ̇)`` (scalars or arrays)."""
+        return self.scale(rig) * BASES[self.basis](theta, omega)
 
     def half_cycle_loss_rad(self, rig: Rig, inertia_kg_m2: float, omega0_rad_s: float, value: float, amplitude_rad):
         """ΔA, the amplitude this effect alone removes over a half cycle starting near ``amplitude_rad``."""
@@ -68,23 +75,19 @@ class Term:
 
 
 # ---------------------------------------------------------------------------
-# Torque shapes (per unit coefficient)
+# Torque bases: a term's torque per unit coefficient is scale(rig) · b(θ, θ̇)
+
+BASES: dict[str, Callable] = {
+    "sin_theta": lambda theta, omega: np.sin(theta),
+    "omega_abs_omega": lambda theta, omega: omega * abs(omega),
+    "omega": lambda theta, omega: omega,
+    "sign_omega": lambda theta, omega: np.sign(omega),
+}
 
 
-def _quadratic_drag_shape(rig: Rig, theta, omega):
-    return -0.5 * rig.fluid_density_kg_m3 * rig.length_m**3 * omega * abs(omega)
-
-
-def _linear_damping_shape(rig: Rig, theta, omega):
-    return -omega
-
-
-def _coulomb_shape(rig: Rig, theta, omega):
-    return -np.sign(omega)
-
-
-def _restoring_shape(rig: Rig, theta, omega):
-    return -rig.restoring_torque_nm * np.sin(theta)
+def _quadratic_drag_scale(rig: Rig) -> float:
+    """−½ ρ L³ (the torque −½ ρ C_dA L³ θ̇|θ̇| per unit C_dA)."""
+    return -0.5 * rig.fluid_density_kg_m3 * rig.length_m**3
 
 
 def _pivot_omega(rig: Rig) -> float:
@@ -126,7 +129,8 @@ TERMS: dict[str, Term] = {
             "quadratic_drag",
             "drag_area_m2",
             "m²",
-            _quadratic_drag_shape,
+            "omega_abs_omega",
+            _quadratic_drag_scale,
             description="−½ ρ C_d A L³ θ̇|θ̇|",
             label="quadratic (form) drag",
             symbol="C_dA",
@@ -149,7 +153,8 @@ TERMS: dict[str, Term] = {
             "linear_damping",
             "linear_damping_nm_s",
             "N·m·s",
-            _linear_damping_shape,
+            "omega",
+            lambda rig: -1.0,
             description="−c θ̇",
             label="linear (viscous) damping",
             symbol="c",
@@ -169,7 +174,8 @@ TERMS: dict[str, Term] = {
             "coulomb_friction",
             "friction_torque_nm",
             "N·m",
-            _coulomb_shape,
+            "sign_omega",
+            lambda rig: -1.0,
             coulomb=True,
             description="−τ_f sgn(θ̇)",
             label="bearing (Coulomb) friction",
@@ -190,7 +196,8 @@ TERMS: dict[str, Term] = {
             "restoring_correction",
             "restoring_torque_correction",
             "1",
-            _restoring_shape,
+            "sin_theta",
+            lambda rig: -rig.restoring_torque_nm,
             description="−ε (m g − B) L sin θ",
             lower_bound=-0.5,
             label="restoring-torque correction",

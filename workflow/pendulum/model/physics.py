@@ -204,6 +204,21 @@ def _step_counts(times, substeps, max_step_s):
     return intervals, counts
 
 
+def basis_factors(model: PendulumModel, params: dict) -> dict[str, float]:
+    """The smooth torque as Σ_b F_b · b(θ, θ̇) over the bases of :data:`pendulum.model.effects.BASES`:
+    F_sinθ = −(m g − B) L + Σ p · scale(rig) of the sin θ terms, and so on (N·m); Coulomb friction
+    and the history force are not smooth and not included."""
+    factors = {"sin_theta": -model.rig.restoring_torque_nm, "omega_abs_omega": 0.0, "omega": 0.0}
+    for name in model.terms:
+        term = TERMS[name]
+        if term.coulomb or term.memory:
+            continue
+        if term.basis not in factors:
+            raise ValueError(f"term {name!r}: the simulator has no factor for the basis {term.basis!r}")
+        factors[term.basis] += float(params[term.parameter]) * float(term.scale(model.rig))
+    return factors
+
+
 def _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s):
     """:func:`simulate` for a model without memory or external torque (the original code path)."""
     times = np.asarray(times_s, dtype=float)
@@ -211,29 +226,24 @@ def _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, subst
         raise ValueError("times_s must be a strictly increasing 1-D sequence")
     inertia = float(model.inertia_kg_m2(params))
     tau_f = model.friction_torque_nm(params)
-    rig = model.rig
-    restoring = rig.restoring_torque_nm
-    smooth_terms = [(float(params[TERMS[t].parameter]), TERMS[t].shape) for t in model.terms if not TERMS[t].coulomb]
+    factors = basis_factors(model, params)
+    # θ̈ = a_s sin θ + a_q θ̇|θ̇| + a_l θ̇ − τ_f sgn(θ̇)/I, each factor over I: one expression, no calls
+    a_sin, a_quad, a_lin = (factors[b] / inertia for b in ("sin_theta", "omega_abs_omega", "omega"))
     sin = math.sin
 
-    def smooth_torque(theta, omega):  # scalar twin of PendulumModel.smooth_torque_nm
-        torque = -restoring * sin(theta)
-        for coefficient, shape in smooth_terms:
-            torque = torque + coefficient * shape(rig, theta, omega)
-        return torque
-
-    def accel_for(direction):
-        friction = tau_f * direction
-
-        def accel(theta, omega):
-            return (smooth_torque(theta, omega) - friction) / inertia
-
-        return accel
-
-    accelerations = {d: accel_for(d) for d in (-1, 1)}
+    def step(theta, omega, h, a_const):
+        """One classical RK4 step (:func:`_rk4_step`) of θ̈ = a_s sin θ + a_q θ̇|θ̇| + a_l θ̇ + a_const."""
+        k1 = a_sin * sin(theta) + a_quad * omega * abs(omega) + a_lin * omega + a_const
+        w2 = omega + 0.5 * h * k1
+        k2 = a_sin * sin(theta + 0.5 * h * omega) + a_quad * w2 * abs(w2) + a_lin * w2 + a_const
+        w3 = omega + 0.5 * h * k2
+        k3 = a_sin * sin(theta + 0.5 * h * w2) + a_quad * w3 * abs(w3) + a_lin * w3 + a_const
+        w4 = omega + h * k3
+        k4 = a_sin * sin(theta + h * w3) + a_quad * w4 * abs(w4) + a_lin * w4 + a_const
+        return theta + h / 6.0 * (omega + 2 * w2 + 2 * w3 + w4), omega + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
     def direction_at_rest(theta):
-        torque = smooth_torque(theta, 0.0)
+        torque = factors["sin_theta"] * sin(theta)  # the smooth torque at θ̇ = 0
         if abs(torque) <= tau_f:
             return 0
         return 1 if torque > 0 else -1
@@ -256,15 +266,15 @@ def _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, subst
                 break
             remaining = h
             while remaining > 0 and direction != 0:
-                accel = accelerations[direction]
-                new_theta, new_omega = _rk4_step(accel, theta, omega, remaining)
+                a_const = -tau_f * direction / inertia
+                new_theta, new_omega = step(theta, omega, remaining, a_const)
                 if new_omega * direction > 0:
                     theta, omega = new_theta, new_omega
                     break
 
                 # Velocity reaches zero inside this step: locate the reversal.
-                def velocity_after(step, accel=accel, theta=theta, omega=omega, direction=direction):
-                    return _rk4_step(accel, theta, omega, step)[1] * direction
+                def velocity_after(dt, a_const=a_const, theta=theta, omega=omega, direction=direction):
+                    return step(theta, omega, dt, a_const)[1] * direction
 
                 if velocity_after(0.0) <= 0:
                     if omega == 0.0:  # cannot happen for a consistent direction; never spin
@@ -272,7 +282,7 @@ def _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, subst
                     h_event = 0.0
                 else:
                     h_event = brentq(velocity_after, 0.0, remaining, xtol=1e-15, rtol=1e-15)
-                theta = _rk4_step(accel, theta, omega, h_event)[0]
+                theta = step(theta, omega, h_event, a_const)[0]
                 omega = 0.0
                 remaining -= h_event
                 direction = direction_at_rest(theta)
@@ -285,8 +295,9 @@ def _simulate_with_memory(
 ):
     """:func:`simulate` with the history force's memory and/or an external torque τ_ext(t).
 
-    θ and θ̇ are advanced by the same RK4 arithmetic as the memoryless path (bit-identical
-    when K_h = 0 and there is no external torque); the states z_j ride along.
+    θ and θ̇ are advanced by the same RK4 arithmetic as the memoryless path, on the same
+    :func:`basis_factors` (bit-identical when K_h = 0 and there is no external torque); the
+    states z_j ride along.
     """
     times = np.asarray(times_s, dtype=float)
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
@@ -294,38 +305,41 @@ def _simulate_with_memory(
     inertia = float(model.inertia_kg_m2(params))
     tau_f = model.friction_torque_nm(params)
     rig = model.rig
-    restoring = rig.restoring_torque_nm
-    smooth_terms = [
-        (float(params[TERMS[t].parameter]), TERMS[t].shape)
-        for t in model.terms
-        if not TERMS[t].coulomb and not TERMS[t].memory
-    ]
+    factors = basis_factors(model, params)
     kernel = HISTORY_KERNEL
     history_torque = model.history_coefficient(params) * rig.length_m**2  # N·m per unit H
     effective_inertia = inertia + history_torque * kernel.instantaneous_s05
     weights, moments, sums = kernel.weights, kernel.moment_matrix, kernel.sums
     external = external_torque_nm
     sin = math.sin
+    # the memoryless path's expression, over the effective inertia, less the history term (0 when K_h = 0)
+    a_sin, a_quad, a_lin = (factors[b] / effective_inertia for b in ("sin_theta", "omega_abs_omega", "omega"))
+    a_history = history_torque / effective_inertia
 
     def smooth_torque(theta, omega):
-        torque = -restoring * sin(theta)
-        for coefficient, shape in smooth_terms:
-            torque = torque + coefficient * shape(rig, theta, omega)
-        return torque
+        return (
+            factors["sin_theta"] * sin(theta)
+            + factors["omega_abs_omega"] * omega * abs(omega)
+            + factors["omega"] * omega
+        )
 
     def accel_for(direction):
-        friction = tau_f * direction
+        a_const = -tau_f * direction / effective_inertia
         if external is None:
 
             def accel(t, theta, omega, history):
-                return (smooth_torque(theta, omega) - friction - history_torque * history) / effective_inertia
+                return a_sin * sin(theta) + a_quad * omega * abs(omega) + a_lin * omega + a_const - a_history * history
 
         else:
 
             def accel(t, theta, omega, history):
                 return (
-                    smooth_torque(theta, omega) - friction + external(t) - history_torque * history
-                ) / effective_inertia
+                    a_sin * sin(theta)
+                    + a_quad * omega * abs(omega)
+                    + a_lin * omega
+                    + (a_const + external(t) / effective_inertia)
+                    - a_history * history
+                )
 
         return accel
 
