@@ -23,6 +23,7 @@ CORE_PACKAGES = (
     "opencv-python-headless",
     "numpy",
     "scipy",
+    "numba",
     "pandas",
     "matplotlib",
     "papermill",
