@@ -108,6 +108,27 @@ def test_zero_history_coefficient_is_bit_identical_to_the_memoryless_simulator(c
         assert a[1][-1] == 0.0  # the stick branch was exercised
 
 
+@pytest.mark.parametrize("case", sorted(CASES))
+@pytest.mark.parametrize("friction_nm", [None, 0.1])
+def test_the_compiled_memory_path_is_the_python_one(case, friction_nm):
+    """The compiled loop with memory (pendulum.model.kernels) against the Python loop that serves external
+    torques, given τ_ext ≡ 0 (it then adds 0/I to every stage): the same θ, θ̇ to 1e-12 with K_h = 0.3 kg/√s,
+    through reversals, Coulomb stick and the memory setting the body moving again (τ_f = 0.1 N·m)."""
+    terms, release_deg, omega0, max_step = CASES[case]
+    terms = terms + (("coulomb_friction",) if friction_nm and "coulomb_friction" not in terms else ())
+    model = PendulumModel(RIG, terms + ("history_force",))
+    params = {**{k: VALUES[k] for k in model.parameter_names if k in VALUES}, HISTORY: 0.3}
+    if friction_nm:
+        params["friction_torque_nm"] = friction_nm
+    times = np.arange(0, 30, 1 / 30)
+    start = (math.radians(release_deg), omega0, times)
+    compiled = simulate(model, params, *start, max_step_s=max_step)
+    python = simulate(model, params, *start, max_step_s=max_step, external_torque_nm=lambda t: 0.0)
+    assert np.abs(compiled[0] - python[0]).max() < 1e-12 and np.abs(compiled[1] - python[1]).max() < 1e-12
+    if friction_nm:
+        assert np.count_nonzero(compiled[1] == 0.0) > 10  # the stick branch was exercised
+
+
 def test_tiny_history_coefficient_moves_events_and_stick_continuously():
     """K_h = 1e-6 and 2e-6 kg/√s beside friction that sticks: θ moves linearly in K_h through reversals and the stop.
 

@@ -31,11 +31,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 from scipy.optimize import brentq
 
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.history import HISTORY_KERNEL, HISTORY_MAX_STEP_S, rk4_memory_step
+from pendulum.model.kernels import integrate_memoryless, integrate_with_memory
 from pendulum.model.rig import Rig
 
 
@@ -209,14 +209,15 @@ def basis_factors(model: PendulumModel, params: dict) -> dict[str, float]:
 
 
 def _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s):
-    """:func:`simulate` for a model without memory or external torque: :func:`_integrate_memoryless`."""
+    """:func:`simulate` for a model without memory or external torque (compiled loop:
+    :func:`pendulum.model.kernels.integrate_memoryless`)."""
     times = np.asarray(times_s, dtype=float)
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
         raise ValueError("times_s must be a strictly increasing 1-D sequence")
     inertia = float(model.inertia_kg_m2(params))
     factors = basis_factors(model, params)
     _, counts = _step_counts(times, substeps, max_step_s)
-    return _integrate_memoryless(
+    return integrate_memoryless(
         float(theta0_rad),
         float(omega0_rad_s),
         times,
@@ -229,124 +230,46 @@ def _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, subst
     )
 
 
-# The memoryless equation of motion, compiled (numba; ~30× the same loop in Python, bit-identical to it):
-#   θ̈ = a_s sin θ + a_q θ̇|θ̇| + a_l θ̇ − τ_f sgn(θ̇)/I,  a_b = F_b / I (:func:`basis_factors`).
-
-
-@njit(cache=True)
-def _rk4_fused(theta, omega, h, a_sin, a_quad, a_lin, a_const):
-    """One classical Runge–Kutta step of θ̈ = a_s sin θ + a_q θ̇|θ̇| + a_l θ̇ + a_const."""
-    k1 = a_sin * math.sin(theta) + a_quad * omega * abs(omega) + a_lin * omega + a_const
-    w2 = omega + 0.5 * h * k1
-    k2 = a_sin * math.sin(theta + 0.5 * h * omega) + a_quad * w2 * abs(w2) + a_lin * w2 + a_const
-    w3 = omega + 0.5 * h * k2
-    k3 = a_sin * math.sin(theta + 0.5 * h * w2) + a_quad * w3 * abs(w3) + a_lin * w3 + a_const
-    w4 = omega + h * k3
-    k4 = a_sin * math.sin(theta + h * w3) + a_quad * w4 * abs(w4) + a_lin * w4 + a_const
-    return theta + h / 6.0 * (omega + 2 * w2 + 2 * w3 + w4), omega + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-
-
-@njit(cache=True)
-def _velocity_after(dt, theta, omega, a_sin, a_quad, a_lin, a_const, direction):
-    """θ̇ · direction after one step of ``dt``: positive until the reversal."""
-    return _rk4_fused(theta, omega, dt, a_sin, a_quad, a_lin, a_const)[1] * direction
-
-
-@njit(cache=True)
-def _reversal_step(limit, theta, omega, a_sin, a_quad, a_lin, a_const, direction):
-    """The step in (0, ``limit``] at which θ̇ reaches 0: Brent's method, the algorithm and
-    tolerances (xtol = rtol = 1e-15, 100 iterations) of :func:`scipy.optimize.brentq`."""
-    xtol = rtol = 1e-15
-    xpre, xcur = 0.0, limit
-    xblk = fblk = spre = scur = 0.0
-    fpre = _velocity_after(xpre, theta, omega, a_sin, a_quad, a_lin, a_const, direction)
-    fcur = _velocity_after(xcur, theta, omega, a_sin, a_quad, a_lin, a_const, direction)
-    if fpre == 0.0:
-        return xpre
-    if fcur == 0.0:
-        return xcur
-    for _ in range(100):
-        if fpre != 0.0 and fcur != 0.0 and (fpre < 0.0) != (fcur < 0.0):
-            xblk, fblk = xpre, fpre
-            spre = scur = xcur - xpre
-        if abs(fblk) < abs(fcur):
-            xpre, xcur, xblk = xcur, xblk, xcur
-            fpre, fcur, fblk = fcur, fblk, fcur
-        delta = (xtol + rtol * abs(xcur)) / 2
-        sbis = (xblk - xcur) / 2
-        if fcur == 0.0 or abs(sbis) < delta:
-            return xcur
-        if abs(spre) > delta and abs(fcur) < abs(fpre):
-            if xpre == xblk:  # secant
-                stry = -fcur * (xcur - xpre) / (fcur - fpre)
-            else:  # inverse quadratic interpolation
-                dpre = (fpre - fcur) / (xpre - xcur)
-                dblk = (fblk - fcur) / (xblk - xcur)
-                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
-            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
-                spre, scur = scur, stry
-            else:
-                spre = scur = sbis
-        else:
-            spre = scur = sbis
-        xpre, fpre = xcur, fcur
-        xcur += scur if abs(scur) > delta else (delta if sbis > 0 else -delta)
-        fcur = _velocity_after(xcur, theta, omega, a_sin, a_quad, a_lin, a_const, direction)
-    return xcur
-
-
-@njit(cache=True)
-def _direction_at_rest(theta, force_sin, tau_f):
-    """Sign of the torque at rest (F_sinθ sin θ), 0 when Coulomb friction τ_f holds the body."""
-    torque = force_sin * math.sin(theta)
-    if abs(torque) <= tau_f:
-        return 0
-    return 1 if torque > 0 else -1
-
-
-@njit(cache=True)
-def _integrate_memoryless(theta0, omega0, times, counts, force_sin, force_quad, force_lin, tau_f, inertia):
-    """θ, θ̇ at ``times``: ``counts[i]`` RK4 steps per interval, every reversal located (:func:`simulate`).
-    A state that leaves the finite numbers leaves the rest of the output NaN (:class:`SimulationDiverged`)."""
-    a_sin, a_quad, a_lin = force_sin / inertia, force_quad / inertia, force_lin / inertia
-    out_theta = np.full(times.size, np.nan)
-    out_omega = np.full(times.size, np.nan)
-    theta, omega = theta0, omega0
-    direction = (1 if omega > 0 else -1) if omega != 0 else _direction_at_rest(theta, force_sin, tau_f)
-    out_theta[0], out_omega[0] = theta, omega
-    for i in range(1, times.size):
-        h = (times[i] - times[i - 1]) / counts[i - 1]
-        for _ in range(counts[i - 1]):
-            if direction == 0:
-                break
-            remaining = h
-            while remaining > 0 and direction != 0:
-                a_const = -tau_f * direction / inertia
-                new_theta, new_omega = _rk4_fused(theta, omega, remaining, a_sin, a_quad, a_lin, a_const)
-                if not (math.isfinite(new_theta) and math.isfinite(new_omega)):
-                    return out_theta, out_omega  # diverged (RK4 unstable): the rest stays NaN
-                if new_omega * direction > 0:
-                    theta, omega = new_theta, new_omega
-                    break
-                # θ̇ reaches zero inside this step: locate the reversal
-                if _velocity_after(0.0, theta, omega, a_sin, a_quad, a_lin, a_const, direction) <= 0:
-                    if omega == 0.0:  # cannot happen for a consistent direction; never spin
-                        raise RuntimeError("simulator stalled")
-                    h_event = 0.0
-                else:
-                    h_event = _reversal_step(remaining, theta, omega, a_sin, a_quad, a_lin, a_const, direction)
-                theta = _rk4_fused(theta, omega, h_event, a_sin, a_quad, a_lin, a_const)[0]
-                omega = 0.0
-                remaining -= h_event
-                direction = _direction_at_rest(theta, force_sin, tau_f)
-        out_theta[i], out_omega[i] = theta, omega
-    return out_theta, out_omega
-
-
 def _simulate_with_memory(
     model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s, history_origin_s, external_torque_nm
 ):
-    """:func:`simulate` with the history force's memory and/or an external torque τ_ext(t).
+    """:func:`simulate` with the history force's memory and/or an external torque τ_ext(t): without
+    external torque the compiled loop (:func:`pendulum.model.kernels.integrate_with_memory`), with one
+    (a Python callable) :func:`_simulate_with_external_torque`."""
+    if external_torque_nm is not None:
+        return _simulate_with_external_torque(
+            model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s, history_origin_s, external_torque_nm
+        )
+    times = np.asarray(times_s, dtype=float)
+    if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
+        raise ValueError("times_s must be a strictly increasing 1-D sequence")
+    kernel = HISTORY_KERNEL
+    history_torque = model.history_coefficient(params) * model.rig.length_m**2  # N·m per unit H
+    factors = basis_factors(model, params)
+    intervals, counts = _step_counts(times, substeps, max_step_s)
+    # the fastest memory state needs λ_max h < 2.78 (RK4's stability limit)
+    counts = np.maximum(counts, np.ceil(intervals / HISTORY_MAX_STEP_S - 1e-9).astype(int))
+    return integrate_with_memory(
+        float(theta0_rad),
+        float(omega0_rad_s),
+        np.asarray(kernel.initial_state(float(omega0_rad_s), float(times[0]) - history_origin_s), float),
+        times,
+        counts.astype(np.int64),
+        factors["sin_theta"],
+        factors["omega_abs_omega"],
+        factors["omega"],
+        float(model.friction_torque_nm(params)),
+        float(model.inertia_kg_m2(params)) + history_torque * kernel.instantaneous_s05,
+        history_torque,
+        kernel.rates_per_s,
+        kernel.weights,
+    )
+
+
+def _simulate_with_external_torque(
+    model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s, history_origin_s, external_torque_nm
+):
+    """:func:`simulate` with an external torque τ_ext(t) (and the history force's memory, if any), in Python.
 
     θ and θ̇ are advanced by the same RK4 arithmetic as the memoryless path, on the same
     :func:`basis_factors` (bit-identical when K_h = 0 and there is no external torque); the
