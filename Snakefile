@@ -12,6 +12,7 @@ configfile: "config.yaml"
 # target lists and the input functions (defined before the stages that use them).
 include: "workflow/rules/trials.smk"
 include: "workflow/rules/provenance.smk"
+include: "workflow/rules/code.smk"
 include: "workflow/rules/targets.smk"
 include: "workflow/rules/inputs.smk"
 include: "workflow/rules/report_inputs.smk"
@@ -31,6 +32,7 @@ include: "workflow/rules/freeze.smk"
 # Small aggregates run on the head node when a cluster executor is used.
 localrules:
     all,
+    code_digest,
     status_table,
     check_trials,
     fit_summary,

@@ -74,6 +74,30 @@ def measure(angles_dir: Path | None = None, repeats: int = 3) -> dict:
     return out
 
 
+def measure_budget(angles_dir: Path | None = None) -> dict:
+    """One per-trial (demo_p20) and one joint fit of 5 trials as the workflow fits: rig tolerances stated,
+    so every rig value is refitted for the systematic error budget. {variant: (per-trial s, joint s, inputs)}."""
+    angles_dir = ROOT / "results" / "angles" if angles_dir is None else Path(angles_dir)
+    settings = FitSettings()
+    model = PendulumModel(Rig(**RIG), VARIANTS["friction"])
+    tables = []
+    for name, release in RELEASES.items():
+        path = angles_dir / f"{name}.csv"
+        tables.append(
+            pd.read_csv(path)
+            if path.is_file()
+            else synthetic_angle_table(model, TRUTH, release, rng=np.random.default_rng(1))
+        )
+    stated = [load_record(t, name, RIG, settings, tolerances={}) for name, t in zip(RELEASES, tables, strict=True)]
+    out = {}
+    for variant in ("quadratic", "friction"):
+        terms = VARIANTS[variant]
+        seconds, fit = timed(lambda terms=terms: fit_trials([stated[1]], terms, settings), repeats=1)
+        joint, _ = timed(lambda terms=terms: fit_trials(stated, terms, settings), repeats=1)
+        out[variant] = (seconds, joint, len(fit["parameters"]["added_mass_kg"]["error_budget"]))
+    return out
+
+
 def main():
     figures = measure()
     print(f"demo records ({figures['source']}): {figures['samples']} samples")
@@ -86,23 +110,7 @@ def main():
         f"friction per-trial fit, 20 s at 60 fps ({figures['long_record_samples']} samples): "
         f"{figures['long_record_s']:.3f} s ({figures['long_record_evaluations']} evaluations); target < 2 s"
     )
-    # as the workflow fits: rig tolerances stated, so every rig value is refitted for the error budget
-    settings = FitSettings()
-    model = PendulumModel(Rig(**RIG), VARIANTS["friction"])
-    tables = []
-    for name, release in RELEASES.items():
-        path = ROOT / "results" / "angles" / f"{name}.csv"
-        tables.append(
-            pd.read_csv(path)
-            if path.is_file()
-            else synthetic_angle_table(model, TRUTH, release, rng=np.random.default_rng(1))
-        )
-    stated = [load_record(t, name, RIG, settings, tolerances={}) for name, t in zip(RELEASES, tables, strict=True)]
-    for variant in ("quadratic", "friction"):
-        terms = VARIANTS[variant]
-        seconds, fit = timed(lambda terms=terms: fit_trials([stated[1]], terms, settings), repeats=1)
-        joint, _ = timed(lambda terms=terms: fit_trials(stated, terms, settings), repeats=1)
-        inputs = len(fit["parameters"]["added_mass_kg"]["error_budget"])
+    for variant, (seconds, joint, inputs) in measure_budget().items():
         print(
             f"{variant:>10} with the systematic budget ({inputs} inputs refitted): per-trial {seconds:6.3f} s   "
             f"joint of 5 trials {joint:6.3f} s"

@@ -108,6 +108,13 @@ def git_state(root: str | Path = ".") -> dict:
     }
 
 
+def code_digest_text(paths) -> str:
+    """``sha256  path`` of each file, one per line, sorted by path: one small file whose content changes
+    exactly when one of the files does (a stage's code, declared as one input instead of every module)."""
+    lines = sorted(f"{hashlib.sha256(Path(p).read_bytes()).hexdigest()}  {Path(p).as_posix()}" for p in paths)
+    return "\n".join(lines) + "\n"
+
+
 def package_versions(names=CORE_PACKAGES) -> dict[str, str | None]:
     """Installed version of each named distribution (None when not installed)."""
     versions = {}

@@ -24,7 +24,7 @@ rule angles:
     """θ(t) about the pivot, arc displacement s = Lθ, trimmed from release to rest."""
     input:
         unpack(angles_inputs),
-        code=script_code("angles.py"),
+        code=code_digest("angles.py"),
     output:
         angles="results/angles/{trial}.csv",
         summary="results/angles/{trial}.json",

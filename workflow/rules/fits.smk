@@ -3,7 +3,7 @@ rule fit_trial:
     input:
         angles="results/angles/{trial}.csv",
         angle_info="results/angles/{trial}.json",
-        code=script_code("fit_trial.py"),
+        code=code_digest("fit_trial.py"),
     output:
         fit="results/fits/{variant}/{trial}.json",
         curve="results/fits/{variant}/{trial}.curve.csv",

@@ -2,7 +2,7 @@ rule frames:
     """Frame timeline from the container (no decoding) and a key-frame contact sheet."""
     input:
         video=raw_video,
-        code=script_code("frames.py"),
+        code=code_digest("frames.py"),
     output:
         timeline="results/frames/{trial}/timeline.csv",
         summary="results/frames/{trial}/summary.json",
@@ -25,7 +25,7 @@ rule frame_images:
     """Every decoded frame as a PNG (only when frames.keep_images is true; costly)."""
     input:
         video=raw_video,
-        code=script_code("frame_images.py"),
+        code=code_digest("frame_images.py"),
     output:
         images=directory("results/frames/{trial}/images"),
     log:

@@ -4,7 +4,7 @@ rule tracks:
         video=raw_video,
         frames_summary="results/frames/{trial}/summary.json",
         contact_sheet="results/frames/{trial}/contact_sheet.png",
-        code=script_code("tracks.py"),
+        code=code_digest("tracks.py"),
     output:
         track="results/tracks/{trial}.csv",
         summary="results/tracks/{trial}.json",
