@@ -563,6 +563,25 @@ def acceptance_24(figures: dict) -> list[tuple]:
     return rows
 
 
+def comparison(before: dict, now: dict) -> list[str]:
+    """Issue 24's acceptance rows of two runs on one machine (their figures.json): the change, measured."""
+    lines = [
+        "## Before and after on this machine (issue 24)",
+        "",
+        f"The same record script on the commit before the work (`{before['machine']['commit'][:7]}`) and on "
+        f"`{now['machine']['commit'][:7]}`, one run each on this machine (dates {before['machine']['date_utc']} "
+        f"and {now['machine']['date_utc']}): the issue's *before* column above was measured on a faster machine "
+        f"(its 1080p clip decoded at 154 frames/s, here at "
+        f"{now.get('throughput', {}).get('decode_fps', float('nan')):.0f}).",
+        "",
+        "| criterion | before | now | met now |",
+        "| --- | --- | --- | --- |",
+    ]
+    for (name, _, was, _), (_, _, measured, ok) in zip(acceptance_24(before), acceptance_24(now), strict=True):
+        lines.append(f"| {name} | {was} | {measured} | {verdict(ok)} |")
+    return lines + [""]
+
+
 def render(figures: dict, quick: bool) -> str:
     m = figures["machine"]
     lines = [
@@ -794,7 +813,18 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, help="default benchmarks/latest.md (--quick: <workdir>/quick.md)")
     parser.add_argument("--quick", action="store_true", help="smaller and fewer runs, for development")
     parser.add_argument("--repeats", type=int, help="throughput repeats (default 3; --quick 1)")
+    parser.add_argument(
+        "--compare",
+        nargs=2,
+        type=Path,
+        metavar=("BEFORE", "NOW"),
+        help="print issue 24's rows of two runs' figures.json side by side (no measurement)",
+    )
     args = parser.parse_args(argv)
+    if args.compare:
+        before, now = (json.loads(path.read_text()) for path in args.compare)
+        print("\n".join(comparison(before, now)))
+        return 0
     workdir = args.workdir.resolve()
     if workdir == ROOT or ROOT in workdir.parents:
         raise SystemExit(f"--workdir {workdir} is inside the repository; builds must run elsewhere")

@@ -211,23 +211,27 @@ def basis_factors(model: PendulumModel, params: dict) -> dict[str, float]:
 def _simulate_memoryless(model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s):
     """:func:`simulate` for a model without memory or external torque (compiled loop:
     :func:`pendulum.model.kernels.integrate_memoryless`)."""
+    times, _, counts, torques = _kernel_inputs(model, params, times_s, substeps, max_step_s)
+    return integrate_memoryless(
+        float(theta0_rad), float(omega0_rad_s), times, counts, *torques, float(model.inertia_kg_m2(params))
+    )
+
+
+def _kernel_inputs(model, params, times_s, substeps, max_step_s):
+    """What both compiled loops take: the checked times, step intervals and counts, and the torques
+    (F_sinθ, F_θ̇|θ̇|, F_θ̇ of :func:`basis_factors`, τ_f)."""
     times = np.asarray(times_s, dtype=float)
     if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
         raise ValueError("times_s must be a strictly increasing 1-D sequence")
-    inertia = float(model.inertia_kg_m2(params))
+    intervals, counts = _step_counts(times, substeps, max_step_s)
     factors = basis_factors(model, params)
-    _, counts = _step_counts(times, substeps, max_step_s)
-    return integrate_memoryless(
-        float(theta0_rad),
-        float(omega0_rad_s),
-        times,
-        counts.astype(np.int64),
+    torques = (
         factors["sin_theta"],
         factors["omega_abs_omega"],
         factors["omega"],
         float(model.friction_torque_nm(params)),
-        inertia,
     )
+    return times, intervals, counts.astype(np.int64), torques
 
 
 def _simulate_with_memory(
@@ -240,25 +244,18 @@ def _simulate_with_memory(
         return _simulate_with_external_torque(
             model, params, theta0_rad, omega0_rad_s, times_s, substeps, max_step_s, history_origin_s, external_torque_nm
         )
-    times = np.asarray(times_s, dtype=float)
-    if times.ndim != 1 or times.size < 1 or np.any(np.diff(times) <= 0):
-        raise ValueError("times_s must be a strictly increasing 1-D sequence")
+    times, intervals, counts, torques = _kernel_inputs(model, params, times_s, substeps, max_step_s)
     kernel = HISTORY_KERNEL
     history_torque = model.history_coefficient(params) * model.rig.length_m**2  # N·m per unit H
-    factors = basis_factors(model, params)
-    intervals, counts = _step_counts(times, substeps, max_step_s)
     # the fastest memory state needs λ_max h < 2.78 (RK4's stability limit)
-    counts = np.maximum(counts, np.ceil(intervals / HISTORY_MAX_STEP_S - 1e-9).astype(int))
+    counts = np.maximum(counts, np.ceil(intervals / HISTORY_MAX_STEP_S - 1e-9).astype(np.int64))
     return integrate_with_memory(
         float(theta0_rad),
         float(omega0_rad_s),
         np.asarray(kernel.initial_state(float(omega0_rad_s), float(times[0]) - history_origin_s), float),
         times,
-        counts.astype(np.int64),
-        factors["sin_theta"],
-        factors["omega_abs_omega"],
-        factors["omega"],
-        float(model.friction_torque_nm(params)),
+        counts,
+        *torques,
         float(model.inertia_kg_m2(params)) + history_torque * kernel.instantaneous_s05,
         history_torque,
         kernel.rates_per_s,
