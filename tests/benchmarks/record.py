@@ -303,9 +303,6 @@ def throughput(clip: Path, threads: int, repeats: int) -> dict:
         n, track = video_throughput.pipeline(clip, settings)
         pipe.append(n / (time.perf_counter() - wall))
         pipe_cpu.append(1e3 * (time.process_time() - cpu) / n)
-    cpu, wall = time.process_time(), time.perf_counter()
-    n_auto, _ = video_throughput.pipeline(clip, TrackerSettings(**workflow_tracking_settings()))
-    auto_fps, auto_cpu = n_auto / (time.perf_counter() - wall), 1e3 * (time.process_time() - cpu) / n_auto
     video.set_decoder_threads(None)
     truth = pd.read_csv(clip.with_suffix(".csv"))
     ok = track.flag == "ok"
@@ -323,9 +320,6 @@ def throughput(clip: Path, threads: int, repeats: int) -> dict:
         "decode_cpu_ms": float(np.median(decode_cpu)),
         "pipeline_cpu_ms": float(np.median(pipe_cpu)),
         "rms_px": float(np.sqrt(np.mean(err**2))),
-        "auto_fps": auto_fps,
-        "auto_cpu_ms": auto_cpu,
-        "auto_settings": workflow_tracking_settings(),
     }
 
 
@@ -635,8 +629,6 @@ def render(figures: dict, quick: bool) -> str:
             f"| frames+tracks+angles | {t['pipeline_fps']:.0f} | {', '.join(f'{r:.0f}' for r in t['pipeline_runs'])} "
             f"| {t['pipeline_cpu_ms']:.2f} |",
             f"| **ratio** | **{t['ratio']:.2f}** | | {t['decode_cpu_ms'] / t['pipeline_cpu_ms']:.2f} (CPU) |",
-            f"| frames+tracks+angles, config.yaml's tracking settings (marker detected: a second decode pass "
-            f"over up to 1,800 frames) | {t['auto_fps']:.0f} | 1 run | {t['auto_cpu_ms']:.2f} |",
             "",
         ]
         for d in figures.get("default_path", {}).values():
