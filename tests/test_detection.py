@@ -400,3 +400,41 @@ def test_a_spot_dropped_from_the_marker_track_is_not_taken_for_the_start(tmp_pat
     err = np.hypot(track.x_px - truth[:, 0], track.y_px - truth[:, 1]).to_numpy()
     assert ok.mean() >= 0.95  # measured 100 %
     assert err[ok].max() <= 0.5  # measured 0.18 px
+
+
+def _bob_with_dot(bob_grey, dot_grey, dot_radius, wall=70.0, centre=(150.37, 120.61), bob_radius=30.0, seed=0):
+    """A round bob on its rod before a wall, a dot at its centre (0: none), sensor noise σ = 1.5."""
+    rng = np.random.default_rng(seed)
+    image = np.full((240, 300), wall, np.float32)
+    cv2.line(image, (int(centre[0]), 0), (int(centre[0]), int(centre[1])), float(bob_grey) - 15, 5, cv2.LINE_AA)
+    draw_disk(image, *centre, bob_radius, bob_grey)
+    if dot_radius:
+        draw_disk(image, *centre, dot_radius, dot_grey)
+    image += rng.normal(0, 1.5, image.shape).astype(np.float32)
+    return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize(
+    "bob, dot, dot_radius, polarity",
+    [(180, 90, 8.3, "dark"), (180, 235, 6.6, "bright"), (60, 150, 9.7, "bright"), (200, 140, 5.2, "dark")],
+)
+def test_the_spot_pointed_at_is_the_dot_not_the_bob(bob, dot, dot_radius, polarity):
+    """start_px on a dot at a bob's centre (two clock pendulums in view): the dot, of either polarity, not the
+    bob around it (a larger spot of the same place); a dot brighter than a bright bob is a weaker blob of the
+    same sign inside the bob's, and is still found."""
+    from pendulum.tracking.acquisition import spot_at
+
+    centre = (150.37, 120.61)
+    found = spot_at(_bob_with_dot(bob, dot, dot_radius, centre=centre), (151.0, 121.0))
+    assert found is not None
+    assert found[0] == polarity
+    assert found[1] == pytest.approx(dot_radius, rel=0.05)  # measured within 1 %
+    assert math.dist(found[2], centre) <= 0.1  # measured 0.011–0.024 px
+
+
+def test_a_bob_without_a_dot_is_the_spot_pointed_at_and_a_plain_wall_is_none():
+    from pendulum.tracking.acquisition import spot_at
+
+    found = spot_at(_bob_with_dot(180, 0, 0.0), (152.0, 118.0))
+    assert found is not None and found[0] == "bright" and found[1] == pytest.approx(30.0, rel=0.1)
+    assert spot_at(np.full((240, 300), 120, np.uint8), (150.0, 120.0)) is None

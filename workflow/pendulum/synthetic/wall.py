@@ -26,7 +26,7 @@ centre's exposure-mean image position ``marker_x_px``, ``marker_y_px``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -44,6 +44,8 @@ class WallBody:
     other_level: float = 215.0  # two_tone: the top half's grey; pattern: the light squares'
     texture: float = 20.0  # grey amplitude of shading and skin
     spin_deg_per_s: float = 0.0  # the look turning about the thread
+    dot_radius_px: float = 0.0  # a marker dot painted at the body's centre (a clock bob's coloured dot); 0: none
+    dot_level: float = 40.0  # the dot's grey
 
     def __post_init__(self):
         if self.look not in ("apple", "two_tone", "pattern"):
@@ -122,6 +124,9 @@ def _body_patch(body: WallBody, cx: float, cy: float, spin_rad: float, swing_rad
         grey = np.where(
             (np.floor(3 * spun + 3) + np.floor(3 * along + 3)) % 2 == 0, body.other_level, body.level
         ) + 0.3 * t * (-along)
+    if body.dot_radius_px > 0:  # the dot's exact coverage, as the body's
+        dot = (fx**2 + fy**2 <= body.dot_radius_px**2).mean(axis=2)
+        grey = grey + dot * (body.dot_level - grey)
     return x0, y0, grey.astype(np.float32), coverage.astype(np.float32)
 
 
@@ -346,3 +351,96 @@ def random_wall_trial(seed: int, rig: dict = STRING_RIG, truth: dict = STRING_TR
         spin_deg_per_s=float(rng.uniform(-10, 10)),  # the real apple turns ≤ 48° in 21 s: up to 4× that
     )
     return WallTrial(spec, body, wall)
+
+
+def render_wall_pair(left: WallTrial, right: WallTrial) -> tuple[list, pd.DataFrame, pd.DataFrame]:
+    """Two pendulums in one view (two clock pendulums side by side): every frame and each one's truth.
+
+    Both trials share the camera size, frame rate, wall and seed (so the same wall and noise); each pixel of
+    a frame is taken from the render in which it differs more from the empty wall (drawn with the same
+    noise): a pendulum's rod, bob and shadows from its own render, the wall from either.
+    """
+    frames_a, truth_a = render_wall_trial(left)
+    frames_b, truth_b = render_wall_trial(right)
+    cam = left.spec.camera
+    away = replace(cam, pivot_px=(-10.0 * cam.width_px, -10.0 * cam.height_px))  # the body far outside the view
+    empty = replace(
+        left,
+        spec=replace(left.spec, camera=away),
+        body=replace(left.body, dot_radius_px=0.0),
+        wall=replace(left.wall, thread_depth=0.0, shadows=()),
+    )
+    walls, _ = render_wall_trial(empty)
+    frames = []
+    for a, b, w in zip(frames_a, frames_b, walls, strict=True):
+        da = np.abs(a.astype(np.int16) - w)
+        db = np.abs(b.astype(np.int16) - w)
+        frames.append(np.where(da >= db, a, b))
+    return frames, truth_a, truth_b
+
+
+def random_clock_pair(seed: int, duration_s: float = 6.0) -> tuple[WallTrial, WallTrial]:
+    """Two rigid pendulums side by side (as the held-out clip of two clock pendulums): a rod from a pivot in
+    the frame's top (or above it), a round bob of radius 12–30 px at 640 px width with a dot of another grey
+    at its centre (radius 0.2–0.35 of the bob's), swinging ±1.2–3 bob radii (a clock's few degrees), before a
+    dark case or a light wall; different lengths and phases. The two trials share camera, wall and seed."""
+    from pendulum.synthetic.specs import Camera
+
+    rng = np.random.default_rng(seed)
+    width, height = [(640, 360), (960, 540)][int(rng.integers(0, 2))]
+    fps = float(rng.choice([30.0, 60.0]))
+    dark_case = bool(rng.uniform() < 0.5)
+    wall_level = float(rng.uniform(40, 90)) if dark_case else float(rng.uniform(160, 210))
+    bob_level = float(rng.uniform(150, 210)) if dark_case else float(rng.uniform(40, 100))
+    dot_level = float(np.clip(bob_level + float(rng.choice([-1, 1])) * rng.uniform(50, 90), 10, 245))
+    pivot_y = float(rng.choice([rng.uniform(0.05, 0.15) * height, -rng.uniform(0.2, 0.6) * height]))
+    rod_px = max(2, int(round(rng.uniform(0.006, 0.012) * width)))
+    wall = Wall(
+        level=wall_level,
+        gradient=float(rng.uniform(0, 25)),
+        vignette=float(rng.uniform(0, 10)),
+        shadows=(),
+        thread_depth=wall_level - float(rng.uniform(0.6, 0.9) * bob_level + 0.1 * wall_level),
+        thread_width_px=rod_px,
+        exposure_drift=float(rng.uniform(0, 0.03)),
+        start_s=0.0,
+    )
+    trials = []
+    for x_frac in (float(rng.uniform(0.25, 0.38)), float(rng.uniform(0.62, 0.75))):
+        radius = float(rng.uniform(12, 30)) * width / 640
+        bob_y = float(rng.uniform(0.55, 0.8)) * height
+        arm = bob_y - pivot_y
+        swing_px = float(rng.uniform(1.2, 3.0)) * radius
+        camera = Camera(
+            width_px=width,
+            height_px=height,
+            fps=fps,
+            pivot_px=(x_frac * width, pivot_y),
+            marker_arm_px=arm,
+            marker_radius_px=radius,
+            roll_deg=float(rng.uniform(-1, 1)),
+            exposure_fraction=float(rng.uniform(0.2, 0.5)),
+            noise_sigma=float(rng.uniform(1.0, 2.5)),
+            crf=int(rng.integers(18, 23)),
+        )
+        spec = TrialSpec(
+            name=f"clocks_{seed}",
+            release_deg=float(rng.choice([-1, 1])) * math.degrees(math.asin(min(swing_px / arm, 1.0))),
+            rig=dict(STRING_RIG, length_m=float(rng.uniform(0.25, 1.0))),
+            truth=STRING_TRUTH,
+            effects=STRING_EFFECTS,
+            seed=seed,
+            hold_s=0.0,
+            duration_s=duration_s,
+            camera=camera,
+        )
+        body = WallBody(
+            look="apple",
+            radius_px=radius,
+            level=bob_level,
+            texture=float(rng.uniform(2, 8)),
+            dot_radius_px=float(rng.uniform(0.2, 0.35)) * radius,
+            dot_level=dot_level,
+        )
+        trials.append(WallTrial(spec, body, replace(wall, start_s=float(rng.uniform(0, 2)))))
+    return trials[0], trials[1]

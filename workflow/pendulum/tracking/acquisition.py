@@ -107,3 +107,51 @@ def static_spot(image, background, c: Candidate, radius: float, reference_contra
     change = float(np.abs(image[box].astype(np.float32) - background[box]).mean())
     floor = MIN_MARKER_CONTRAST if reference_contrast is None else 0.3 * reference_contrast
     return change < floor
+
+
+def spot_at(image: np.ndarray, near_px, min_score: float = 0.75) -> tuple[str, float, tuple[float, float]] | None:
+    """The marker the user pointed at with ``start_px`` in the first frame, seen in that frame alone:
+    ``(polarity, radius_px, centre)`` or None.
+
+    Blobs of either sign in the DoG of the frame (:func:`pendulum.tracking.spots.dog_blobs`, per level) whose
+    centre lies within their radius (and 2 px) of ``near_px``; of those that are disk-like (normalised
+    disk-template correlation ≥ ``min_score``, :func:`pendulum.tracking.acquisition.marker_candidates`)
+    the smallest: a dot on a body rather than the body. Radius and centre refined at full resolution
+    (:func:`pendulum.tracking.spots.refine_spot`). No background is needed: what moves is not asked.
+    """
+    from pendulum.tracking.settings import TrackerSettings
+    from pendulum.tracking.spots import dog_blobs, dog_pyramid, refine_spot
+
+    h, w = image.shape
+    reach = int(min(max(h, w) // 4, 320))
+    nx, ny = float(near_px[0]), float(near_px[1])
+    x0, y0 = max(0, int(nx) - reach), max(0, int(ny) - reach)
+    crop = image[y0 : min(h, int(ny) + reach + 1), x0 : min(w, int(nx) + reach + 1)].astype(np.float32)
+    if min(crop.shape) < 24:
+        return None
+    noise = 1.4826 * float(np.median(np.abs(crop[1:, 1:] - crop[:-1, :-1]))) / math.sqrt(2)
+    found = []
+    # per pyramid level (a dot on a bob is a weaker blob of the same sign inside the bob's: one search over
+    # all scales would keep only the bob)
+    threshold = max(2.0, 3.0 * noise)
+    blobs = [b for k, level in enumerate(dog_pyramid(crop)) for b in dog_blobs([level], 1 << k, threshold, 64)]
+    for sign, bx, by, r, _ in blobs:
+        x, y = bx + x0, by + y0
+        if math.hypot(x - nx, y - ny) > r + 2.0:
+            continue
+        refined = refine_spot(image, x, y, sign, r, None)
+        if refined is None or math.hypot(refined[0] - nx, refined[1] - ny) > refined[2] + 2.0:
+            continue
+        polarity = "bright" if sign > 0 else "dark"
+        probe = TrackerSettings(polarity=polarity, marker_radius_px=refined[2], start_px=(refined[0], refined[1]))
+        best = marker_candidates(image, probe, near=refined[:2], search_radius_px=2 * refined[2] + 4, n=1)
+        if (
+            best
+            and best[0].score >= min_score
+            and math.hypot(best[0].x - refined[0], best[0].y - refined[1]) <= max(0.5 * refined[2], 2.0)
+        ):
+            found.append((refined[2], polarity, (refined[0], refined[1])))
+    if not found:
+        return None
+    radius, polarity, centre = min(found, key=lambda f: f[0])
+    return polarity, radius, centre

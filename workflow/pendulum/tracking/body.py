@@ -50,6 +50,7 @@ from scipy.ndimage import median_filter
 
 from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.checks import flag_jumps
+from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.settings import TrackerSettings
 
 log = logging.getLogger(__name__)
@@ -67,6 +68,7 @@ AREA_SIGMAS = 6.0
 MIN_AREA_CHANGE = 0.10  # the covered area must also change by this fraction to be a fault
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT_PX = 0.3
+MIN_MID_SWING_AREA_RATIO = 0.9  # below: the scene holds the body at its rest place (rest_place_area_ratio)
 TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D) in most samples: ambiguous
 
 
@@ -531,5 +533,14 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
         raise VideoError(
             f"{path}: the body is usable in only {n_ok} of {len(table)} frames "
             f"({100 * n_ok / len(table):.0f} %; {faults}): the video cannot give an angle record"
+        )
+    ratio = rest_place_area_ratio(table)
+    table.attrs["body"]["mid_swing_area_ratio"] = None if ratio is None else round(ratio, 4)
+    if ratio is not None and ratio < MIN_MID_SWING_AREA_RATIO:
+        raise BodyError(
+            f"{path}: the body's silhouette is {100 * (1 - ratio):.0f} % smaller mid-swing than at the ends of its "
+            "swing: it covers its rest place in most frames, so the scene behind it there is never seen clearly "
+            "and its positions would be biased towards the ends (a swing narrower than about twice the body's "
+            "width); film a wider swing, or give start_px at a marker dot on it"
         )
     return table

@@ -99,7 +99,12 @@ def measure_marker(
     background_level = float(np.median(border))
     ys = np.arange(y0, y1, dtype=np.float32)[:, None]
     xs = np.arange(x0, x1, dtype=np.float32)[None, :]
-    level = float(np.percentile(roi, 99.5)) if marker_level is None else marker_level
+    if marker_level is None:  # the marker's own level: from its disk about the guess, not the whole ROI
+        # (whose corners may reach past a bob round a dot to a wall of the marker's polarity)
+        near = (xs - x_guess) ** 2 + (ys - y_guess) ** 2 <= (r + 0.5 * blur_px + 4.0) ** 2
+        level = float(np.percentile(roi[near], 99.5)) if near.any() else float(np.percentile(roi, 99.5))
+    else:
+        level = marker_level
     streak_zone = None
     if direction is not None and blur_px > r:
         # A long streak is dimmer than the marker (its peak coverage ≈ 2r / length) and the ROI holds

@@ -124,7 +124,9 @@ class Detection:
         }
 
 
-def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: int = 1800, seed: int = 0) -> Detection:
+def detect_marker(
+    path, max_samples: int = 60, max_full: int = 12, max_frames: int = 1800, seed: int = 0, near_px=None
+) -> Detection:
     """Find the swinging marker in the video at ``path`` (see the module docstring).
 
     Only the first ``max_frames`` frames are read (30 s at 60 fps: a long clip's swing is there).
@@ -152,10 +154,16 @@ def detect_marker(path, max_samples: int = 60, max_full: int = 12, max_frames: i
     outcomes = []
     for quantile in (0.5, BACKGROUND_QUANTILE):
         try:
-            outcomes.append(_detect(path, small, full, scale, first, seed, stack, background, rows[quantile], scene))
+            outcomes.append(
+                _detect(path, small, full, scale, first, seed, stack, background, rows[quantile], scene, near_px)
+            )
         except DetectionError as error:
             outcomes.append(error)
     started = [d for d in outcomes if isinstance(d, Detection) and d.start_px is not None]
+    if len(started) == 2 and near_px is not None:  # both at the spot the user pointed at: the nearer, or the dot
+        nearest = min(math.dist(d.start_px, near_px) for d in started)
+        tie = 0.5 * min(d.marker_radius_px for d in started) + 2.0
+        return min(started, key=lambda d: (math.dist(d.start_px, near_px) > nearest + tie, d.marker_radius_px))
     if len(started) == 2:
         median_based, quantile_based = started
         if math.dist(median_based.start_px, quantile_based.start_px) <= max(
@@ -236,9 +244,12 @@ def _blob_rows(stack: np.ndarray, scale: int) -> tuple[np.ndarray, float, dict[f
     return background, threshold, rows
 
 
-def _detect(path, small, full, scale: int, first, seed: int, stack, background, rows: list, scene) -> Detection:
+def _detect(
+    path, small, full, scale: int, first, seed: int, stack, background, rows: list, scene, near_px=None
+) -> Detection:
     """The swinging marker in the samples, from the blobs ``rows`` of one search (:func:`_blob_rows`);
-    ``scene``: :func:`pendulum.tracking.spots.full_scene` of the full-size samples ``full``."""
+    ``scene``: :func:`pendulum.tracking.spots.full_scene` of the full-size samples ``full``; ``near_px``:
+    the user's ``start_px`` (:func:`_at_start`)."""
     n = len(small)
     where = f"{path}: "
     hint = (
@@ -270,6 +281,13 @@ def _detect(path, small, full, scale: int, first, seed: int, stack, background, 
         )
 
     swinging = [t for t in tracks if swings(t)]
+    if near_px is not None:
+        swinging = _at_start(blobs, swinging, near_px, scale)
+        if not swinging:
+            raise DetectionError(
+                f"{where}no spot swings at start_px ({near_px[0]:.0f}, {near_px[1]:.0f}) in the first frame; "
+                "check start_px (the marker's centre in the first frame)"
+            )
     if not swinging:
         seen = max(tracks, key=lambda t: t.support, default=None)
         what = (
@@ -429,6 +447,27 @@ def _detect(path, small, full, scale: int, first, seed: int, stack, background, 
         n_continuous=int(kept.size),
         rest_deg=math.degrees(middle),
     )
+
+
+def _at_start(blobs: Blobs, tracks: list, near_px, scale: int) -> list:
+    """The swinging tracks whose spot in the first sampled frame lies at ``near_px`` (the user pointed at
+    it: within its radius and two sample pixels), nearest first; of a dot on a body (two spots there, about
+    the same centre) the smaller. Other objects (a second pendulum) are then no rivals."""
+    at = []
+    for t in tracks:
+        first = [int(i) for i in t.members if blobs.sample[i] == 0]
+        if not first:
+            continue
+        i = first[0]
+        distance = math.hypot(blobs.x[i] - near_px[0], blobs.y[i] - near_px[1])
+        if distance <= blobs.r[i] + 2.0 * scale:
+            at.append((distance, float(blobs.r[i]), t))
+    if not at:
+        return []
+    closest = min(d for d, _, _ in at)
+    # spots about as near (within half the smallest one's radius) are one place: the smaller spot is the marker
+    tie = 0.5 * min(r for _, r, _ in at) + 2.0 * scale
+    return [t for d, r, t in sorted(at, key=lambda a: (a[0] > closest + tie, a[1], a[0]))]
 
 
 def _rest_deg(blobs: Blobs, track: ArcTrack) -> float:

@@ -67,14 +67,43 @@ def resolve_settings(path, settings: TrackerSettings, progress=None):
     """Settings with the marker found by detection where not given: ``(settings, detection or None)``.
 
     Given values (polarity, marker_radius_px, start_px) win; a detected start is used only
-    when the polarity agrees with the detected one (else it may be another object's).
+    when the polarity agrees with the detected one (else it may be another object's). With
+    ``start_px`` given, detection looks for the spot swinging there (:func:`detect_marker`'s
+    ``near_px``); where it finds none, or a larger spot about it (the bob, not its dot), the spot
+    seen there in the first frame stands (:func:`pendulum.tracking.detection.spot_at`), tracked
+    without detection's arc and scene.
     """
     if not settings.needs_detection:
         return settings, None
-    from pendulum.tracking.detection import detect_marker
+    from pendulum.tracking.acquisition import spot_at
+    from pendulum.tracking.detection import DetectionError, detect_marker
 
     started = time.perf_counter()
-    found = detect_marker(path)
+    local = None
+    if settings.start_px is not None:
+        first = next((image for _, _, image in iter_luma(path, damaged=True) if image is not None), None)
+        local = None if first is None else spot_at(first, settings.start_px)
+        if local is not None and not _agrees(settings, local[0], local[1]):
+            local = None  # the user's polarity or radius says it is another spot
+    try:
+        found = detect_marker(path, near_px=settings.start_px)
+    except DetectionError:
+        if local is None:
+            raise
+        found = None
+    if local is not None:
+        polarity, radius, centre = local
+        same = (
+            found is not None
+            and found.start_px is not None
+            and found.polarity == polarity
+            and math.dist(found.start_px, centre) <= max(0.5 * radius, 2.0)
+            and 0.67 <= found.marker_radius_px / radius <= 1.5
+        )
+        if not same:
+            if progress:
+                progress(f"{path}: the {polarity} spot at start_px, radius {radius:.1f} px, seen in the first frame")
+            return replace(settings, polarity=polarity, marker_radius_px=settings.marker_radius_px or radius), None
     polarity = found.polarity if settings.polarity == "auto" else settings.polarity
     radius = found.marker_radius_px if settings.marker_radius_px is None else settings.marker_radius_px
     start = settings.start_px
@@ -88,6 +117,13 @@ def resolve_settings(path, settings: TrackerSettings, progress=None):
             f"{found.confidence:.2f} ({time.perf_counter() - started:.1f} s)"
         )
     return replace(settings, polarity=polarity, marker_radius_px=float(radius), start_px=start), found
+
+
+def _agrees(settings: TrackerSettings, polarity: str, radius: float) -> bool:
+    """Whether a spot of this polarity and radius is the one the given settings describe."""
+    return settings.polarity in ("auto", polarity) and (
+        settings.marker_radius_px is None or 0.67 <= settings.marker_radius_px / radius <= 1.5
+    )
 
 
 def track_video(
@@ -123,8 +159,11 @@ def track_video(
     reflection; ``start_px`` resolves it), or fewer than ``min_usable_fraction``
     of the frames usable (marker out of the frame or hidden most of the time).
     """
+    found_by = "detection" if detection is not None or settings.needs_detection else "given in the settings"
     if detection is None:
         settings, detection = resolve_settings(path, settings, progress)
+        if detection is None and found_by == "detection":
+            found_by = "the spot at start_px in the first frame"
     elif settings.needs_detection:
         settings = replace(
             settings,
@@ -152,6 +191,10 @@ def track_video(
     first_signals: list[tuple[int, bool, float]] = []  # (row, kind, signal) before the kind's reference
     width_ref = math.nan  # the marker's width² in the first frames: a wider spot is not the marker alone
     widths: list[float] = []
+    # The two centroids' disagreement in the first frames: what is rigidly joined to the marker (a bob's rod,
+    # a ball's thread) shifts them apart by the same amount in every frame; more than that is something else.
+    disagreement_ref = math.nan
+    disagreements: list[float] = []
     lost_run = 0
     window = None  # (frame, slice, pixels) around the marker in the last good frame: repeated frames
     streak2: dict[int, float] = {}
@@ -183,7 +226,9 @@ def track_video(
             candidates = marker_candidates(image, settings, n=4)
             hinted = reference_contrast is None and settings.start_px is not None
             if hinted:  # the spot near the hint first, then the others (possible distractors)
-                local = marker_candidates(image, settings, near=settings.start_px, search_radius_px=60, n=1)
+                # within 60 px of the hint; a large marker's disk template (4 radii wide) must fit the window
+                reach = max(60.0, 2 * settings.marker_radius_px + 24)
+                local = marker_candidates(image, settings, near=settings.start_px, search_radius_px=reach, n=1)
                 others = [c for c in candidates if not local or not near_any(c.x, c.y, [(local[0].x, local[0].y)], 4)]
                 candidates = local + others if local and marker_like(local[0], settings, None) else []
             likely = [
@@ -251,6 +296,10 @@ def track_video(
                     if abs(turn) < 0.5:
                         c, s_ = math.cos(turn), math.sin(turn)
                         direction = (direction[0] * c - direction[1] * s_, direction[0] * s_ + direction[1] * c)
+            elif all(row[6] == "duplicate" for row in rows[len(rows) - (gap - 1) :]):
+                # only repeated frames since (the marker measured there, its picture the frame before's): it
+                # moved on for gap frames at the same step, and its streak is one exposure's, not longer
+                guess, speed = (x1 + vx * gap, y1 + vy * gap), step
             else:  # after lost frames: along the arc when known, the window bounded
                 if arc.circle is not None and step > 0:
                     guess = arc.predict(x1, y1, x1 - vx, y1 - vy, gap)
@@ -300,6 +349,10 @@ def track_video(
             if len(widths) >= 5 and not math.isfinite(width_ref):
                 width_ref = float(np.median(widths))
                 width_curve.base = width_ref
+        if not math.isfinite(disagreement_ref) and math.isfinite(m.disagreement_px):
+            disagreements.append(m.disagreement_px)
+            if len(disagreements) >= 5:
+                disagreement_ref = float(np.median(disagreements))
         else:
             ratio = m.signal / signal_curves[kind].value(m.x, m.y)
         # a long streak's mask takes in more of the scene's noise across it: r²/100 per radius of streak
@@ -314,7 +367,10 @@ def track_video(
         elif (
             ratio < settings.min_signal_ratio
             # (a thresholded streak's centroid sits on its plateau: 2 % of the streak's excess length off)
-            or m.disagreement_px > settings.max_centroid_disagreement_px + 0.02 * max(speed - r, 0.0)
+            or m.disagreement_px
+            > settings.max_centroid_disagreement_px
+            + (disagreement_ref if math.isfinite(disagreement_ref) else 0.0)
+            + 0.02 * max(speed - r, 0.0)
             or m.margin_shift_px > settings.max_margin_shift_px
             or m.unresolved > settings.max_unresolved
             # a free marker not measurable against the scene (something else around it): biased
@@ -360,6 +416,7 @@ def track_video(
         "polarity": settings.polarity,
         "marker_radius_px": round(float(r), 3),
         "start_px": None if settings.start_px is None else [round(float(v), 2) for v in settings.start_px],
+        "found_by": found_by,
     }
     if reference_contrast is None:
         score = "no disk-like spot at all" if best_seen is None else f"the best spot scores {best_seen.score:.2f}"
