@@ -280,9 +280,29 @@ STRING_TRUTH = {"added_mass_kg": 0.0001, "drag_area_m2": 0.0025, "linear_damping
 STRING_EFFECTS = ["quadratic_drag", "linear_damping"]
 
 
+def _drawn_camera(rng, frame: tuple, pivot_px: tuple, arm_px: float, radius_px: float, upper: tuple):
+    """A camera of ``frame`` = (width, height, fps) with its roll, exposure, noise and compression drawn from
+    ``rng`` (in that order): roll ±1°, exposure 0.2 … ``upper[0]``, noise 1 … ``upper[1]`` grey levels, crf
+    18 … ``upper[2]`` − 1."""
+    from pendulum.synthetic.specs import Camera
+
+    width, height, fps = frame
+    return Camera(
+        width_px=width,
+        height_px=height,
+        fps=fps,
+        pivot_px=pivot_px,
+        marker_arm_px=arm_px,
+        marker_radius_px=radius_px,
+        roll_deg=float(rng.uniform(-1, 1)),
+        exposure_fraction=float(rng.uniform(0.2, upper[0])),
+        noise_sigma=float(rng.uniform(1.0, upper[1])),
+        crf=int(rng.integers(18, upper[2])),
+    )
+
+
 def random_wall_trial(seed: int, rig: dict = STRING_RIG, truth: dict = STRING_TRUTH, effects=STRING_EFFECTS):
     """A scene of real footage's faults drawn at random (the body study's scenes)."""
-    from pendulum.synthetic.specs import Camera
 
     rng = np.random.default_rng(seed)
     width, height = [(640, 360), (960, 540)][int(rng.integers(0, 2))]
@@ -299,18 +319,7 @@ def random_wall_trial(seed: int, rig: dict = STRING_RIG, truth: dict = STRING_TR
     # place holds its own pixels in most frames and has no static scene behind it)
     amplitude = max(amplitude, math.degrees(math.asin(min(4 * radius / arm, 1.0))))
     level = float(rng.uniform(40, 110)) if look != "pattern" else float(rng.uniform(30, 80))
-    camera = Camera(
-        width_px=width,
-        height_px=height,
-        fps=fps,
-        pivot_px=(pivot_x, pivot_y),
-        marker_arm_px=arm,
-        marker_radius_px=radius,
-        roll_deg=float(rng.uniform(-1, 1)),
-        exposure_fraction=float(rng.uniform(0.2, 0.6)),
-        noise_sigma=float(rng.uniform(1.0, 3.0)),
-        crf=int(rng.integers(18, 24)),
-    )
+    camera = _drawn_camera(rng, (width, height, fps), (pivot_x, pivot_y), arm, radius, (0.6, 3.0, 24))
     spec = TrialSpec(
         name=f"wall_{seed}",
         release_deg=float(rng.choice([-1, 1])) * amplitude,
@@ -384,7 +393,6 @@ def random_clock_pair(seed: int, duration_s: float = 6.0) -> tuple[WallTrial, Wa
     the frame's top (or above it), a round bob of radius 12–30 px at 640 px width with a dot of another grey
     at its centre (radius 0.2–0.35 of the bob's), swinging ±1.2–3 bob radii (a clock's few degrees), before a
     dark case or a light wall; different lengths and phases. The two trials share camera, wall and seed."""
-    from pendulum.synthetic.specs import Camera
 
     rng = np.random.default_rng(seed)
     width, height = [(640, 360), (960, 540)][int(rng.integers(0, 2))]
@@ -411,18 +419,7 @@ def random_clock_pair(seed: int, duration_s: float = 6.0) -> tuple[WallTrial, Wa
         bob_y = float(rng.uniform(0.55, 0.8)) * height
         arm = bob_y - pivot_y
         swing_px = float(rng.uniform(1.2, 3.0)) * radius
-        camera = Camera(
-            width_px=width,
-            height_px=height,
-            fps=fps,
-            pivot_px=(x_frac * width, pivot_y),
-            marker_arm_px=arm,
-            marker_radius_px=radius,
-            roll_deg=float(rng.uniform(-1, 1)),
-            exposure_fraction=float(rng.uniform(0.2, 0.5)),
-            noise_sigma=float(rng.uniform(1.0, 2.5)),
-            crf=int(rng.integers(18, 23)),
-        )
+        camera = _drawn_camera(rng, (width, height, fps), (x_frac * width, pivot_y), arm, radius, (0.5, 2.5, 23))
         spec = TrialSpec(
             name=f"clocks_{seed}",
             release_deg=float(rng.choice([-1, 1])) * math.degrees(math.asin(min(swing_px / arm, 1.0))),

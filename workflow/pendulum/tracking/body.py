@@ -31,6 +31,12 @@ and 10 %, or the soft and the plain silhouette's centroids disagree by more than
 σ of their own difference and 0.3 px: something joined or hid part of it), ``jump``
 (leave-one-out cubic, as for the marker) and ``lost`` (no body near the prediction).
 
+A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most
+samples) shows as a silhouette smaller or larger mid-swing than at the ends
+(:func:`pendulum.tracking.path_shape.rest_place_area_ratio` outside 0.9–1/0.9): the scene there is
+taken again from the two ends of the swing (:func:`pendulum.tracking.body_scene.rest_place_scene`)
+and the body tracked again, up to :data:`REST_PLACE_REPAIRS` times; then refused.
+
 ECC alignment of the body's own look (``cv2.findTransformECCWithMask``, Euclidean) was measured
 against this on renders with known truth and not taken: where the look changes (a body turning on
 its thread, a print) the aligned point drifts (0.10–1.0° against 0.02–0.08° for the silhouette on
@@ -49,6 +55,18 @@ import pandas as pd
 from scipy.ndimage import median_filter
 
 from pendulum.camera.video import VideoError, iter_luma
+from pendulum.tracking.body_scene import (
+    MIN_BODY_AREA_PX,
+    close_size,
+    components,
+    masked_median,
+    moving_objects,
+    noise_sigma,
+    reduced,
+    rest_place_scene,
+    same_exposure,
+    sample_clip,
+)
 from pendulum.tracking.checks import flag_jumps
 from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.settings import TrackerSettings
@@ -58,9 +76,6 @@ log = logging.getLogger(__name__)
 SCENE_SAMPLES = 60  # frames spread over the clip for the static scene
 EDGE_REACH = 1.2  # in view or not: what lies within this many inner radii of its thickest point (not its rod)
 SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the previous one showed
-# closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
-CLOSE_FRACTION = 1 / 72
-MIN_BODY_AREA_PX = 12  # a moving component smaller than this is noise
 NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
 CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft shadow stays below)
 STRONG_FRACTION = 0.25  # the silhouette: pixels differing by more than this fraction of the body's contrast, filled
@@ -68,8 +83,8 @@ AREA_SIGMAS = 6.0
 MIN_AREA_CHANGE = 0.10  # the covered area must also change by this fraction to be a fault
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT_PX = 0.3
-MIN_MID_SWING_AREA_RATIO = 0.9  # below: the scene holds the body at its rest place (rest_place_area_ratio)
-TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D) in most samples: ambiguous
+REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body that holds its place is refused
+MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
 
 
 class BodyError(VideoError):
@@ -101,46 +116,6 @@ class BodyScene:
             "n_samples": self.n_samples,
             "silhouette_fraction": round(self.silhouette_fraction, 3),
         }
-
-
-def _samples(path, n_samples: int) -> list[tuple[int, np.ndarray]]:
-    """Every k-th decoded frame (k doubling as needed): between n and 2n frames over the whole clip, frame 0 first."""
-    kept, stride = [], 1
-    for index, _t, image in iter_luma(path):
-        if index % stride == 0:
-            kept.append((index, image.copy()))
-            if len(kept) >= 2 * n_samples:
-                kept, stride = kept[::2], stride * 2
-    if not kept:
-        raise VideoError(f"{path}: no frame could be decoded")
-    return kept
-
-
-def _close_size(shape) -> int:
-    return max(5, 2 * int(round(min(shape[:2]) * CLOSE_FRACTION / 2)) + 1)
-
-
-def _components(diff: np.ndarray, threshold: float, open_px: int, close_px: int = 5):
-    """Connected components of ``diff > threshold`` after a closing and an opening: (labels, stats, masses)."""
-    mask = (diff > threshold).astype(np.uint8)
-    # closed first: the dark squares of a print, or a body's dark patches, are one object
-    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px,) * 2))
-    if open_px > 1:
-        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px, open_px))
-        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-    masses = np.zeros(n)
-    if n > 1:
-        masses = np.bincount(labels.ravel(), weights=diff.ravel(), minlength=n)
-        masses[0] = 0.0
-    return labels, stats, masses
-
-
-def _noise_sigma(samples: list[np.ndarray], background: np.ndarray) -> float:
-    """Robust σ of I − B over a few samples (most pixels show the static scene)."""
-    picks = samples[:: max(1, len(samples) // 8)]
-    values = np.concatenate([(s.astype(np.float32) - background)[::2, ::2].ravel() for s in picks])
-    return max(float(1.4826 * np.median(np.abs(values - np.median(values)))), 0.5)
 
 
 def _body_close_size(inner_radius_px: float) -> int:
@@ -222,7 +197,7 @@ def _body_in(diff: np.ndarray, threshold: float, open_px: int, close_px: int, ne
     """The moving pixels to take for the body: the component nearest ``near`` (else the heaviest) with every
     component whose box lies within 2 closing widths of it (a print's patches, a body cut by a wall-coloured
     band): ``(mask, (x, y, w, h))``, or ``(None, None)``."""
-    labels, stats, masses = _components(diff, threshold, open_px, close_px)
+    labels, stats, masses = components(diff, threshold, open_px, close_px)
     ids = [i for i in range(1, len(masses)) if stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
     if not ids:
         return None, None
@@ -270,112 +245,46 @@ def _core(component: np.ndarray, reach_px: float):
     return kept, (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
 
 
-def _same_exposure(images: list[np.ndarray]) -> list[np.ndarray]:
-    """The samples brought to one exposure: each mapped by the gain and offset that best take it to the
-    samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD: the body)."""
-    grid = np.stack([im[::4, ::4] for im in images]).astype(np.float32)
-    reference = np.median(grid, axis=0).ravel()
-    if np.ptp(reference) < 4:  # a flat picture: its gain is not defined, nothing to match
-        return images
-    out = []
-    for image, small in zip(images, grid, strict=True):
-        values = small.ravel()
-        keep = np.ones(values.size, bool)
-        for _ in range(2):
-            gain, offset = np.polyfit(reference[keep], values[keep], 1)
-            residual = values - (gain * reference + offset)
-            keep = np.abs(residual) <= 3 * 1.4826 * np.median(np.abs(residual)) + 1e-6
-        if abs(gain - 1) < 0.005 and abs(offset) < 0.5:
-            out.append(image)
-        else:
-            out.append(np.clip(np.rint((image.astype(np.float32) - offset) / gain), 0, 255).astype(np.uint8))
-    return out
-
-
-def _reduced(image: np.ndarray, scale: int) -> np.ndarray:
-    return cv2.resize(image, (image.shape[1] // scale, image.shape[0] // scale), interpolation=cv2.INTER_AREA)
-
-
-def _moving_objects(images: list, background: np.ndarray, threshold: float):
-    """Per sample, the pixels of its heavier moving objects (grown by 4 px); how many samples show one; how many
-    show two far-apart objects of similar weight, and where."""
-    excluded = np.zeros((len(images),) + background.shape, bool)
-    moving, areas, pairs = 0, [], []
-    grow = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
-    for k, image in enumerate(images):
-        diff = np.abs(image.astype(np.float32) - background)
-        labels, stats, masses = _components(diff, threshold, 3, _close_size(diff.shape))
-        order = [i for i in np.argsort(masses)[::-1] if i > 0 and stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
-        if not order:
-            continue
-        moving += 1
-        heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]]
-        excluded[k] = cv2.dilate(np.isin(labels, heavy).astype(np.uint8), grow) > 0
-        a = order[0]
-        areas.append(stats[a, cv2.CC_STAT_AREA])
-        if len(order) > 1 and masses[order[1]] >= TWO_OBJECTS_MASS_RATIO * masses[a]:
-            b = order[1]
-            (ax, ay), (bx, by) = (stats[a, :2] + stats[a, 2:4] / 2), (stats[b, :2] + stats[b, 2:4] / 2)
-            ra, rb = (math.sqrt(stats[i, cv2.CC_STAT_AREA] / math.pi) for i in (a, b))
-            if math.hypot(ax - bx, ay - by) > 2 * (ra + rb):
-                pairs.append((stats[b, cv2.CC_STAT_AREA], (ax, ay), (bx, by)))
-    # two objects: the second as heavy as 0.4× the first and at least a third the body's usual size, far apart
-    typical = float(np.median(areas)) if areas else 0.0
-    seen = [(p, q) for area, p, q in pairs if area >= typical / 3]
-    return excluded, moving, len(seen), seen
-
-
-def _masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """Per pixel, the median of the samples not excluded there (``fallback`` where fewer than max(5, n/10) are left)."""
-    background = fallback.copy()
-    union = excluded.any(axis=0)
-    if union.any():
-        column = stack[:, union].astype(np.float32)
-        column[excluded[:, union]] = np.nan
-        column.sort(axis=0)  # NaN last: the median of the first `valid` values of each pixel
-        valid = np.isfinite(column).sum(axis=0)
-        lower = np.take_along_axis(column, np.maximum((valid - 1) // 2, 0)[None], axis=0)[0]
-        upper = np.take_along_axis(column, np.maximum(valid // 2, 0)[None], axis=0)[0]
-        second = 0.5 * (lower + upper)
-        enough = valid >= max(5, len(stack) // 10)
-        background[union] = np.where(enough, second, fallback[union])
-    return background
-
-
-def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
+def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, radius_px=None) -> BodyScene:
     """The static scene and the swinging body in the first frame (see the module docstring).
 
-    Raises :class:`BodyError` when nothing moves, or when two objects of similar weight move in
-    most samples and ``start_px`` does not say which one is the pendulum.
+    With ``track`` (a first track of the body, whose silhouette shrank mid-swing) and the body's
+    ``radius_px``, the scene at the body's rest place is taken from the two ends of its swing
+    (:func:`pendulum.tracking.body_scene.rest_place_scene`). Raises :class:`BodyError` when nothing
+    moves, or when two objects of similar weight move in most samples and ``start_px`` does not say
+    which one is the pendulum.
     """
-    samples = _samples(path, n_samples)
-    images = _same_exposure([s for _, s in samples])
+    samples = sample_clip(path, n_samples)
+    images = same_exposure([s for _, s in samples])
     stack = np.stack(images)
     first_pass = np.median(stack, axis=0).astype(np.float32)
-    sigma = _noise_sigma(images, first_pass)
+    sigma = noise_sigma(images, first_pass)
     threshold = max(NOISE_SIGMAS * sigma, 4.0)
     # Each sample's moving objects leave the scene; again against the new scene, as a body that overlaps
     # itself over many samples (large, slow near its turning points) is only partly seen moving at first.
     # Found on samples reduced to ≤ ~640 px (the masks then enlarged): the scene itself at full resolution.
     scale = max(1, int(round(max(first_pass.shape) / 640)))
-    small = [_reduced(im, scale) for im in images] if scale > 1 else images
+    small = [reduced(im, scale) for im in images] if scale > 1 else images
     small_stack = np.stack(small) if scale > 1 else stack
-    small_first = _reduced(first_pass, scale) if scale > 1 else first_pass
-    small_threshold = max(NOISE_SIGMAS * _noise_sigma(small, small_first), 4.0) if scale > 1 else threshold
+    small_first = reduced(first_pass, scale) if scale > 1 else first_pass
+    small_threshold = max(NOISE_SIGMAS * noise_sigma(small, small_first), 4.0) if scale > 1 else threshold
     small_background = small_first
     excluded = np.zeros(small_stack.shape, bool)
     for _ in range(SCENE_PASSES):
-        found, moving, two_objects, seen = _moving_objects(small, small_background, small_threshold)
+        found, moving, two_objects, seen = moving_objects(small, small_background, small_threshold)
         grown = excluded | found
         if grown.sum() <= 1.02 * excluded.sum():
             break
         excluded = grown
-        small_background = _masked_median(small_stack, excluded, small_first)
+        small_background = masked_median(small_stack, excluded, small_first)
     seen = [((ax * scale, ay * scale), (bx * scale, by * scale)) for (ax, ay), (bx, by) in seen]
     if scale > 1:
         size = (first_pass.shape[1], first_pass.shape[0])
         excluded = np.stack([cv2.resize(e.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 for e in excluded])
-    background = _masked_median(stack, excluded, first_pass) if excluded.any() else first_pass
+    background = masked_median(stack, excluded, first_pass) if excluded.any() else first_pass
+    if track is not None:
+        frames = [frame for frame, _ in samples]
+        background = rest_place_scene(frames, images, background, track, radius_px, threshold)
     if moving < max(3, len(images) // 4):
         raise BodyError(
             f"{path}: nothing moves against the static scene in {len(images) - moving} of {len(images)} sampled "
@@ -391,7 +300,7 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES) -> BodyScene:
     # The body in the first frame.
     diff = np.abs(images[0].astype(np.float32) - background)
     near = None if start_px is None else (float(start_px[0]), float(start_px[1]))
-    close_px = _close_size(diff.shape)
+    close_px = close_size(diff.shape)
     component, _ = _body_in(diff, threshold, 3, close_px, near=near)
     if component is None:
         raise BodyError(
@@ -444,7 +353,9 @@ def _robust_outliers(values: np.ndarray, usable: np.ndarray, window: int, sigmas
     return usable & (np.abs(dev) > max(sigmas * spread, floor))
 
 
-def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene | None = None) -> pd.DataFrame:
+def track_body(
+    path, settings: TrackerSettings, progress=None, scene: BodyScene | None = None, rest_place_from=None
+) -> pd.DataFrame:
     """Follow the body through the whole video in one decode pass (columns as :func:`.marker.track_video`).
 
     ``quality`` and ``signal_ratio`` are the body's covered area relative to its median.
@@ -458,7 +369,7 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
     contrast = scene.contrast_grey
     threshold = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * contrast)
     open_px = _open_size(scene.inner_radius_px)
-    close_px = max(_close_size(background.shape), _body_close_size(scene.inner_radius_px))
+    close_px = max(close_size(background.shape), _body_close_size(scene.inner_radius_px))
     edge_px = EDGE_REACH * scene.inner_radius_px + 2
     reach = 2.5 * scene.radius_px + 12
     rows = []
@@ -527,6 +438,8 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
     n_ok = int(counts.get("ok", 0))
     table.attrs["video"] = report
     table.attrs["body"] = scene.to_dict()
+    if rest_place_from:  # earlier scenes held the body (their tracks' mid-swing area ratios)
+        table.attrs["body"]["scene_from_swing_ends"] = {"earlier_mid_swing_area_ratios": list(rest_place_from)}
     table.attrs["marker"] = None
     if n_ok < settings.min_usable_fraction * len(table):
         faults = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()) if k != "ok")
@@ -536,11 +449,20 @@ def track_body(path, settings: TrackerSettings, progress=None, scene: BodyScene 
         )
     ratio = rest_place_area_ratio(table)
     table.attrs["body"]["mid_swing_area_ratio"] = None if ratio is None else round(ratio, 4)
-    if ratio is not None and ratio < MIN_MID_SWING_AREA_RATIO:
+    held = ratio is not None and not MIN_MID_SWING_AREA_RATIO <= ratio <= 1 / MIN_MID_SWING_AREA_RATIO
+    tries = [] if rest_place_from is None else list(rest_place_from)
+    if held and len(tries) < REST_PLACE_REPAIRS:
+        # the scene holds the body where it spends most samples (its rest place, or the ends of a narrow
+        # swing): the scene there again, from the two ends of the swing as this track finds them
+        start = settings.start_px or scene.start_px
+        repaired = find_body(path, start, track=table, radius_px=max(scene.radius_px, scene.inner_radius_px))
+        return track_body(path, settings, progress, repaired, rest_place_from=[*tries, round(ratio, 4)])
+    if held:
+        where = "smaller mid-swing" if ratio < 1 else "larger mid-swing"
         raise BodyError(
-            f"{path}: the body's silhouette is {100 * (1 - ratio):.0f} % smaller mid-swing than at the ends of its "
-            "swing: it covers its rest place in most frames, so the scene behind it there is never seen clearly "
-            "and its positions would be biased towards the ends (a swing narrower than about twice the body's "
-            "width); film a wider swing, or give start_px at a marker dot on it"
+            f"{path}: the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {where} than at the ends of its swing, "
+            "also with the scene taken from the ends of the swing: the body covers the same place in most frames "
+            "(a swing narrower than about twice the body's width), so the scene behind it is never seen clearly "
+            "and its positions would be biased; film a wider swing, or give start_px at a marker dot on it"
         )
     return table

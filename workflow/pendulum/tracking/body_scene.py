@@ -1,0 +1,174 @@
+"""The static scene behind a swinging body, from frames sampled over the clip (:mod:`pendulum.tracking.body`).
+
+Samples brought to one exposure, their moving objects found against a scene estimate and left out of the
+next (the per-pixel median of the rest), and, for a body that covers its own rest place in most samples,
+the scene there from the two ends of its swing (:func:`rest_place_scene`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from pendulum.camera.video import VideoError, iter_luma
+
+# closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
+CLOSE_FRACTION = 1 / 72
+MIN_BODY_AREA_PX = 12  # a moving component smaller than this is noise
+TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D) in most samples: ambiguous
+
+
+def sample_clip(path, n_samples: int) -> list[tuple[int, np.ndarray]]:
+    """Every k-th decoded frame (k doubling as needed): between n and 2n frames over the whole clip, frame 0 first."""
+    kept, stride = [], 1
+    for index, _t, image in iter_luma(path):
+        if index % stride == 0:
+            kept.append((index, image.copy()))
+            if len(kept) >= 2 * n_samples:
+                kept, stride = kept[::2], stride * 2
+    if not kept:
+        raise VideoError(f"{path}: no frame could be decoded")
+    return kept
+
+
+def close_size(shape) -> int:
+    return max(5, 2 * int(round(min(shape[:2]) * CLOSE_FRACTION / 2)) + 1)
+
+
+def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int = 5):
+    """Connected components of ``diff > threshold`` after a closing and an opening: (labels, stats, masses)."""
+    mask = (diff > threshold).astype(np.uint8)
+    # closed first: the dark squares of a print, or a body's dark patches, are one object
+    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px,) * 2))
+    if open_px > 1:
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px, open_px))
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    masses = np.zeros(n)
+    if n > 1:
+        masses = np.bincount(labels.ravel(), weights=diff.ravel(), minlength=n)
+        masses[0] = 0.0
+    return labels, stats, masses
+
+
+def noise_sigma(samples: list[np.ndarray], background: np.ndarray) -> float:
+    """Robust σ of I − B over a few samples (most pixels show the static scene)."""
+    picks = samples[:: max(1, len(samples) // 8)]
+    values = np.concatenate([(s.astype(np.float32) - background)[::2, ::2].ravel() for s in picks])
+    return max(float(1.4826 * np.median(np.abs(values - np.median(values)))), 0.5)
+
+
+def same_exposure(images: list[np.ndarray]) -> list[np.ndarray]:
+    """The samples brought to one exposure: each mapped by the gain and offset that best take it to the
+    samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD: the body)."""
+    grid = np.stack([im[::4, ::4] for im in images]).astype(np.float32)
+    reference = np.median(grid, axis=0).ravel()
+    if np.ptp(reference) < 4:  # a flat picture: its gain is not defined, nothing to match
+        return images
+    out = []
+    for image, small in zip(images, grid, strict=True):
+        values = small.ravel()
+        keep = np.ones(values.size, bool)
+        for _ in range(2):
+            gain, offset = np.polyfit(reference[keep], values[keep], 1)
+            residual = values - (gain * reference + offset)
+            keep = np.abs(residual) <= 3 * 1.4826 * np.median(np.abs(residual)) + 1e-6
+        if abs(gain - 1) < 0.005 and abs(offset) < 0.5:
+            out.append(image)
+        else:
+            out.append(np.clip(np.rint((image.astype(np.float32) - offset) / gain), 0, 255).astype(np.uint8))
+    return out
+
+
+def reduced(image: np.ndarray, scale: int) -> np.ndarray:
+    return cv2.resize(image, (image.shape[1] // scale, image.shape[0] // scale), interpolation=cv2.INTER_AREA)
+
+
+def moving_objects(images: list, background: np.ndarray, threshold: float):
+    """Per sample, the pixels of its heavier moving objects (grown by 4 px); how many samples show one; how many
+    show two far-apart objects of similar weight, and where."""
+    excluded = np.zeros((len(images),) + background.shape, bool)
+    moving, areas, pairs = 0, [], []
+    grow = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
+    for k, image in enumerate(images):
+        diff = np.abs(image.astype(np.float32) - background)
+        labels, stats, masses = components(diff, threshold, 3, close_size(diff.shape))
+        order = [i for i in np.argsort(masses)[::-1] if i > 0 and stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
+        if not order:
+            continue
+        moving += 1
+        heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]]
+        excluded[k] = cv2.dilate(np.isin(labels, heavy).astype(np.uint8), grow) > 0
+        a = order[0]
+        areas.append(stats[a, cv2.CC_STAT_AREA])
+        if len(order) > 1 and masses[order[1]] >= TWO_OBJECTS_MASS_RATIO * masses[a]:
+            b = order[1]
+            (ax, ay), (bx, by) = (stats[a, :2] + stats[a, 2:4] / 2), (stats[b, :2] + stats[b, 2:4] / 2)
+            ra, rb = (math.sqrt(stats[i, cv2.CC_STAT_AREA] / math.pi) for i in (a, b))
+            if math.hypot(ax - bx, ay - by) > 2 * (ra + rb):
+                pairs.append((stats[b, cv2.CC_STAT_AREA], (ax, ay), (bx, by)))
+    # two objects: the second as heavy as 0.4× the first and at least a third the body's usual size, far apart
+    typical = float(np.median(areas)) if areas else 0.0
+    seen = [(p, q) for area, p, q in pairs if area >= typical / 3]
+    return excluded, moving, len(seen), seen
+
+
+def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """Per pixel, the median of the samples not excluded there (``fallback`` where fewer than max(5, n/10) are left)."""
+    background = fallback.copy()
+    union = excluded.any(axis=0)
+    if union.any():
+        column = stack[:, union].astype(np.float32)
+        column[excluded[:, union]] = np.nan
+        column.sort(axis=0)  # NaN last: the median of the first `valid` values of each pixel
+        valid = np.isfinite(column).sum(axis=0)
+        lower = np.take_along_axis(column, np.maximum((valid - 1) // 2, 0)[None], axis=0)[0]
+        upper = np.take_along_axis(column, np.maximum(valid // 2, 0)[None], axis=0)[0]
+        second = 0.5 * (lower + upper)
+        enough = valid >= max(5, len(stack) // 10)
+        background[union] = np.where(enough, second, fallback[union])
+    return background
+
+
+def rest_place_scene(frames, images, background, track, radius_px: float, threshold: float) -> np.ndarray:
+    """The scene with the body's rest place filled from the two ends of its swing.
+
+    A body that covers its rest place in most samples is part of the median scene there. At the ends of a
+    swing wider than the body it is elsewhere: the samples (``frames``, ``images``) at each end (the tenth
+    with the lowest and the highest position along the path's main direction, from ``track``'s ok frames)
+    have one median each, B₋ and B₊; where they differ by more than ``threshold`` one of them holds the
+    body, the end's own (the pixels on its side of the bisector between the two ends' mean positions), and
+    the scene there is taken from the other; where they agree but the median scene differs from them (the
+    body between its two ends), from them. Only within 2 ``radius_px`` + 10 px of the segment between the
+    two ends (another moving object elsewhere is left as the median has it).
+    """
+    ok = track[track.flag == "ok"].set_index("frame")
+    at = [(k, float(ok.x_px[f]), float(ok.y_px[f])) for k, f in enumerate(frames) if f in ok.index]
+    if len(at) < 10:
+        return background
+    xy = np.array([(x, y) for _, x, y in at])
+    centred = xy - xy.mean(axis=0)
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    order = np.argsort(centred @ axes[0])
+    m = max(3, len(at) // 10)
+    ends = []
+    for picks in (order[:m], order[-m:]):
+        scene = np.median(np.stack([images[at[i][0]] for i in picks]), axis=0).astype(np.float32)
+        ends.append((scene, xy[picks].mean(axis=0)))
+    (low, c_low), (high, c_high) = ends
+    span = c_high - c_low
+    length = float(np.hypot(*span))
+    if length <= 0:
+        return background
+    yy, xx = np.indices(background.shape, dtype=np.float32)
+    along = ((xx - c_low[0]) * span[0] + (yy - c_low[1]) * span[1]) / length
+    across = np.abs((xx - c_low[0]) * span[1] - (yy - c_low[1]) * span[0]) / length
+    beyond = np.maximum(np.maximum(-along, along - length), 0.0)
+    near = np.hypot(across, beyond) <= 2 * radius_px + 10
+    differs = near & (np.abs(low - high) > threshold)
+    composite = np.where(along < 0.5 * length, high, low)  # the low end's body is on its side: the high end's scene
+    both = 0.5 * (low + high)  # where the two ends agree, neither holds the body: the wall, if the median had it
+    held = near & ~differs & (np.abs(background - both) > threshold)
+    return np.where(differs, composite, np.where(held, both, background)).astype(np.float32)
