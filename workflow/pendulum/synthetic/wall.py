@@ -46,6 +46,11 @@ class WallBody:
     spin_deg_per_s: float = 0.0  # the look turning about the thread
     dot_radius_px: float = 0.0  # a marker dot painted at the body's centre (a clock bob's coloured dot); 0: none
     dot_level: float = 40.0  # the dot's grey
+    # a shiny body (a bauble): the specular highlight of a lamp at lamp_px = (x, y, distance in front of the
+    # wall plane), this much brighter at its peak (0: matte), Gaussian σ this fraction of the radius
+    gloss: float = 0.0
+    gloss_sigma: float = 0.1
+    lamp_px: tuple = (320.0, 0.0, 700.0)
 
     def __post_init__(self):
         if self.look not in ("apple", "two_tone", "pattern"):
@@ -124,6 +129,12 @@ def _body_patch(body: WallBody, cx: float, cy: float, spin_rad: float, swing_rad
         grey = np.where(
             (np.floor(3 * spun + 3) + np.floor(3 * along + 3)) % 2 == 0, body.other_level, body.level
         ) + 0.3 * t * (-along)
+    if body.gloss > 0:  # the highlight where the sphere's normal halves the lamp's and the view's directions
+        to_lamp = np.array([body.lamp_px[0] - cx, body.lamp_px[1] - cy, body.lamp_px[2]], float)
+        half = to_lamp / np.linalg.norm(to_lamp) + np.array([0.0, 0.0, 1.0])
+        hx, hy = half[:2] / np.linalg.norm(half)
+        spot = np.exp(-0.5 * ((u - hx) ** 2 + (v - hy) ** 2) / body.gloss_sigma**2)
+        grey = np.minimum(grey + body.gloss * spot, 255.0)
     if body.dot_radius_px > 0:  # the dot's exact coverage, as the body's
         dot = (fx**2 + fy**2 <= body.dot_radius_px**2).mean(axis=2)
         grey = grey + dot * (body.dot_level - grey)
