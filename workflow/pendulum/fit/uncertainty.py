@@ -15,23 +15,31 @@ Z95 = float(ndtri(0.975))  # the standard normal's 97.5 % quantile (as scipy.sta
 
 
 def fit_ar(r: np.ndarray, max_order: int = 10) -> tuple[np.ndarray, float, int]:
-    """AR(p) model of a residual series by least squares, p ≤ max_order chosen by AIC: (φ, σ_e², p)."""
+    """AR(p) model of a residual series by least squares, p ≤ max_order chosen by AIC: (φ, σ_e², p).
+
+    Every order regresses the same target on the first p of the same lags, so one QR factorisation of
+    [lags | target] = Q R gives them all: φ_p solves R[:p, :p] φ = R[:p, m], and the residual sum of
+    squares is Σ_{j ≥ p} R[j, m]² (m = max_order, the target's column)."""
     r = r - r.mean()
     n = r.size
     best = (np.zeros(0), float(r @ r) / n, 0)
     best_aic = n * math.log(best[1])
-    if max_order < 1:
+    m = min(max_order, (n - 1) // 2)  # at least as many equations as unknowns
+    if m < 1:
         return best
-    lags = np.column_stack([r[max_order - i - 1 : n - i - 1] for i in range(max_order)])
-    target = r[max_order:]
-    for order in range(1, max_order + 1):
-        phi, *_ = np.linalg.lstsq(lags[:, :order], target, rcond=None)
-        e = target - lags[:, :order] @ phi
-        var = float(e @ e) / e.size
-        aic = n * math.log(var) + 2 * order
-        roots = np.abs(np.roots(np.concatenate([[1.0], -phi])))
-        if aic < best_aic and (roots.size == 0 or roots.max() < 0.995):
-            best, best_aic = (phi, var, order), aic
+    system = np.column_stack([*(r[m - i - 1 : n - i - 1] for i in range(m)), r[m:]])
+    upper = np.linalg.qr(system, mode="r")
+    rhs = upper[:, m]
+    rss = np.cumsum((rhs**2)[::-1])[::-1]  # rss[p] = Σ_{j ≥ p} rhs_j²
+    size = n - m
+    var = rss[1:] / size
+    aic = np.where(var > 0, n * np.log(np.where(var > 0, var, 1.0)) + 2 * np.arange(1, m + 1), np.inf)
+    for order in np.argsort(aic, kind="stable") + 1:  # the lowest AIC among the stationary orders
+        if not aic[order - 1] < best_aic:
+            break
+        phi = np.linalg.solve(upper[:order, :order], rhs[:order])
+        if np.abs(np.roots(np.concatenate([[1.0], -phi]))).max() < 0.995:
+            return phi, float(var[order - 1]), int(order)
     return best
 
 
