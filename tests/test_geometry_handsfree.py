@@ -273,3 +273,20 @@ def test_a_jump_at_the_start_of_a_record_is_left_out_and_the_fit_finds_the_truth
             record.time_s,
             max_step_s=0.02,
         )
+
+
+@pytest.mark.parametrize("roll_deg", [90.0, 179.6, -178.0])
+def test_the_vertical_of_a_camera_held_sideways_or_upside_down(roll_deg):
+    """A phone on its side or upside down: the body hangs to the side of its pivot, or above it, in the image.
+    The image angle of a path above its pivot crosses ±180° where atan2 wraps; the vertical is still its swing's
+    centre (before: 179.6° came out as -0.6°, the angle record a wrapped saw-tooth)."""
+    from pendulum.angles.record import angles_from_track
+
+    track = swing_track(20.0, vertical_deg=roll_deg, pivot=(320.0, 240.0), arm=150.0, decay_s=30.0, seed=5)
+    geometry = estimate_rig_geometry({"t": track})
+    error = (geometry["vertical_deg"] - roll_deg + 180.0) % 360.0 - 180.0
+    assert abs(error) < 0.05, geometry["vertical_deg"]
+    table, _ = angles_from_track(
+        track, pivot_px=geometry["pivot_px"], vertical_deg=geometry["vertical_deg"], length_m=0.76, source="t"
+    )
+    assert np.nanmax(np.abs(table.theta_rad)) == pytest.approx(math.radians(20.0), abs=math.radians(0.1))

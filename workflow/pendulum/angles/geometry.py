@@ -212,7 +212,8 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
     """Pivot (circle through the pooled marker paths, outlying tracks left out) and vertical.
 
     The vertical is the median oscillation centre (:func:`swing_centre_rad`, any
-    amplitude) of the tracks used; when no track has a clean swing it is the
+    amplitude, about each path's circular mean angle: a camera upside down gives about 180°) of the
+    tracks used; when no track has a clean swing it is the
     image vertical (0°) with a warning under ``warnings`` (the fits' rest offset
     absorbs a camera roll). Values given are kept; only the missing ones are
     estimated. An estimated pivot comes with ``pivot_stderr_px`` and
@@ -236,11 +237,19 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         centres = []
         for track in tracks.values():
             th = image_angle_rad(track.x_px.where(track.flag == "ok"), track.y_px.where(track.flag == "ok"), pivot_px)
-            found = swing_centre_rad(th)
+            # about the path's circular mean, so a swing across ±180° (a camera upside down: the body above
+            # its pivot in the image) is not cut in two where atan2 wraps
+            seen = th[np.isfinite(th)]
+            mean = math.atan2(float(np.sin(seen).sum()), float(np.cos(seen).sum())) if seen.size else 0.0
+            found = swing_centre_rad(np.mod(th - mean + math.pi, 2 * math.pi) - math.pi)
             if found is not None:
-                centres.append(found[0])
+                centres.append(found[0] + mean)
         if centres:
-            vertical_deg = math.degrees(float(np.median(centres)))
+            middle = math.atan2(float(np.sin(centres).sum()), float(np.cos(centres).sum()))
+            spread = np.mod(np.asarray(centres) - middle + math.pi, 2 * math.pi) - math.pi
+            vertical_deg = math.degrees(middle + float(np.median(spread)))
+            if not -180.0 <= vertical_deg < 180.0:
+                vertical_deg = (vertical_deg + 180.0) % 360.0 - 180.0
             result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
         else:
             vertical_deg = 0.0
