@@ -118,13 +118,25 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
     assert zero_crossing_period(t, theta) == pytest.approx(2.078, rel=1e-5)
 
 
-@pytest.mark.parametrize("variant", ["upside_down", "sideways"])
-def test_the_apple_filmed_with_the_phone_upside_down_or_on_its_side(variant, tmp_path):
-    """The real clip turned as a phone held the other way up or on its side films it (no rotation tag): the
-    same period and noise, the vertical found at about 180° or −90° (before: upside down, the path crossed
-    ±180° where atan2 wraps and the record's period came out 8.8 % short, silently). The other variants of
-    ``tests/benchmarks/real_variants.py`` (sizes, frame rate, a later start, exposure drift, defocus, low
-    bitrate, noise) pass there as well: 11 of 11."""
+# The real clip turned into footage filmed other ways (tests/benchmarks/real_variants.py): each case here was
+# wrong before this test. Expected: (least share of frames ok, the vertical in degrees or None when it cannot be
+# estimated). Upside down, the path crossed ±180° where atan2 wraps: the vertical came out -1.5° and the period
+# 8.8 % short, silently. At 15 fps the apple taken as a marker disk was usable in 94.5 % of the frames (its
+# turning points flagged) and the body was not tried. With the swing leaving the frame at one end, the body was
+# refused (its size learnt from the first frame, where it is cut by the border) and the vertical was estimated
+# from turning points that were where the body left the frame (1.4° off).
+REAL_VARIANTS = {
+    "upside_down": (99.0, 180.0),
+    "sideways": (99.0, -90.0),
+    "15fps": (99.0, 0.0),
+    "swing_leaves_the_frame": (80.0, None),
+}
+
+
+@pytest.mark.parametrize("variant", sorted(REAL_VARIANTS))
+def test_the_apple_filmed_other_ways(variant, tmp_path):
+    """The same period (within 0.3 %) and record noise (≤ 0.03°) as the clip itself; the frames with the body partly
+    out of view flagged ``edge``; the vertical found, or said not to be found. All 17 variants of the study pass."""
     if not APPLE.is_file():
         pytest.skip(f"{APPLE} not found (../shared beside the project)")
     import sys
@@ -132,9 +144,13 @@ def test_the_apple_filmed_with_the_phone_upside_down_or_on_its_side(variant, tmp
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import judge
 
+    least_ok, vertical = REAL_VARIANTS[variant]
     row = judge(variant, tmp_path)
-    assert row["ok%"] >= 99.0, row
+    assert row["ok%"] >= least_ok, row
     assert abs(row["period_err_pct"]) <= 0.3, row
     assert row["noise_deg"] <= 0.03, row
-    expected = 180.0 if variant == "upside_down" else -90.0
-    assert abs((row["vertical_deg"] - expected + 180.0) % 360.0 - 180.0) <= 5.0, row
+    if vertical is None:
+        assert not row["vertical_estimated"] and row["edge_pct"] >= 10, row
+    else:
+        assert row["vertical_estimated"], row
+        assert abs((row["vertical_deg"] - vertical + 180.0) % 360.0 - 180.0) <= 5.0, row

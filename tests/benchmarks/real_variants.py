@@ -5,7 +5,8 @@
 `../shared/data/real-video/redapple_480p.mov` (real phone footage, MIT licence) is turned into the
 variants a lab's footage differs by — half and double size, 30 fps, a record that starts later in
 the swing, a phone held sideways or upside down, exposure drift, defocus, a low bitrate, sensor
-noise of a dim room — and each is tracked with config.yaml's defaults (no hints), as a new user
+noise of a dim room, a phone 5° off level, 15 fps, a 6 s record, a swing that leaves the frame at one
+end — and each is tracked with config.yaml's defaults (no hints), as a new user
 would. Per variant: the method used, the share of frames ``ok``, the angle record's period from
 its zero crossings against the independently measured 2.078 s (issue 23: within 0.3 %) and the
 record's own noise figure. The variants are real footage transformed, not renders: what they
@@ -27,6 +28,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 APPLE = ROOT.parent / "shared" / "data" / "real-video" / "redapple_480p.mov"
 APPLE_PERIOD_S = 2.078
+APPLE_START_PX = (73.0, 172.1)  # the apple's centre in the clip's first frame (find_body)
+SECOND_SPEED = 1.25  # the second pendulum: the clip mirrored and played 1.25× faster (period 1.662 s)
 
 
 def _resize(factor):
@@ -56,6 +59,18 @@ def _noisy(image, index, n):
     return np.clip(image + rng.normal(0, 4.0, image.shape), 0, 255).astype(np.uint8)
 
 
+def _tilted(image, index, n):
+    import cv2
+
+    h, w = image.shape
+    turn = cv2.getRotationMatrix2D((w / 2, h / 2), 5.0, 1.0)  # a phone 5° off level
+    return cv2.warpAffine(image, turn, (w, h), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+
+
+def _cropped(image, index, n):
+    return np.ascontiguousarray(image[:, 96:])  # the first swings leave the frame on the left
+
+
 def _rotate(code):
     import cv2
 
@@ -71,14 +86,27 @@ def variants():
         "half_size": (_resize(0.5), 1, 0, 18),
         "double_size": (_resize(2.0), 1, 0, 18),
         "30fps": (None, 2, 0, 18),
+        "15fps": (None, 4, 0, 18),
+        "short_6s": (None, 1, 0, 18),
         "later_start": (None, 1, 200, 18),
         "sideways": (_rotate(cv2.ROTATE_90_CLOCKWISE), 1, 0, 18),
         "upside_down": (_rotate(cv2.ROTATE_180), 1, 0, 18),
+        "tilted_5deg": (_tilted, 1, 0, 18),
+        "swing_leaves_the_frame": (_cropped, 1, 0, 18),
         "exposure_drift": (_drift, 1, 0, 18),
         "defocus": (_defocus, 1, 0, 18),
         "low_bitrate": (None, 1, 0, 34),
         "dim_room_noise": (_noisy, 1, 0, 18),
+        "two_pendulums": (None, 1, 0, 18),
+        "two_pendulums_start_px": (None, 1, 0, 18),
     }
+
+
+def _two_pendulums(frames: list) -> list:
+    """Each frame beside the clip mirrored and played SECOND_SPEED× faster (nearest frames): two pendulums of
+    different periods side by side, 1280 px wide."""
+    n = int((len(frames) - 1) / SECOND_SPEED)
+    return [np.hstack([frames[k], frames[int(round(k * SECOND_SPEED))][:, ::-1]]) for k in range(n)]
 
 
 def make(name: str, workdir: Path) -> Path:
@@ -89,9 +117,16 @@ def make(name: str, workdir: Path) -> Path:
     out = workdir / f"apple_{name}.mp4"
     if out.is_file():
         return out
-    frames = [image.copy() for index, _, image in iter_luma(APPLE) if index >= first and (index - first) % every == 0]
+    last = 360 if name == "short_6s" else None
+    frames = [
+        image.copy()
+        for index, _, image in iter_luma(APPLE)
+        if index >= first and (index - first) % every == 0 and (last is None or index < last)
+    ]
     if transform is not None:
         frames = [transform(image, k, len(frames)) for k, image in enumerate(frames)]
+    if name.startswith("two_pendulums"):
+        frames = _two_pendulums(frames)
     write_video(frames, out, 60.0 / every, crf, "veryfast")
     return out
 
@@ -107,12 +142,17 @@ def judge(name: str, workdir: Path) -> dict:
     from pendulum.tracking.settings import TrackerSettings
 
     video = make(name, workdir)
-    settings = TrackerSettings.from_config(yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"])
+    config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
+    if name == "two_pendulums_start_px":  # the user points at the left one (the original clip's apple)
+        config = {**config, "start_px": list(APPLE_START_PX)}
+    settings = TrackerSettings.from_config(config)
     row = {"variant": name}
     try:
         track = track_trial(video, settings)
     except VideoError as error:
-        return {**row, "method": "refused", "ok%": 0.0, "error": str(error)[:300]}
+        # two pendulums in view and no start_px: a refusal that asks for it is the right answer
+        asks = name == "two_pendulums" and "start_px" in str(error)
+        return {**row, "method": "refused", "ok%": 0.0, "pass": asks, "error": str(error)[:300]}
     corrected, _ = path_departure(track)
     geometry = estimate_rig_geometry({"v": corrected})
     table, info = angles_from_track(
@@ -123,10 +163,15 @@ def judge(name: str, workdir: Path) -> dict:
         method=track.attrs["method"]["used"],
         **{"ok%": round(100 * float((track.flag == "ok").mean()), 2)},
         vertical_deg=round(float(geometry["vertical_deg"]), 2),
+        vertical_estimated=geometry["vertical_source"].startswith("estimated"),
+        edge_pct=round(100 * float((track.flag == "edge").mean()), 2),
         period_err_pct=round(100 * (period / APPLE_PERIOD_S - 1), 3),
         noise_deg=round(float(info.noise_deg), 4),
     )
-    row["pass"] = row["ok%"] >= 95 and abs(row["period_err_pct"]) <= 0.3 and row["noise_deg"] <= 0.03
+    # where the swing leaves the frame, the frames with the body partly out of view are flagged `edge`: the
+    # rest (83 % of this clip) must be usable
+    least = 80 if name == "swing_leaves_the_frame" else 95
+    row["pass"] = row["ok%"] >= least and abs(row["period_err_pct"]) <= 0.3 and row["noise_deg"] <= 0.03
     return row
 
 

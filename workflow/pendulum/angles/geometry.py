@@ -253,7 +253,11 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
             result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
         else:
             vertical_deg = 0.0
-            why = "no usable track" if not tracks else "no trial has a clean swing (three extrema above the noise)"
+            why = (
+                "no usable track"
+                if not tracks
+                else "no trial has a clean swing: three turning points above the noise, each in view"
+            )
             result["vertical_source"] = "image vertical (not estimated)"
             result["warnings"].append(
                 f"cannot estimate the vertical ({why}); the image vertical (0°) is used: the fits' rest offset "

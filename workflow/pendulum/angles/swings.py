@@ -47,14 +47,23 @@ def swing_centre_rad(theta: np.ndarray) -> tuple[float, int] | None:
         half = max(2, min(g for g in spacing if g is not None) // 6) if any(spacing) else 2
         near = np.flatnonzero(np.abs(idx - idx[i]) <= half)
         value = v[i]
+        bracketed = True
         if near.size >= 5:
             a, b, c = np.polyfit(idx[near] - idx[i], v[near], 2)
             if a != 0 and abs(b / (2 * a)) <= half:
                 value = c - b * b / (4 * a)
-        values.append(value)
+            # the turn must lie between samples: an extremum at the edge of a run of missing frames whose
+            # parabola turns beyond it (the body out of view at the end of its swing) is where the record
+            # stops, not where the swing turns
+            vertex = -b / (2 * a) if a != 0 else math.inf
+            offsets = idx[near] - idx[i]
+            bracketed = (offsets < vertex).sum() >= 2 and (offsets > vertex).sum() >= 2
+        values.append(value if bracketed else math.nan)
     centres = []
     for k in range(len(values) - 2):
         p0, q, p1 = values[k : k + 3]
+        if not math.isfinite(p0 + q + p1):
+            continue
         swing = abs(q - 0.5 * (p0 + p1))
         if swing > 20 * sigma and np.sign(p0 - q) == np.sign(p1 - q) and p0 + p1 - 2 * q != 0:
             centres.append((p0 * p1 - q * q) / (p0 + p1 - 2 * q))

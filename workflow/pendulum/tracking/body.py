@@ -297,31 +297,27 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, r
             f"({ax:.0f}, {ay:.0f}) and ({bx:.0f}, {by:.0f}) px): give start_px of the pendulum to follow in the "
             "trial's sidecar"
         )
-    # The body in the first frame.
-    diff = np.abs(images[0].astype(np.float32) - background)
+    # The body in the first frame; its size and contrast from the nearest sample that shows all of it (a record
+    # that starts with the body partly out of view would otherwise learn a smaller, fainter body).
     near = None if start_px is None else (float(start_px[0]), float(start_px[1]))
-    close_px = close_size(diff.shape)
-    component, _ = _body_in(diff, threshold, 3, close_px, near=near)
-    if component is None:
+    close_px = close_size(background.shape)
+    first = _body_measure(np.abs(images[0].astype(np.float32) - background), threshold, close_px, near)
+    if first is None:
         raise BodyError(
             f"{path}: no moving body in the first frame (nothing differs from the static scene by more than "
             f"{threshold:.0f} grey levels)" + ("" if near is None else f" near start_px ({near[0]:.0f}, {near[1]:.0f})")
         )
-    # Again above a quarter of its own contrast (a soft shadow beside it falls away), still the heaviest
-    # object (or the one at start_px), then opened to cut its thread.
-    contrast = float(np.percentile(diff[component], 90))
-    threshold = max(threshold, CONTRAST_FRACTION * contrast)
-    strong, _ = _body_in(diff, threshold, 3, close_px, near=near)
-    component = component if strong is None else strong
-    inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
-    close_px = max(close_px, _body_close_size(inner))
-    open_px = _open_size(inner)
-    component, _ = _body_in(diff, threshold, open_px, close_px, near=near or _centre(component))
-    if component is None:
+    if first[4] is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
-    inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
-    fraction = silhouette_fraction(diff[component])
-    x, y, _, _, _ = _soft_centroid(diff, component, fraction)
+    whole = first
+    if _touches_border(first[4]) and near is None:
+        for image in images[1:]:
+            seen = _body_measure(np.abs(image.astype(np.float32) - background), threshold, close_px, None)
+            if seen is not None and seen[4] is not None and not _touches_border(seen[4]):
+                whole = seen
+                break
+    x, y = first[0], first[1]
+    component, inner, contrast, fraction = whole[4], whole[5], whole[2], whole[3]
     return BodyScene(
         background=background,
         noise_grey=sigma,
@@ -333,6 +329,35 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, r
         n_samples=len(images),
         silhouette_fraction=fraction,
     )
+
+
+def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near):
+    """The body in one frame's difference from the scene: ``(x, y, contrast, silhouette fraction, component,
+    inner radius)``, the component None when only a thread or rod moves; None when nothing does.
+
+    The heaviest moving object (or the one at ``near``), again above a quarter of its own contrast (a soft
+    shadow beside it falls away), then opened to cut its thread."""
+    component, _ = _body_in(diff, threshold, 3, close_px, near=near)
+    if component is None:
+        return None
+    contrast = float(np.percentile(diff[component], 90))
+    threshold = max(threshold, CONTRAST_FRACTION * contrast)
+    strong, _ = _body_in(diff, threshold, 3, close_px, near=near)
+    component = component if strong is None else strong
+    inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
+    close_px = max(close_px, _body_close_size(inner))
+    opened, _ = _body_in(diff, threshold, _open_size(inner), close_px, near=near or _centre(component))
+    if opened is None:
+        return math.nan, math.nan, contrast, STRONG_FRACTION, None, inner
+    inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
+    fraction = silhouette_fraction(diff[opened])
+    x, y, _, _, _ = _soft_centroid(diff, opened, fraction)
+    return x, y, contrast, fraction, opened, inner
+
+
+def _touches_border(component: np.ndarray) -> bool:
+    """Whether a body's pixels reach the frame's outermost rows or columns (part of it out of view)."""
+    return bool(component[0].any() or component[-1].any() or component[:, 0].any() or component[:, -1].any())
 
 
 def _centre(component: np.ndarray) -> tuple[float, float]:

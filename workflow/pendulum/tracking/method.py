@@ -18,7 +18,7 @@ from pendulum.tracking.body import track_body
 from pendulum.tracking.marker import track_video
 from pendulum.tracking.settings import TrackerSettings
 
-MARKER_USABLE_FRACTION = 0.9
+MARKER_USABLE_FRACTION = 0.95  # issue 23: a record ≥ 95 % usable; below it the body is tried too, the better kept
 
 
 def usable_fraction(track: pd.DataFrame) -> float:
