@@ -71,6 +71,29 @@ def _cropped(image, index, n):
     return np.ascontiguousarray(image[:, 96:])  # the first swings leave the frame on the left
 
 
+def _inverted(image, index, n):
+    return 255 - image  # a light body before a dark backdrop
+
+
+def _bar_in_front(image, index, n):
+    out = image.copy()
+    out[:, 296:308] = 40  # a dark post of the tank's frame between the camera and the swing
+    return out
+
+
+def _letterbox(image, index, n):
+    return np.pad(image, ((60, 60), (0, 0)), constant_values=16)  # 640×360 padded into 640×480
+
+
+def _timestamp(image, index, n):
+    import cv2
+
+    out = image.copy()
+    text = f"2026-11-27 10:{index // 3600:02d}:{index // 60 % 60:02d}.{index % 60:02d}"  # burnt in, every frame
+    cv2.putText(out, text, (12, 340), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 255, 2, cv2.LINE_AA)
+    return out
+
+
 def _rotate(code):
     import cv2
 
@@ -97,6 +120,10 @@ def variants():
         "defocus": (_defocus, 1, 0, 18),
         "low_bitrate": (None, 1, 0, 34),
         "dim_room_noise": (_noisy, 1, 0, 18),
+        "dark_backdrop": (_inverted, 1, 0, 18),
+        "post_in_front": (_bar_in_front, 1, 0, 18),
+        "letterbox": (_letterbox, 1, 0, 18),
+        "timestamp_overlay": (_timestamp, 1, 0, 18),
         "two_pendulums": (None, 1, 0, 18),
         "two_pendulums_start_px": (None, 1, 0, 18),
     }
