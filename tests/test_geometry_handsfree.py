@@ -290,3 +290,20 @@ def test_the_vertical_of_a_camera_held_sideways_or_upside_down(roll_deg):
         track, pivot_px=geometry["pivot_px"], vertical_deg=geometry["vertical_deg"], length_m=0.76, source="t"
     )
     assert np.nanmax(np.abs(table.theta_rad)) == pytest.approx(math.radians(20.0), abs=math.radians(0.1))
+
+
+def test_a_camera_upside_down_with_the_vertical_given_as_zero_is_refused_with_what_to_do():
+    """The shipped rig gives vertical_deg: 0; a user's camera upside down then puts the swing at ±180°, where the
+    angle wraps: no record, but a message saying why and what to set (before: a wrapped saw-tooth record)."""
+    from pendulum.angles.record import InputError, angles_from_track
+
+    track = swing_track(20.0, vertical_deg=179.6, pivot=(320.0, 240.0), arm=150.0, decay_s=30.0, seed=5)
+    with pytest.raises(InputError, match=r"upside down.*vertical_deg to null"):
+        angles_from_track(track, pivot_px=[320.0, 240.0], vertical_deg=0.0, length_m=0.76, source="t")
+    sideways = swing_track(20.0, vertical_deg=-90.0, pivot=(320.0, 240.0), arm=150.0, decay_s=30.0, seed=5)
+    with pytest.raises(InputError, match=r"hangs -(8|9)\d°"):
+        angles_from_track(sideways, pivot_px=[320.0, 240.0], vertical_deg=0.0, length_m=0.76, source="t")
+    # a 75° hold before the release is not a camera on its side
+    held = swing_track(75.0, pivot=(320.0, 240.0), arm=150.0, decay_s=30.0, seed=5)
+    table, _ = angles_from_track(held, pivot_px=[320.0, 240.0], vertical_deg=0.0, length_m=0.76, source="t")
+    assert np.nanmax(table.theta_deg) == pytest.approx(75.0, abs=0.1)

@@ -130,6 +130,15 @@ def angles_from_track(
     # a position on the pivot (or not finite) has no angle
     ok = (track.flag == "ok").to_numpy() & np.isfinite(theta_img) & np.isfinite(radius) & (radius >= 1.0)
     flag = np.where(ok | (track.flag != "ok").to_numpy(), track.flag.to_numpy(object), "lost")
+    if ok.any():  # where the swing hangs against the vertical it is measured from: a camera on its side or upside down
+        off = theta_img[ok] - math.radians(vertical_deg)
+        hangs_deg = math.degrees(math.atan2(float(np.sin(off).sum()), float(np.cos(off).sum())))
+        if abs(hangs_deg) > MAX_HANG_DEG:
+            raise InputError(
+                f"{source}: the swing hangs {hangs_deg:+.0f}° from the vertical it is measured from "
+                f"({vertical_deg:g}° in the image): the camera is on its side or upside down, or vertical_deg is "
+                "wrong; set the rig's vertical_deg to null to have it estimated from the swing"
+            )
     return angle_record(
         columns["time_s"],
         theta_img,
@@ -143,6 +152,9 @@ def angles_from_track(
         arm_radius_px=float(np.median(radius[ok])) if ok.any() else None,
         pivot_covariance_px2=pivot_covariance_px2,
     )
+
+
+MAX_HANG_DEG = 60.0  # a swing centred further from the vertical it is measured from: the vertical is not the camera's
 
 
 class InputError(ValueError):
