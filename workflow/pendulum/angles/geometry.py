@@ -79,6 +79,17 @@ def fit_circle(x, y, weights=None) -> CircleFit:
     )
 
 
+def wrapped_rad(angle):
+    """An angle (or array) brought to [−π, π)."""
+    return np.mod(angle + math.pi, 2 * math.pi) - math.pi
+
+
+def circular_mean_rad(angles) -> float:
+    """The mean direction of angles (radians), 0 for none: what crosses ±π is not cut in two."""
+    a = np.asarray(angles, float)
+    return math.atan2(float(np.sin(a).sum()), float(np.cos(a).sum())) if a.size else 0.0
+
+
 def image_angle_rad(x, y, pivot_px) -> np.ndarray:
     """atan2(x − x_p, y − y_p): the marker's angle from the image's downward vertical."""
     return np.arctan2(np.asarray(x, float) - pivot_px[0], np.asarray(y, float) - pivot_px[1])
@@ -239,17 +250,15 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
             th = image_angle_rad(track.x_px.where(track.flag == "ok"), track.y_px.where(track.flag == "ok"), pivot_px)
             # about the path's circular mean, so a swing across ±180° (a camera upside down: the body above
             # its pivot in the image) is not cut in two where atan2 wraps
-            seen = th[np.isfinite(th)]
-            mean = math.atan2(float(np.sin(seen).sum()), float(np.cos(seen).sum())) if seen.size else 0.0
-            found = swing_centre_rad(np.mod(th - mean + math.pi, 2 * math.pi) - math.pi)
+            mean = circular_mean_rad(th[np.isfinite(th)])
+            found = swing_centre_rad(wrapped_rad(th - mean))
             if found is not None:
                 centres.append(found[0] + mean)
         if centres:
-            middle = math.atan2(float(np.sin(centres).sum()), float(np.cos(centres).sum()))
-            spread = np.mod(np.asarray(centres) - middle + math.pi, 2 * math.pi) - math.pi
-            vertical_deg = math.degrees(middle + float(np.median(spread)))
-            if not -180.0 <= vertical_deg < 180.0:
-                vertical_deg = (vertical_deg + 180.0) % 360.0 - 180.0
+            middle = circular_mean_rad(centres)  # the median of the centres about it, in [−180°, 180°)
+            vertical_deg = math.degrees(
+                float(wrapped_rad(middle + np.median(wrapped_rad(np.asarray(centres) - middle))))
+            )
             result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
         else:
             vertical_deg = 0.0

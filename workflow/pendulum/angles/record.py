@@ -15,8 +15,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pendulum.angles.geometry import image_angle_rad
+from pendulum.angles.geometry import circular_mean_rad, image_angle_rad, wrapped_rad
 from pendulum.angles.swings import detect_release, rest_start_index, sample_noise_rad
+
+MAX_HANG_DEG = 60.0  # a swing centred further from the vertical it is measured from: the vertical is not the camera's
 
 
 @dataclass
@@ -66,7 +68,7 @@ def angle_record(
     t = np.asarray(time_s, float)
     flag = np.asarray(flag, dtype=object)
     theta = np.asarray(theta_image_rad, float) - math.radians(vertical_deg)
-    theta = np.mod(theta + math.pi, 2 * math.pi) - math.pi  # in [−π, π) whatever the vertical
+    theta = wrapped_rad(theta)  # in [−π, π) whatever the vertical
     if not np.isfinite(t).all() or np.any(np.diff(t) < 0):
         raise InputError(f"{source}: times are missing or not in order; cannot make an angle record")
     usable = (flag == "ok") & np.isfinite(theta)
@@ -131,8 +133,7 @@ def angles_from_track(
     ok = (track.flag == "ok").to_numpy() & np.isfinite(theta_img) & np.isfinite(radius) & (radius >= 1.0)
     flag = np.where(ok | (track.flag != "ok").to_numpy(), track.flag.to_numpy(object), "lost")
     if ok.any():  # where the swing hangs against the vertical it is measured from: a camera on its side or upside down
-        off = theta_img[ok] - math.radians(vertical_deg)
-        hangs_deg = math.degrees(math.atan2(float(np.sin(off).sum()), float(np.cos(off).sum())))
+        hangs_deg = math.degrees(circular_mean_rad(theta_img[ok] - math.radians(vertical_deg)))
         if abs(hangs_deg) > MAX_HANG_DEG:
             raise InputError(
                 f"{source}: the swing hangs {hangs_deg:+.0f}° from the vertical it is measured from "
@@ -152,9 +153,6 @@ def angles_from_track(
         arm_radius_px=float(np.median(radius[ok])) if ok.any() else None,
         pivot_covariance_px2=pivot_covariance_px2,
     )
-
-
-MAX_HANG_DEG = 60.0  # a swing centred further from the vertical it is measured from: the vertical is not the camera's
 
 
 class InputError(ValueError):

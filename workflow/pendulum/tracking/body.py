@@ -48,6 +48,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -307,33 +308,41 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, r
             f"{path}: no moving body in the first frame (nothing differs from the static scene by more than "
             f"{threshold:.0f} grey levels)" + ("" if near is None else f" near start_px ({near[0]:.0f}, {near[1]:.0f})")
         )
-    if first[4] is None:
+    if first.component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
     whole = first
-    if _touches_border(first[4]) and near is None:
+    if _touches_border(first.component) and near is None:
         for image in images[1:]:
             seen = _body_measure(np.abs(image.astype(np.float32) - background), threshold, close_px, None)
-            if seen is not None and seen[4] is not None and not _touches_border(seen[4]):
+            if seen is not None and seen.component is not None and not _touches_border(seen.component):
                 whole = seen
                 break
-    x, y = first[0], first[1]
-    component, inner, contrast, fraction = whole[4], whole[5], whole[2], whole[3]
     return BodyScene(
         background=background,
         noise_grey=sigma,
-        start_px=(x, y),
-        radius_px=math.sqrt(component.sum() / math.pi),
-        inner_radius_px=inner,
-        contrast_grey=contrast,
+        start_px=(first.x, first.y),
+        radius_px=math.sqrt(whole.component.sum() / math.pi),
+        inner_radius_px=whole.inner_radius_px,
+        contrast_grey=whole.contrast,
         moving_samples=moving,
         n_samples=len(images),
-        silhouette_fraction=fraction,
+        silhouette_fraction=whole.fraction,
     )
 
 
-def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near):
-    """The body in one frame's difference from the scene: ``(x, y, contrast, silhouette fraction, component,
-    inner radius)``, the component None when only a thread or rod moves; None when nothing does.
+class _Seen(NamedTuple):
+    """The body in one frame: soft centre, contrast, silhouette fraction, pixels (None: a thread or rod only)."""
+
+    x: float
+    y: float
+    contrast: float
+    fraction: float
+    component: np.ndarray | None
+    inner_radius_px: float
+
+
+def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _Seen | None:
+    """The body in one frame's difference from the scene (:class:`_Seen`); None when nothing moves.
 
     The heaviest moving object (or the one at ``near``), again above a quarter of its own contrast (a soft
     shadow beside it falls away), then opened to cut its thread."""
@@ -348,11 +357,11 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near):
     close_px = max(close_px, _body_close_size(inner))
     opened, _ = _body_in(diff, threshold, _open_size(inner), close_px, near=near or _centre(component))
     if opened is None:
-        return math.nan, math.nan, contrast, STRONG_FRACTION, None, inner
+        return _Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
     fraction = silhouette_fraction(diff[opened])
     x, y, _, _, _ = _soft_centroid(diff, opened, fraction)
-    return x, y, contrast, fraction, opened, inner
+    return _Seen(x, y, contrast, fraction, opened, inner)
 
 
 def _touches_border(component: np.ndarray) -> bool:
