@@ -232,6 +232,36 @@ def test_a_silhouette_shrinking_mid_swing_is_a_scene_that_holds_the_body():
     assert rest_place_area_ratio(track) is None  # too few frames to say
 
 
+def test_a_body_darker_than_the_wall_is_measured_by_its_darkness_only():
+    """A body darker than the scene in its samples (a dark apple; a two-tone ball whose light half is near the
+    wall's grey) is one-sided: a part brighter than the wall behind it (that light half before a shadow band)
+    then adds nothing to its silhouette. Light and dark parts of equal weight (a black-and-white print before a
+    grey wall): both sides count, |I − B|."""
+    from pendulum.tracking.body_scene import body_polarity, one_sided
+
+    wall = np.full((40, 60), 150.0, np.float32)
+    moving = np.zeros((3, 40, 60), bool)
+    moving[:, 10:30, 20:40] = True
+
+    def samples(dark_grey, light_grey):
+        images = []
+        for _ in range(3):
+            image = wall.copy()
+            image[10:20, 20:40] = light_grey  # the upper half
+            image[20:30, 20:40] = dark_grey
+            images.append(image)
+        return images
+
+    assert body_polarity(samples(60.0, 160.0), wall, moving, 4.0) == "dark"  # the light half: 10 above the wall
+    assert body_polarity(samples(240.0, 140.0), wall, moving, 4.0) == "bright"
+    assert body_polarity(samples(60.0, 240.0), wall, moving, 4.0) == "both"
+    assert body_polarity(samples(150.0, 150.0), wall, moving, 4.0) == "both"  # nothing moved: no side
+    signed = np.array([-30.0, -2.0, 0.0, 5.0, 40.0])
+    assert one_sided(signed, "dark").tolist() == [30.0, 2.0, 0.0, 0.0, 0.0]
+    assert one_sided(signed, "bright").tolist() == [0.0, 0.0, 0.0, 5.0, 40.0]
+    assert one_sided(signed, "both").tolist() == [30.0, 2.0, 0.0, 5.0, 40.0]
+
+
 # Two pendulums in view, the user pointing at one (tests/benchmarks/clock_study.py): scenes 9000–9005, drawn
 # before any was looked at (developed on 8000–8011), 4 s each.
 PAIR_SEEDS = tuple(range(9000, 9006))

@@ -33,12 +33,16 @@ def default_settings():
 
 
 def zero_crossing_period(time_s: np.ndarray, theta: np.ndarray) -> float:
-    """Mean period from upward crossings of the median angle (linear interpolation), by a line through them."""
+    """Mean period from upward crossings of the median angle (linear interpolation), by a line through them, each
+    numbered by its cycle (a crossing among flagged samples is missing, not the next one's)."""
     ok = np.isfinite(theta)
     centred = theta - np.median(theta[ok])
     i = np.flatnonzero((centred[:-1] < 0) & (centred[1:] >= 0) & ok[:-1] & ok[1:])
     crossings = time_s[i] - centred[i] * (time_s[i + 1] - time_s[i]) / (centred[i + 1] - centred[i])
-    return float(np.polyfit(np.arange(crossings.size), crossings, 1)[0])
+    gaps = np.diff(crossings)
+    one_period = gaps[gaps > 0.5 * np.median(gaps)].min()  # gaps are whole periods; a noisy double crossing is not
+    cycle = np.round((crossings - crossings[0]) / one_period)
+    return float(np.polyfit(cycle, crossings, 1)[0])
 
 
 @pytest.fixture(scope="module")
@@ -116,6 +120,8 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
     t = np.arange(0, 20, 1 / 60)
     theta = 0.3 * np.cos(2 * math.pi * t / 2.078 + 0.4) + 0.01
     assert zero_crossing_period(t, theta) == pytest.approx(2.078, rel=1e-5)
+    gappy = np.where(np.isin(np.floor(t / 2.078), [2, 5, 6]) & (np.abs(theta - 0.01) < 0.1), np.nan, theta)
+    assert zero_crossing_period(t, gappy) == pytest.approx(2.078, rel=1e-5)  # three crossings flagged
 
 
 # The real clip turned into footage filmed other ways (tests/benchmarks/real_variants.py): each case here was
@@ -124,8 +130,14 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
 # 8.8 % short, silently. At 15 fps the apple taken as a marker disk was usable in 94.5 % of the frames (its
 # turning points flagged) and the body was not tried. With the swing leaving the frame at one end, the body was
 # refused (its size learnt from the first frame, where it is cut by the border) and the vertical was estimated
-# from turning points that were where the body left the frame (1.4° off).
+# from turning points that were where the body left the frame (1.4° off). Before a soft dark band on the wall
+# (a shelf's shadow the swing crosses), the body was usable in 84 % of the frames and the period came out 53 %
+# off: its contrast there fell to a third and its silhouette broke up. The apple made a two-tone ball (its upper
+# half bright and patterned) before that band was refused ("the body covers the same place in most frames"):
+# its silhouette, smaller in the band, was taken for a scene that holds the body.
 REAL_VARIANTS = {
+    "shadow_band": (96.0, 0.0),
+    "two_tone_shadow_band": (95.0, 0.0),
     "upside_down": (99.0, 180.0),
     "sideways": (99.0, -90.0),
     "15fps": (99.0, 0.0),
@@ -136,7 +148,7 @@ REAL_VARIANTS = {
 @pytest.mark.parametrize("variant", sorted(REAL_VARIANTS))
 def test_the_apple_filmed_other_ways(variant, tmp_path):
     """The same period (within 0.3 %) and record noise (≤ 0.03°) as the clip itself; the frames with the body partly
-    out of view flagged ``edge``; the vertical found, or said not to be found. 22 of the study's 23 variants pass."""
+    out of view flagged ``edge``; the vertical found, or said not to be found. 30 of the study's 31 variants pass."""
     if not APPLE.is_file():
         pytest.skip(f"{APPLE} not found (../shared beside the project)")
     import sys

@@ -5,6 +5,7 @@ stays one quiet row. Unit-level: small hand-made result documents, exact text in
 
 import json
 import re
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -270,3 +271,23 @@ def test_the_tracking_table_says_whether_the_marker_was_detected_or_given():
     assert marker_text(given) == "bright, r 12.0 px, given"
     assert marker_text(found) == "dark, r 6.0 px, detected"
     assert marker_text({"status": "ok", "flags": {"ok": 660}}) == "—"  # a track from before the field existed
+
+
+def test_the_tracking_table_says_a_body_was_tracked_and_its_warning(tmp_path):
+    """A trial whose body was tracked: the reason, and the body's warning (a silhouette that changes with the wall
+    behind it), each on its own line of the notes."""
+    report = _report(tmp_path, garbage=False)
+    warning = (
+        "the body's silhouette is 20 % smaller mid-swing than at the ends of its swing, with the scene there clear"
+    )
+    body = {
+        "status": "ok",
+        "flags": {"ok": 640, "occluded": 20},
+        "method": {"used": "body", "reason": "no marker disk in the video"},
+        "body": {"radius_px": 14.1, "polarity": "dark", "warning": warning},
+    }
+    Path(report.files["trials"]["t10"]["tracks"]).write_text(json.dumps(body))
+    report.__post_init__()  # the documents read again
+    row = _row(report.tracking_section(), trial="t10")
+    assert "tracked the body: no marker disk in the video<br>" + warning.replace("'", "&#x27;") in row
+    assert "body, r 14.1 px, auto" in row

@@ -3,17 +3,20 @@
     nice -n 10 .venv/bin/python tests/benchmarks/real_variants.py [--workdir DIR] [--only NAME ...]
 
 `../shared/data/real-video/redapple_480p.mov` (real phone footage, MIT licence) is turned into the
-variants a lab's footage differs by — half and double size, 30 and 15 fps, a 6 s record, a record that
-starts later in the swing, a phone on its side, upside down or 5° off level, a swing that leaves the
-frame at one end, exposure drift, defocus, a low bitrate, the sensor noise of a dim room, a dark
-backdrop, a letterbox, a burnt-in timestamp, a post in front of the swing, an uncalibrated fisheye
-lens, a phone held upright (the swing out of view most of the time: a refusal that says so), and two
-pendulums side by side (with and without ``start_px``) — and each is tracked with config.yaml's defaults (no hints), as
-a new user would. Per variant: the method used, the share of frames ``ok`` (and ``edge``), the
-vertical found, the angle record's period from its zero crossings against the independently
-measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure. The variants are real
-footage transformed, not renders: what they change is known exactly, and the rest is what a camera
-saw. Measured 2026-11-27: 22 of 23 pass (not the post in front; docs/footage.md).
+variants a lab's footage differs by — half, double and triple (1080p) size, 30 and 15 fps, a 6 s record, a
+record that starts later in the swing, a phone on its side, upside down or 5° off level, a swing that
+leaves the frame at one end, exposure drift, defocus, a low bitrate, the sensor noise of a dim room, a
+dark backdrop, a letterbox, a burnt-in timestamp, a post in front of the swing, an uncalibrated fisheye
+lens, a phone held upright (the swing out of view most of the time: a refusal that says so), a soft dark
+band across the wall (on the wall only, or on the apple too), the apple's own soft shadow beside it, a
+glossy apple, the apple made a two-tone ball (alone, before the band, and that at 1080p: as one of the
+held-out clips), and two pendulums side by side (with and without ``start_px``) — and each is tracked
+with config.yaml's defaults (no hints), as a new user would. Per variant: the method used, the share of
+frames ``ok`` (and ``edge``), the vertical found, the angle record's period from its zero crossings
+against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
+The variants are real footage transformed, not renders: what they change is known exactly, and the rest
+is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
+Measured 2026-11-27: 30 of 31 pass (not the post in front; docs/footage.md).
 """
 
 from __future__ import annotations
@@ -114,6 +117,84 @@ def _fisheye(image, index, n):
     return cv2.remap(image, mx, my, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
 
 
+def _on_the_wall(frames: list, shade) -> list:
+    """``shade(index, apple) → gain`` applied to the wall only, composited as a camera would see it: a pixel
+    that is a fraction ``f`` apple becomes ``image − (1 − f)·wall·(1 − gain)``, the wall being the clip's
+    median image and ``f`` the pixel's difference from it over the apple's contrast (its 99.9th percentile)."""
+    wall = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+    out = []
+    for k, image in enumerate(frames):
+        difference = np.abs(image - wall)
+        apple = np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
+        shaded = image - (1.0 - apple) * wall * (1.0 - shade(k, apple))
+        out.append(np.clip(np.round(shaded), 0, 255).astype(np.uint8))
+    return out
+
+
+def _band(shape) -> np.ndarray:
+    """A soft dark band across the wall (a shelf's shadow: 45 % darker at its middle, σ 30 px, slanted) that
+    the swing crosses: the gain per pixel."""
+    h, w = shape
+    ys, xs = np.mgrid[0:h, 0:w]
+    distance = (xs - 0.45 * w) + 0.35 * (ys - h / 2)
+    return 1 - 0.45 * np.exp(-0.5 * (distance / 30.0) ** 2)
+
+
+def _shadow_band(frames: list) -> list:
+    """:func:`_band` on the wall only (the apple in front of it stays lit)."""
+    gain = _band(frames[0].shape)
+    return _on_the_wall(frames, lambda k, apple: gain)
+
+
+def _cast_shadow(frames: list) -> list:
+    """The apple's own soft shadow on the wall beside it (a lamp to the upper left): up to 40 % darker, the
+    apple's silhouette offset (+22, +14) px and blurred σ 8 px, moving with it."""
+    import cv2
+
+    def shade(k, apple):
+        shifted = np.roll(np.roll((apple > 0.5).astype(np.float32), 14, axis=0), 22, axis=1)
+        return 1 - 0.4 * cv2.GaussianBlur(shifted, (0, 0), 8.0)
+
+    return _on_the_wall(frames, shade)
+
+
+def _glossy(frames: list) -> list:
+    """A shiny apple (a bauble): a lamp's highlight on it, a bright spot (σ 2.5 px, up to white) 7 px up and
+    left of its centre in every frame, where the lamp's reflection stays while the apple swings."""
+    wall = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+    h, w = frames[0].shape
+    ys, xs = np.mgrid[0:h, 0:w]
+    out = []
+    for image in frames:
+        difference = np.abs(image - wall)
+        apple = np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
+        apple[apple < 0.5] = 0.0
+        cx, cy = float((apple * xs).sum() / apple.sum()), float((apple * ys).sum() / apple.sum())
+        spot = np.exp(-0.5 * ((xs - cx + 7) ** 2 + (ys - cy + 7) ** 2) / 2.5**2)
+        out.append(np.clip(image + 200.0 * spot * apple, 0, 255).astype(np.uint8))
+    return out
+
+
+def _two_tone(frames: list, lit=None) -> list:
+    """The apple as a two-tone ball: its upper half bright and patterned (the lit wall's grey +10 %, 6 px
+    squares ±25 grey levels), its lower half its own dark red; the halves split at its centre's height."""
+    wall = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+    lit = wall if lit is None else lit
+    h, w = frames[0].shape
+    ys, xs = np.mgrid[0:h, 0:w]
+    out = []
+    for image in frames:
+        difference = np.abs(image - wall)
+        apple = np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
+        solid = np.where(apple >= 0.5, apple, 0.0)
+        cx, cy = float((solid * xs).sum() / solid.sum()), float((solid * ys).sum() / solid.sum())
+        squares = 25.0 * np.where(((xs - cx) // 6 + (ys - cy) // 6) % 2 == 0, 1.0, -1.0)
+        top = np.clip((ys - cy) / -2.0 + 0.5, 0.0, 1.0) * apple  # a 2 px soft seam
+        bright = np.minimum(1.1 * lit + squares, 255.0)
+        out.append(np.clip(image * (1 - top) + bright * top, 0, 255).astype(np.uint8))
+    return out
+
+
 def _rotate(code):
     import cv2
 
@@ -128,6 +209,7 @@ def variants():
         "original": (None, 1, 0, 18),
         "half_size": (_resize(0.5), 1, 0, 18),
         "double_size": (_resize(2.0), 1, 0, 18),
+        "1080p": (_resize(3.0), 1, 0, 18),
         "30fps": (None, 2, 0, 18),
         "15fps": (None, 4, 0, 18),
         "short_6s": (None, 1, 0, 18),
@@ -146,6 +228,13 @@ def variants():
         "timestamp_overlay": (_timestamp, 1, 0, 18),
         "portrait_crop": (_portrait, 1, 0, 18),
         "fisheye": (_fisheye, 1, 0, 18),
+        "shadow_band": (None, 1, 0, 18),
+        "cast_shadow": (None, 1, 0, 18),
+        "shadow_band_on_all": (None, 1, 0, 18),
+        "glossy": (None, 1, 0, 18),
+        "two_tone": (None, 1, 0, 18),
+        "two_tone_shadow_band": (None, 1, 0, 18),
+        "two_tone_shadow_band_1080p": (None, 1, 0, 18),
         "two_pendulums": (None, 1, 0, 18),
         "two_pendulums_start_px": (None, 1, 0, 18),
     }
@@ -176,6 +265,21 @@ def make(name: str, workdir: Path) -> Path:
         frames = [transform(image, k, len(frames)) for k, image in enumerate(frames)]
     if name.startswith("two_pendulums"):
         frames = _two_pendulums(frames)
+    if name == "shadow_band":
+        frames = _shadow_band(frames)
+    if name == "cast_shadow":
+        frames = _cast_shadow(frames)
+    if name == "shadow_band_on_all":  # the band falls on the apple too
+        frames = [np.clip(image * _band(image.shape), 0, 255).astype(np.uint8) for image in frames]
+    if name == "two_tone":
+        frames = _two_tone(frames)
+    if name.startswith("two_tone_shadow_band"):  # the band on the wall, then the ball's bright half lit as outside it
+        lit = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+        frames = _two_tone(_shadow_band(frames), lit)
+    if name == "glossy":
+        frames = _glossy(frames)
+    if name.endswith("_1080p"):
+        frames = [_resize(3.0)(image, k, len(frames)) for k, image in enumerate(frames)]
     write_video(frames, out, 60.0 / every, crf, "veryfast")
     return out
 

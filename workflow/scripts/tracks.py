@@ -38,6 +38,8 @@ def work():
     flags = track.flag.value_counts().to_dict()
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
+    if (track.attrs.get("body") or {}).get("warning"):
+        log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)
     # the track over the frames stage's contact sheet (no frame decoded again), in image coordinates
     frames = json.loads(Path(sm.input.frames_summary).read_text())

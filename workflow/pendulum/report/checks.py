@@ -304,6 +304,8 @@ class CheckSections(ReportData):
             method = (tracks or {}).get("method") or {}
             if kind == "video" and is_ok(tracks) and method.get("used") == "body":
                 notes.append(esc(f"tracked the body: {method.get('reason', '')}"))
+                if ((tracks or {}).get("body") or {}).get("warning"):
+                    notes.append(esc(tracks["body"]["warning"]))
             notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
             problems = record_problems(fit) or self.trial_problems(trial)
             if problems:

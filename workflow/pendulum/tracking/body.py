@@ -14,10 +14,12 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
    soft shadow is below T); the connected component nearest the prediction, with every component
    within two closing widths of it. The first frame's body is the heaviest moving object above a
-   quarter of its own contrast, or the one at ``start_px`` (two pendulums in view).
+   quarter of its own contrast, or the one at ``start_px`` (two pendulums in view). Where the body's
+   contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
+   again above ¼ of its own contrast there.
 3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
-   contrast C_f fixed for the clip (:func:`silhouette_fraction`: ¼, or the Otsu split of a two-tone
-   body), filled to their convex hull (a part that hardly differs from the wall, a bright half before
+   contrast C_f fixed for the clip (``body_scene.silhouette_fraction``: ¼, or the Otsu split of a
+   two-tone body), filled to their convex hull (a part that hardly differs from the wall, a bright half before
    a bright wall, is left out the same way in every frame); its soft-edged centroid x̂ = Σ w x / Σ w,
    w = 1 in the hull's core, the pixel's coverage D / C_local within 2 px of its outline (no pixel
    locking). Any point fixed to a rigid pendulum turns about the pivot with it, so its angle about the
@@ -28,14 +30,18 @@ Flags from the measurement's own evidence (never thresholds fitted to renders):
 the frame, touches the frame's border: part of it is not seen), ``occluded`` (its
 covered area departs from its own running median by more than 6 robust σ of that series
 and 10 %, or the soft and the plain silhouette's centroids disagree by more than 6 robust
-σ of their own difference and 0.3 px: something joined or hid part of it), ``jump``
+σ of their own difference and 1.5 % of its radius (≥ 0.3 px): something joined or hid part of it), ``jump``
 (leave-one-out cubic, as for the marker) and ``lost`` (no body near the prediction).
 
 A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most
 samples) shows as a silhouette smaller or larger mid-swing than at the ends
 (:func:`pendulum.tracking.path_shape.rest_place_area_ratio` outside 0.9–1/0.9): the scene there is
 taken again from the two ends of the swing (:func:`pendulum.tracking.body_scene.rest_place_scene`)
-and the body tracked again, up to :data:`REST_PLACE_REPAIRS` times; then refused.
+and the body tracked again, up to :data:`REST_PLACE_REPAIRS` times; then refused, unless the scene from
+the swing's ends is the median's there (it never held the body: the body's look changes with the wall
+behind it, a two-tone ball's light half before a shadow band): then the body is measured by its own side
+of the scene only (D = −(I − B) for a body darker than the scene, ``body_scene.body_polarity``), and
+a silhouette still smaller or larger mid-swing is kept with a ``warning`` in the track's body facts.
 
 ECC alignment of the body's own look (``cv2.findTransformECCWithMask``, Euclidean) was measured
 against this on renders with known truth and not taken: where the look changes (a body turning on
@@ -47,7 +53,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import cv2
@@ -58,15 +64,19 @@ from scipy.ndimage import median_filter
 from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.body_scene import (
     MIN_BODY_AREA_PX,
+    STRONG_FRACTION,
+    body_polarity,
     close_size,
     components,
     masked_median,
     moving_objects,
     noise_sigma,
+    one_sided,
     reduced,
     rest_place_scene,
     same_exposure,
     sample_clip,
+    silhouette_fraction,
 )
 from pendulum.tracking.checks import flag_jumps
 from pendulum.tracking.path_shape import rest_place_area_ratio
@@ -79,11 +89,12 @@ EDGE_REACH = 1.2  # in view or not: what lies within this many inner radii of it
 SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the previous one showed
 NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
 CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft shadow stays below)
-STRONG_FRACTION = 0.25  # the silhouette: pixels differing by more than this fraction of the body's contrast, filled
+FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
 AREA_SIGMAS = 6.0
 MIN_AREA_CHANGE = 0.10  # the covered area must also change by this fraction to be a fault
 CENTROID_SIGMAS = 6.0
-MIN_CENTROID_DISAGREEMENT_PX = 0.3
+MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px
+CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held no body
 REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body that holds its place is refused
 MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
 
@@ -105,6 +116,9 @@ class BodyScene:
     moving_samples: int  # samples in which a moving object was seen
     n_samples: int
     silhouette_fraction: float = STRONG_FRACTION  # share of the body's contrast a silhouette pixel needs
+    rest_place_changed_px: int | None = None  # pixels the scene from the swing's ends changed (None: not taken)
+    polarity: str = "both"  # measured by |I − B| ("both"), −(I − B) ("dark") or I − B ("bright")
+    one_sided: str = "both"  # the side of the scene the body's grey lies on (body_scene.body_polarity)
 
     def to_dict(self) -> dict:
         return {
@@ -116,6 +130,8 @@ class BodyScene:
             "moving_samples": self.moving_samples,
             "n_samples": self.n_samples,
             "silhouette_fraction": round(self.silhouette_fraction, 3),
+            "polarity": self.polarity,
+            "one_sided": self.one_sided,
         }
 
 
@@ -128,30 +144,6 @@ def _body_close_size(inner_radius_px: float) -> int:
 def _open_size(inner_radius_px: float) -> int:
     """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
     return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
-
-
-def silhouette_fraction(values: np.ndarray) -> float:
-    """The share of the body's contrast C above which a pixel counts for its silhouette, fixed for the clip.
-
-    :data:`STRONG_FRACTION` unless the body's differences from the wall fall in two well-separated groups
-    (a dark half and a half of nearly the wall's grey: Otsu's split explains ≥ 75 % of their variance and
-    the lower group's mean is under 45 % of the upper's); then the split itself, so the faint part is left
-    out in every frame instead of flickering in and out with its texture.
-    """
-    values = np.asarray(values, float)
-    top = float(np.percentile(values, 90)) if values.size else 0.0
-    if values.size < 30 or top <= 0:
-        return STRONG_FRACTION
-    scaled = np.clip(values / top * 200, 0, 255).astype(np.uint8).reshape(-1, 1)
-    split, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-    cut = split / 200 * top
-    low, high = values[values <= cut], values[values > cut]
-    if low.size < 0.1 * values.size or high.size < 0.3 * values.size:
-        return STRONG_FRACTION
-    between = low.size * high.size / values.size**2 * (high.mean() - low.mean()) ** 2
-    if between < 0.75 * values.var() or low.mean() > 0.45 * high.mean():
-        return STRONG_FRACTION
-    return max(STRONG_FRACTION, cut / top)
 
 
 def _silhouette(
@@ -246,8 +238,11 @@ def _core(component: np.ndarray, reach_px: float):
     return kept, (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
 
 
-def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, radius_px=None) -> BodyScene:
-    """The static scene and the swinging body in the first frame (see the module docstring).
+def find_body(
+    path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, radius_px=None, polarity: str = "both"
+) -> BodyScene:
+    """The static scene and the swinging body in the first frame (see the module docstring), the body measured by
+    the difference ``polarity`` names (:func:`pendulum.tracking.body_scene.one_sided`).
 
     With ``track`` (a first track of the body, whose silhouette shrank mid-swing) and the body's
     ``radius_px``, the scene at the body's rest place is taken from the two ends of its swing
@@ -283,6 +278,7 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, r
         size = (first_pass.shape[1], first_pass.shape[0])
         excluded = np.stack([cv2.resize(e.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 for e in excluded])
     background = masked_median(stack, excluded, first_pass) if excluded.any() else first_pass
+    median_scene = background
     if track is not None:
         frames = [frame for frame, _ in samples]
         background = rest_place_scene(frames, images, background, track, radius_px, threshold)
@@ -302,7 +298,18 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, r
     # that starts with the body partly out of view would otherwise learn a smaller, fainter body).
     near = None if start_px is None else (float(start_px[0]), float(start_px[1]))
     close_px = close_size(background.shape)
-    first = _body_measure(np.abs(images[0].astype(np.float32) - background), threshold, close_px, near)
+
+    def measured(polarity: str) -> tuple[_Seen | None, _Seen | None]:
+        first = _body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near)
+        whole = first
+        if first is not None and first.component is not None and _touches_border(first.component) and near is None:
+            for image in images[1:]:
+                seen = _body_measure(one_sided(image - background, polarity), threshold, close_px, None)
+                if seen is not None and seen.component is not None and not _touches_border(seen.component):
+                    return first, seen
+        return first, whole
+
+    first, whole = measured(polarity)
     if first is None:
         raise BodyError(
             f"{path}: no moving body in the first frame (nothing differs from the static scene by more than "
@@ -310,13 +317,6 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, r
         )
     if first.component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
-    whole = first
-    if _touches_border(first.component) and near is None:
-        for image in images[1:]:
-            seen = _body_measure(np.abs(image.astype(np.float32) - background), threshold, close_px, None)
-            if seen is not None and seen.component is not None and not _touches_border(seen.component):
-                whole = seen
-                break
     return BodyScene(
         background=background,
         noise_grey=sigma,
@@ -327,6 +327,12 @@ def find_body(path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, r
         moving_samples=moving,
         n_samples=len(images),
         silhouette_fraction=whole.fraction,
+        polarity=polarity,
+        one_sided=body_polarity(images, background, excluded, threshold),
+        # a ghost of the body the median scene held differs from the scene from the swing's ends by its contrast
+        rest_place_changed_px=None
+        if track is None
+        else int((np.abs(background - median_scene) > CONTRAST_FRACTION * whole.contrast).sum()),
     )
 
 
@@ -421,8 +427,13 @@ def track_body(
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             border = np.concatenate([signed[0], signed[-1], signed[:, 0], signed[:, -1]])
-            diff = np.abs(signed - np.median(border))
+            diff = one_sided(signed - np.median(border), scene.polarity)
             component, box = _body_in(diff, threshold, open_px, close_px, near=(px - x0, py - y0))
+            if component is not None:
+                here = float(np.percentile(diff[component], 90))
+                if here < FAINT_CONTRAST * contrast:  # before a darker (or lighter) patch of wall: its own contrast
+                    low = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * here)
+                    component, box = _body_in(diff, low, open_px, close_px, near=(px - x0, py - y0))
             if component is not None:
                 _, box = _core(component, edge_px)  # in view or not: the body itself, without its rod
                 sx, sy, mass, bx, by = _soft_centroid(diff, component, scene.silhouette_fraction)
@@ -461,7 +472,11 @@ def track_body(
     bxy = np.asarray(binary, float)
     disagreement = np.hypot(x - bxy[:, 0], y - bxy[:, 1])
     centroid_fault = _robust_outliers(
-        disagreement, usable & np.isfinite(disagreement), window, CENTROID_SIGMAS, MIN_CENTROID_DISAGREEMENT_PX
+        disagreement,
+        usable & np.isfinite(disagreement),
+        window,
+        CENTROID_SIGMAS,
+        max(0.3, MIN_CENTROID_DISAGREEMENT * scene.radius_px),
     )
     flags[area_fault | centroid_fault] = "occluded"
     usable = flags == "ok"
@@ -491,6 +506,25 @@ def track_body(
         start = settings.start_px or scene.start_px
         repaired = find_body(path, start, track=table, radius_px=max(scene.radius_px, scene.inner_radius_px))
         return track_body(path, settings, progress, repaired, rest_place_from=[*tries, round(ratio, 4)])
+    clear = scene.rest_place_changed_px is not None and (
+        scene.rest_place_changed_px < CLEAR_REST_PLACE * math.pi * scene.radius_px**2
+    )
+    if held and clear and scene.polarity == "both" and scene.one_sided != "both":
+        # the swing's ends show the scene at the rest place as the median has it (it never held the body): the
+        # silhouette changes with the wall behind it (a two-tone ball's light half before a shadow band); the
+        # body measured by its own side of the scene only
+        start = settings.start_px or scene.start_px
+        one = replace(
+            find_body(path, start, polarity=scene.one_sided), rest_place_changed_px=scene.rest_place_changed_px
+        )
+        return track_body(path, settings, progress, one, rest_place_from=[*tries, round(ratio, 4)])
+    if held and clear:
+        table.attrs["body"]["warning"] = (
+            f"the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} "
+            "mid-swing than at the ends of its swing, with the scene there clear (the same from the swing's ends): "
+            "its contrast changes with the wall behind it, and its positions there may be biased by up to a few pixels"
+        )
+        return table
     if held:
         where = "smaller mid-swing" if ratio < 1 else "larger mid-swing"
         raise BodyError(

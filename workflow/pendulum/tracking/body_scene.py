@@ -172,3 +172,63 @@ def rest_place_scene(frames, images, background, track, radius_px: float, thresh
     both = 0.5 * (low + high)  # where the two ends agree, neither holds the body: the wall, if the median had it
     held = near & ~differs & (np.abs(background - both) > threshold)
     return np.where(differs, composite, np.where(held, both, background)).astype(np.float32)
+
+
+ONE_SIDED_SHARE = 0.8  # the body is darker (or lighter) than the scene: this share of its moving pixels' |I − B|
+
+
+def body_polarity(images: list, background: np.ndarray, moving: np.ndarray, threshold: float) -> str:
+    """``"dark"``, ``"bright"`` or ``"both"``: on which side of the scene the body's grey lies, over all samples.
+
+    Σ|I − B| of the samples' moving pixels (above ``threshold``) that are darker than the scene, against those
+    lighter: one side holding :data:`ONE_SIDED_SHARE` of it makes the body one-sided. A one-sided body is
+    measured by that side's difference only (:func:`one_sided`), so a part of nearly the wall's grey (a
+    two-tone ball's light half) stays out of its silhouette also where it passes before a darker patch of wall
+    (a shadow band), instead of joining it there and moving its centre."""
+    dark = bright = 0.0
+    for image, mask in zip(images, moving, strict=True):
+        if mask.any():
+            signed = image[mask].astype(np.float32) - background[mask]
+            signed = signed[np.abs(signed) > threshold]
+            dark -= float(signed[signed < 0].sum())
+            bright += float(signed[signed > 0].sum())
+    total = dark + bright
+    if total <= 0:
+        return "both"
+    return "dark" if dark >= ONE_SIDED_SHARE * total else "bright" if bright >= ONE_SIDED_SHARE * total else "both"
+
+
+def one_sided(signed: np.ndarray, polarity: str) -> np.ndarray:
+    """The difference D a body of this polarity is measured by: −(I − B) or (I − B) clipped at 0, or |I − B|."""
+    if polarity == "dark":
+        return np.maximum(-signed, 0.0)
+    if polarity == "bright":
+        return np.maximum(signed, 0.0)
+    return np.abs(signed)
+
+
+STRONG_FRACTION = 0.25  # the silhouette: pixels differing by more than this fraction of the body's contrast, filled
+
+
+def silhouette_fraction(values: np.ndarray) -> float:
+    """The share of the body's contrast C above which a pixel counts for its silhouette, fixed for the clip.
+
+    :data:`STRONG_FRACTION` unless the body's differences from the wall fall in two well-separated groups
+    (a dark half and a half of nearly the wall's grey: Otsu's split explains ≥ 75 % of their variance and
+    the lower group's mean is under 45 % of the upper's); then the split itself, so the faint part is left
+    out in every frame instead of flickering in and out with its texture.
+    """
+    values = np.asarray(values, float)
+    top = float(np.percentile(values, 90)) if values.size else 0.0
+    if values.size < 30 or top <= 0:
+        return STRONG_FRACTION
+    scaled = np.clip(values / top * 200, 0, 255).astype(np.uint8).reshape(-1, 1)
+    split, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    cut = split / 200 * top
+    low, high = values[values <= cut], values[values > cut]
+    if low.size < 0.1 * values.size or high.size < 0.3 * values.size:
+        return STRONG_FRACTION
+    between = low.size * high.size / values.size**2 * (high.mean() - low.mean()) ** 2
+    if between < 0.75 * values.var() or low.mean() > 0.45 * high.mean():
+        return STRONG_FRACTION
+    return max(STRONG_FRACTION, cut / top)
