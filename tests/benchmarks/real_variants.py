@@ -117,15 +117,37 @@ def _fisheye(image, index, n):
     return cv2.remap(image, mx, my, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
 
 
+def _wall(frames: list) -> np.ndarray:
+    """The clip's median image: the wall without the apple."""
+    return np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+
+
+def _apple_share(image: np.ndarray, wall: np.ndarray) -> np.ndarray:
+    """How much of each pixel is apple, 0–1: its difference from the wall over the apple's contrast (the
+    difference's 99.9th percentile)."""
+    difference = np.abs(image - wall)
+    return np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
+
+
+def _apples(frames: list, wall: np.ndarray):
+    """Per frame: the image, its share of apple (:func:`_apple_share`), the pixel grid (xs, ys) and the centroid
+    (cx, cy) of the pixels at least half apple, weighted by their share."""
+    h, w = frames[0].shape
+    ys, xs = np.mgrid[0:h, 0:w]
+    for image in frames:
+        apple = _apple_share(image, wall)
+        solid = np.where(apple >= 0.5, apple, 0.0)
+        yield image, apple, xs, ys, float((solid * xs).sum() / solid.sum()), float((solid * ys).sum() / solid.sum())
+
+
 def _on_the_wall(frames: list, shade) -> list:
     """``shade(index, apple) → gain`` applied to the wall only, composited as a camera would see it: a pixel
     that is a fraction ``f`` apple becomes ``image − (1 − f)·wall·(1 − gain)``, the wall being the clip's
-    median image and ``f`` the pixel's difference from it over the apple's contrast (its 99.9th percentile)."""
-    wall = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+    median image and ``f`` the pixel's share of apple (:func:`_apple_share`)."""
+    wall = _wall(frames)
     out = []
     for k, image in enumerate(frames):
-        difference = np.abs(image - wall)
-        apple = np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
+        apple = _apple_share(image, wall)
         shaded = image - (1.0 - apple) * wall * (1.0 - shade(k, apple))
         out.append(np.clip(np.round(shaded), 0, 255).astype(np.uint8))
     return out
@@ -161,15 +183,9 @@ def _cast_shadow(frames: list) -> list:
 def _glossy(frames: list) -> list:
     """A shiny apple (a bauble): a lamp's highlight on it, a bright spot (σ 2.5 px, up to white) 7 px up and
     left of its centre in every frame, where the lamp's reflection stays while the apple swings."""
-    wall = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
-    h, w = frames[0].shape
-    ys, xs = np.mgrid[0:h, 0:w]
     out = []
-    for image in frames:
-        difference = np.abs(image - wall)
-        apple = np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
+    for image, apple, xs, ys, cx, cy in _apples(frames, _wall(frames)):
         apple[apple < 0.5] = 0.0
-        cx, cy = float((apple * xs).sum() / apple.sum()), float((apple * ys).sum() / apple.sum())
         spot = np.exp(-0.5 * ((xs - cx + 7) ** 2 + (ys - cy + 7) ** 2) / 2.5**2)
         out.append(np.clip(image + 200.0 * spot * apple, 0, 255).astype(np.uint8))
     return out
@@ -178,16 +194,10 @@ def _glossy(frames: list) -> list:
 def _two_tone(frames: list, lit=None) -> list:
     """The apple as a two-tone ball: its upper half bright and patterned (the lit wall's grey +10 %, 6 px
     squares ±25 grey levels), its lower half its own dark red; the halves split at its centre's height."""
-    wall = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+    wall = _wall(frames)
     lit = wall if lit is None else lit
-    h, w = frames[0].shape
-    ys, xs = np.mgrid[0:h, 0:w]
     out = []
-    for image in frames:
-        difference = np.abs(image - wall)
-        apple = np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
-        solid = np.where(apple >= 0.5, apple, 0.0)
-        cx, cy = float((solid * xs).sum() / solid.sum()), float((solid * ys).sum() / solid.sum())
+    for image, apple, xs, ys, cx, cy in _apples(frames, wall):
         squares = 25.0 * np.where(((xs - cx) // 6 + (ys - cy) // 6) % 2 == 0, 1.0, -1.0)
         top = np.clip((ys - cy) / -2.0 + 0.5, 0.0, 1.0) * apple  # a 2 px soft seam
         bright = np.minimum(1.1 * lit + squares, 255.0)
@@ -274,7 +284,7 @@ def make(name: str, workdir: Path) -> Path:
     if name == "two_tone":
         frames = _two_tone(frames)
     if name.startswith("two_tone_shadow_band"):  # the band on the wall, then the ball's bright half lit as outside it
-        lit = np.median(np.stack(frames[:: max(len(frames) // 60, 1)]), axis=0).astype(np.float32)
+        lit = _wall(frames)
         frames = _two_tone(_shadow_band(frames), lit)
     if name == "glossy":
         frames = _glossy(frames)

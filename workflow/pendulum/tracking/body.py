@@ -38,10 +38,11 @@ samples) shows as a silhouette smaller or larger mid-swing than at the ends
 (:func:`pendulum.tracking.path_shape.rest_place_area_ratio` outside 0.9–1/0.9): the scene there is
 taken again from the two ends of the swing (:func:`pendulum.tracking.body_scene.rest_place_scene`)
 and the body tracked again, up to :data:`REST_PLACE_REPAIRS` times; then refused, unless the scene from
-the swing's ends is the median's there (it never held the body: the body's look changes with the wall
-behind it, a two-tone ball's light half before a shadow band): then the body is measured by its own side
-of the scene only (D = −(I − B) for a body darker than the scene, ``body_scene.body_polarity``), and
-a silhouette still smaller or larger mid-swing is kept with a ``warning`` in the track's body facts.
+the swing's ends saw the rest place and is the median's there (``rest_place_clear``: it never held the body;
+the body's look changes with the wall behind it, a two-tone ball's light half before a shadow band): then
+a one-sided body (``body_scene.body_polarity``: darker or lighter than the scene) is measured by that side
+of the scene only, D = −(I − B) or I − B, and a silhouette still smaller or larger mid-swing is kept with
+a ``warning`` in the track's body facts.
 
 ECC alignment of the body's own look (``cv2.findTransformECCWithMask``, Euclidean) was measured
 against this on renders with known truth and not taken: where the look changes (a body turning on
@@ -94,7 +95,7 @@ AREA_SIGMAS = 6.0
 MIN_AREA_CHANGE = 0.10  # the covered area must also change by this fraction to be a fault
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px
-CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held no body
+CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
 REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body that holds its place is refused
 MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
 
@@ -116,7 +117,9 @@ class BodyScene:
     moving_samples: int  # samples in which a moving object was seen
     n_samples: int
     silhouette_fraction: float = STRONG_FRACTION  # share of the body's contrast a silhouette pixel needs
-    rest_place_changed_px: int | None = None  # pixels the scene from the swing's ends changed (None: not taken)
+    rest_place_clear: bool | None = (
+        None  # the scene from the swing's ends the median's at the rest place (None: not taken)
+    )
     polarity: str = "both"  # measured by |I − B| ("both"), −(I − B) ("dark") or I − B ("bright")
     one_sided: str = "both"  # the side of the scene the body's grey lies on (body_scene.body_polarity)
 
@@ -132,6 +135,7 @@ class BodyScene:
             "silhouette_fraction": round(self.silhouette_fraction, 3),
             "polarity": self.polarity,
             "one_sided": self.one_sided,
+            "rest_place_clear": self.rest_place_clear,
         }
 
 
@@ -281,7 +285,7 @@ def find_body(
     median_scene = background
     if track is not None:
         frames = [frame for frame, _ in samples]
-        background = rest_place_scene(frames, images, background, track, radius_px, threshold)
+        background, ends_clear = rest_place_scene(frames, images, background, track, radius_px, threshold)
     if moving < max(3, len(images) // 4):
         raise BodyError(
             f"{path}: nothing moves against the static scene in {len(images) - moving} of {len(images)} sampled "
@@ -328,11 +332,17 @@ def find_body(
         n_samples=len(images),
         silhouette_fraction=whole.fraction,
         polarity=polarity,
-        one_sided=body_polarity(images, background, excluded, threshold),
-        # a ghost of the body the median scene held differs from the scene from the swing's ends by its contrast
-        rest_place_changed_px=None
+        # the vote above a quarter of the body's contrast: not its soft shadow, nor the noise around it
+        one_sided=body_polarity(images, background, excluded, max(threshold, CONTRAST_FRACTION * whole.contrast)),
+        # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
+        # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body
+        rest_place_clear=None
         if track is None
-        else int((np.abs(background - median_scene) > CONTRAST_FRACTION * whole.contrast).sum()),
+        else bool(
+            ends_clear
+            and np.count_nonzero(np.abs(background - median_scene) > CONTRAST_FRACTION * whole.contrast)
+            < CLEAR_REST_PLACE * whole.component.sum()
+        ),
     )
 
 
@@ -500,25 +510,25 @@ def track_body(
     table.attrs["body"]["mid_swing_area_ratio"] = None if ratio is None else round(ratio, 4)
     held = ratio is not None and not MIN_MID_SWING_AREA_RATIO <= ratio <= 1 / MIN_MID_SWING_AREA_RATIO
     tries = [] if rest_place_from is None else list(rest_place_from)
-    if held and len(tries) < REST_PLACE_REPAIRS:
+    if held and len(tries) < REST_PLACE_REPAIRS and not scene.rest_place_clear:
         # the scene holds the body where it spends most samples (its rest place, or the ends of a narrow
         # swing): the scene there again, from the two ends of the swing as this track finds them
         start = settings.start_px or scene.start_px
         repaired = find_body(path, start, track=table, radius_px=max(scene.radius_px, scene.inner_radius_px))
         return track_body(path, settings, progress, repaired, rest_place_from=[*tries, round(ratio, 4)])
-    clear = scene.rest_place_changed_px is not None and (
-        scene.rest_place_changed_px < CLEAR_REST_PLACE * math.pi * scene.radius_px**2
-    )
-    if held and clear and scene.polarity == "both" and scene.one_sided != "both":
+    if held and scene.rest_place_clear and scene.polarity == "both" and scene.one_sided != "both":
         # the swing's ends show the scene at the rest place as the median has it (it never held the body): the
         # silhouette changes with the wall behind it (a two-tone ball's light half before a shadow band); the
         # body measured by its own side of the scene only
         start = settings.start_px or scene.start_px
-        one = replace(
-            find_body(path, start, polarity=scene.one_sided), rest_place_changed_px=scene.rest_place_changed_px
-        )
-        return track_body(path, settings, progress, one, rest_place_from=[*tries, round(ratio, 4)])
-    if held and clear:
+        try:
+            one = find_body(path, start, track=table, radius_px=scene.radius_px, polarity=scene.one_sided)
+            return track_body(path, settings, progress, replace(one, rest_place_clear=True), [*tries, round(ratio, 4)])
+        except VideoError as error:
+            log.info(
+                "%s: measured by its %s side only, the body could not be tracked (%s)", path, scene.one_sided, error
+            )
+    if held and scene.rest_place_clear:
         table.attrs["body"]["warning"] = (
             f"the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} "
             "mid-swing than at the ends of its swing, with the scene there clear (the same from the swing's ends): "

@@ -132,7 +132,7 @@ def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray)
     return background
 
 
-def rest_place_scene(frames, images, background, track, radius_px: float, threshold: float) -> np.ndarray:
+def rest_place_scene(frames, images, background, track, radius_px: float, threshold: float) -> tuple[np.ndarray, bool]:
     """The scene with the body's rest place filled from the two ends of its swing.
 
     A body that covers its rest place in most samples is part of the median scene there. At the ends of a
@@ -142,12 +142,13 @@ def rest_place_scene(frames, images, background, track, radius_px: float, thresh
     body, the end's own (the pixels on its side of the bisector between the two ends' mean positions), and
     the scene there is taken from the other; where they agree but the median scene differs from them (the
     body between its two ends), from them. Only within 2 ``radius_px`` + 10 px of the segment between the
-    two ends (another moving object elsewhere is left as the median has it).
+    two ends (another moving object elsewhere is left as the median has it). Second: whether the ends saw
+    the rest place clear (each more than 1.2 ``radius_px`` from the middle between them).
     """
     ok = track[track.flag == "ok"].set_index("frame")
     at = [(k, float(ok.x_px[f]), float(ok.y_px[f])) for k, f in enumerate(frames) if f in ok.index]
     if len(at) < 10:
-        return background
+        return background, False
     xy = np.array([(x, y) for _, x, y in at])
     centred = xy - xy.mean(axis=0)
     _, _, axes = np.linalg.svd(centred, full_matrices=False)
@@ -161,7 +162,7 @@ def rest_place_scene(frames, images, background, track, radius_px: float, thresh
     span = c_high - c_low
     length = float(np.hypot(*span))
     if length <= 0:
-        return background
+        return background, False
     yy, xx = np.indices(background.shape, dtype=np.float32)
     along = ((xx - c_low[0]) * span[0] + (yy - c_low[1]) * span[1]) / length
     across = np.abs((xx - c_low[0]) * span[1] - (yy - c_low[1]) * span[0]) / length
@@ -171,7 +172,8 @@ def rest_place_scene(frames, images, background, track, radius_px: float, thresh
     composite = np.where(along < 0.5 * length, high, low)  # the low end's body is on its side: the high end's scene
     both = 0.5 * (low + high)  # where the two ends agree, neither holds the body: the wall, if the median had it
     held = near & ~differs & (np.abs(background - both) > threshold)
-    return np.where(differs, composite, np.where(held, both, background)).astype(np.float32)
+    scene = np.where(differs, composite, np.where(held, both, background)).astype(np.float32)
+    return scene, length / 2 > 1.2 * radius_px
 
 
 ONE_SIDED_SHARE = 0.8  # the body is darker (or lighter) than the scene: this share of its moving pixels' |I − B|
