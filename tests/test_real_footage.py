@@ -131,8 +131,8 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
 # turning points flagged) and the body was not tried. With the swing leaving the frame at one end, the body was
 # refused (its size learnt from the first frame, where it is cut by the border) and the vertical was estimated
 # from turning points that were where the body left the frame (1.4° off). Before a soft dark band on the wall
-# (a shelf's shadow the swing crosses), the body was usable in 84 % of the frames and the period came out 53 %
-# off: its contrast there fell to a third and its silhouette broke up. The apple made a two-tone ball (its upper
+# (a shelf's shadow the swing crosses), the body was usable in 93.8 % of the frames: its contrast there fell to a
+# third and its silhouette broke up. The apple made a two-tone ball (its upper
 # half bright and patterned) before that band was refused ("the body covers the same place in most frames"):
 # its silhouette, smaller in the band, was taken for a scene that holds the body.
 REAL_VARIANTS = {
