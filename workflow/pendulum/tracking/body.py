@@ -117,11 +117,9 @@ class BodyScene:
     moving_samples: int  # samples in which a moving object was seen
     n_samples: int
     silhouette_fraction: float = STRONG_FRACTION  # share of the body's contrast a silhouette pixel needs
-    rest_place_clear: bool | None = (
-        None  # the scene from the swing's ends the median's at the rest place (None: not taken)
-    )
+    rest_place_clear: bool | None = None  # the ends' scene is the median's at the rest place (None: not taken)
     polarity: str = "both"  # measured by |I − B| ("both"), −(I − B) ("dark") or I − B ("bright")
-    one_sided: str = "both"  # the side of the scene the body's grey lies on (body_scene.body_polarity)
+    one_sided: str | None = None  # the side of the scene the body lies on (body_polarity; None: not taken)
 
     def to_dict(self) -> dict:
         return {
@@ -332,8 +330,11 @@ def find_body(
         n_samples=len(images),
         silhouette_fraction=whole.fraction,
         polarity=polarity,
-        # the vote above a quarter of the body's contrast: not its soft shadow, nor the noise around it
-        one_sided=body_polarity(images, background, excluded, max(threshold, CONTRAST_FRACTION * whole.contrast)),
+        # only for a scene from the swing's ends (what track_body retries with): the vote above a quarter of the
+        # body's contrast, not its soft shadow nor the noise around it
+        one_sided=None
+        if track is None
+        else body_polarity(images, background, excluded, max(threshold, CONTRAST_FRACTION * whole.contrast)),
         # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
         # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body
         rest_place_clear=None
@@ -516,7 +517,7 @@ def track_body(
         start = settings.start_px or scene.start_px
         repaired = find_body(path, start, track=table, radius_px=max(scene.radius_px, scene.inner_radius_px))
         return track_body(path, settings, progress, repaired, rest_place_from=[*tries, round(ratio, 4)])
-    if held and scene.rest_place_clear and scene.polarity == "both" and scene.one_sided != "both":
+    if held and scene.rest_place_clear and scene.polarity == "both" and scene.one_sided in ("dark", "bright"):
         # the swing's ends show the scene at the rest place as the median has it (it never held the body): the
         # silhouette changes with the wall behind it (a two-tone ball's light half before a shadow band); the
         # body measured by its own side of the scene only
