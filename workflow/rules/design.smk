@@ -10,15 +10,15 @@ rule design:
     input:
         angles=lambda wc: [
             f"results/angles/{n}.csv"
-            for n in group_trials(config, TRIALS, DISCOVERY_GROUPS, wc.group)
+            for n in group_trials(RIG_TRIALS, DISCOVERY_GROUPS, wc.group)
         ],
         angle_info=lambda wc: [
             f"results/angles/{n}.json"
-            for n in group_trials(config, TRIALS, DISCOVERY_GROUPS, wc.group)
+            for n in group_trials(RIG_TRIALS, DISCOVERY_GROUPS, wc.group)
         ],
         fits=lambda wc: [
             f"results/fits/{DISCOVERY['baseline']}/{n}.json"
-            for n in group_trials(config, TRIALS, DISCOVERY_GROUPS, wc.group)
+            for n in group_trials(RIG_TRIALS, DISCOVERY_GROUPS, wc.group)
         ],
         joint=lambda wc: [
             f"results/fits/{DISCOVERY['baseline']}/joint/{rig}.json"
@@ -41,7 +41,7 @@ rule design:
         runtime=10,
     params:
         trial_rigs=lambda wc: group_trial_rigs(
-            config, TRIALS, DISCOVERY_GROUPS, wc.group
+            SETTINGS, RIG_TRIALS, DISCOVERY_GROUPS, wc.group
         ),
         design=config.get("design", {}),
         fitting=config["fitting"],

@@ -1,7 +1,5 @@
-from pendulum.fit.bodies import discovery_groups, discovery_settings  # noqa: E402
-
 DISCOVERY = discovery_settings(config)  # None: the default baseline is not a variant
-DISCOVERY_GROUPS = discovery_groups(config, TRIALS) if DISCOVERY else {}
+DISCOVERY_GROUPS = discovery_groups(config, RIG_TRIALS) if DISCOVERY else {}
 DISCOVERY_TARGETS = [  # the CSVs too, so that a freeze keeps what the report plots
     f"results/discovery/{g}{suffix}"
     for g in sorted(DISCOVERY_GROUPS)
@@ -14,15 +12,15 @@ rule discovery:
     input:
         angles=lambda wc: [
             f"results/angles/{n}.csv"
-            for n in group_trials(config, TRIALS, DISCOVERY_GROUPS, wc.group)
+            for n in group_trials(RIG_TRIALS, DISCOVERY_GROUPS, wc.group)
         ],
         angle_info=lambda wc: [
             f"results/angles/{n}.json"
-            for n in group_trials(config, TRIALS, DISCOVERY_GROUPS, wc.group)
+            for n in group_trials(RIG_TRIALS, DISCOVERY_GROUPS, wc.group)
         ],
         fits=lambda wc: [
             f"results/fits/{DISCOVERY['baseline']}/{n}.json"
-            for n in group_trials(config, TRIALS, DISCOVERY_GROUPS, wc.group)
+            for n in group_trials(RIG_TRIALS, DISCOVERY_GROUPS, wc.group)
         ],
         joint=lambda wc: [
             f"results/fits/{DISCOVERY['baseline']}/joint/{rig}.json"
@@ -47,7 +45,7 @@ rule discovery:
     params:
         rigs=lambda wc: DISCOVERY_GROUPS[wc.group],
         trial_rigs=lambda wc: group_trial_rigs(
-            config, TRIALS, DISCOVERY_GROUPS, wc.group
+            SETTINGS, RIG_TRIALS, DISCOVERY_GROUPS, wc.group
         ),
         baseline=DISCOVERY and DISCOVERY["baseline"],
         terms=lambda wc: list(config["variants"][DISCOVERY["baseline"]]),

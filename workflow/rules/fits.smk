@@ -102,7 +102,7 @@ rule fit_body:
         runtime=120,
     params:
         terms=variant_terms,
-        trial_rigs=lambda wc: group_trial_rigs(config, TRIALS, BODIES, wc.body),
+        trial_rigs=lambda wc: group_trial_rigs(SETTINGS, RIG_TRIALS, BODIES, wc.body),
         fitting=config["fitting"],
     script:
         "../scripts/fit_body.py"

@@ -11,7 +11,7 @@ def raw_video(wildcards):
 
 
 def tracking_settings(wildcards):
-    return trial_settings(config, TRIALS[wildcards.trial])["tracking"]
+    return SETTINGS[wildcards.trial]["tracking"]
 
 
 def geometry_trials(wildcards):
@@ -79,8 +79,10 @@ def angles_inputs(wildcards):
             "track_summary": f"results/tracks/{trial.name}.json",
         }
         if needs_rig_geometry(config, trial):
-            inputs["geometry"] = f"results/geometry/{rig_name(config, trial)}.json"
-        camera = trial_settings(config, trial)["camera"]
+            inputs["geometry"] = (
+                f"results/geometry/{SETTINGS[trial.name]['rig_name']}.json"
+            )
+        camera = SETTINGS[trial.name]["camera"]
         if camera:
             inputs["calibration"] = f"results/calibration/{camera}.json"
     return inputs
@@ -88,7 +90,7 @@ def angles_inputs(wildcards):
 
 def angles_settings(wildcards):
     """Only what the angles stage uses, so that changing a mass or a tolerance reruns the fits, not the angles."""
-    s = trial_settings(config, TRIALS[wildcards.trial])
+    s = SETTINGS[wildcards.trial]
     settings = {
         "rig_name": s["rig_name"],
         "length_m": s["rig"]["length_m"],
@@ -110,22 +112,22 @@ def variant_terms(wildcards):
 
 
 def fit_rig(wildcards):
-    settings = trial_settings(config, TRIALS[wildcards.trial])
+    settings = SETTINGS[wildcards.trial]
     return {"name": settings["rig_name"], "values": settings["rig"]}
 
 
 def fit_tolerances(wildcards):
-    return trial_settings(config, TRIALS[wildcards.trial])["tolerances"]
+    return SETTINGS[wildcards.trial]["tolerances"]
 
 
 def body_trials(wildcards):
     """Trials of a body's rigs (the inputs of its body fit)."""
-    return group_trials(config, TRIALS, BODIES, wildcards.body)
+    return group_trials(RIG_TRIALS, BODIES, wildcards.body)
 
 
 def joint_trials(wildcards):
     """Trials of the rig of a joint fit (only these are its inputs)."""
-    names = rig_trials(config, TRIALS).get(wildcards.rig)
+    names = RIG_TRIALS.get(wildcards.rig)
     if not names:
         raise ValueError(f"rig {wildcards.rig!r} has no trials in {config['raw_dir']}")
     return names
@@ -133,18 +135,12 @@ def joint_trials(wildcards):
 
 def joint_trial_rigs(wildcards):
     """Trial → its rig values (sidecars may override rig values) for one rig's joint fit."""
-    return {
-        name: trial_settings(config, TRIALS[name])["rig"]
-        for name in joint_trials(wildcards)
-    }
+    return {name: SETTINGS[name]["rig"] for name in joint_trials(wildcards)}
 
 
 def joint_tolerances(wildcards):
     """Trial → the rig's stated 1σ tolerances, for one rig's joint fit."""
-    return {
-        name: trial_settings(config, TRIALS[name])["tolerances"]
-        for name in joint_trials(wildcards)
-    }
+    return {name: SETTINGS[name]["tolerances"] for name in joint_trials(wildcards)}
 
 
 def status_trials():
@@ -152,7 +148,7 @@ def status_trials():
     return {
         name: {
             "source": TRIALS[name].path,
-            "rig": rig_name(config, TRIALS[name]),
+            "rig": SETTINGS[name]["rig_name"],
             "documents": trial_documents(name),
         }
         for name in sorted(TRIALS)

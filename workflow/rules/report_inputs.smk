@@ -16,11 +16,11 @@ def report_files():
             entry["truth"] = str(Path(truth_dir) / f"{name}.yaml")
         trials[name] = entry
     variants = sorted(config["variants"])
-    rigs = sorted(rig_trials(config, TRIALS))
+    rigs = sorted(RIG_TRIALS)
     # camera setups of rigs with video trials (calibration.smk); no key without cameras
     cameras = {
         config["rigs"][rig].get("camera")
-        for rig, names in rig_trials(config, TRIALS).items()
+        for rig, names in RIG_TRIALS.items()
         if any(TRIALS[n].kind == "video" for n in names)
     } - {None}
     calibration = {c: f"results/calibration/{c}.json" for c in sorted(cameras)}
@@ -103,5 +103,5 @@ def report_rigs():
             },
             "tolerances": dict(config["rigs"][rig].get("tolerances") or {}),
         }
-        for rig in sorted(rig_trials(config, TRIALS))
+        for rig in sorted(RIG_TRIALS)
     }

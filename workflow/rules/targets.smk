@@ -33,10 +33,7 @@ def all_targets():
 
 def joint_fits(variant):
     """The per-rig joint fits of one variant: one file per rig that has trials."""
-    return [
-        f"results/fits/{variant}/joint/{rig}.json"
-        for rig in sorted(rig_trials(config, TRIALS))
-    ]
+    return [f"results/fits/{variant}/joint/{rig}.json" for rig in sorted(RIG_TRIALS)]
 
 
 def body_fits(variant):

@@ -5,8 +5,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(workflow.basedir) / "workflow"))
 
-from pendulum.fit.bodies import (  # noqa: E402
+from pendulum.groups import (  # noqa: E402
     body_groups,
+    discovery_groups,
+    discovery_settings,
     group_trial_rigs,
     group_trials,
 )
@@ -36,10 +38,15 @@ TRIALS = discover_trials(config["raw_dir"])
 # rigs defined in sidecars join config["rigs"]
 SIDECAR_RIGS = add_sidecar_rigs(config, TRIALS)
 VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
-BODIES = body_groups(config, TRIALS)  # body → its rigs with trials (config `bodies`)
+# each trial's merged settings (config, rig, sidecar; a bad sidecar stops the run here) and each rig's
+# trials, computed once: the input functions and params of a thousand trials' jobs read them
+SETTINGS = {name: trial_settings(config, TRIALS[name]) for name in sorted(TRIALS)}
+RIG_TRIALS = rig_trials(config, TRIALS)
+# body → its rigs with trials (config `bodies`)
+BODIES = body_groups(config, RIG_TRIALS)
 RIGS_NEEDING_GEOMETRY = sorted(
     {
-        rig_name(config, TRIALS[n])
+        SETTINGS[n]["rig_name"]
         for n in VIDEO_TRIALS
         if needs_rig_geometry(config, TRIALS[n])
     }

@@ -1,0 +1,88 @@
+"""Groups of trials from the configuration: the bodies of config ``bodies`` and the discovery groups.
+
+Config-level only (no numerics): the workflow reads these when it is parsed. Every function takes
+``by_rig``, the trial names of each rig (:func:`pendulum.trials.rig_trials`, computed once), and
+the trials' merged settings where it needs rig values (:func:`pendulum.trials.trial_settings`).
+"""
+
+from __future__ import annotations
+
+from pendulum.trials import ConfigError
+
+DISCOVERY_DEFAULTS = {
+    "baseline": "quadratic",
+    "candidates": ["linear_damping", "coulomb_friction", "quadratic_drag", "history_force", "restoring_correction"],
+    "alpha": 0.01,
+}
+
+
+def discovery_settings(config: dict) -> dict | None:
+    """Config ``discovery`` with its defaults; None (no discovery) when the default baseline is not a variant.
+
+    A baseline named in config that is not a variant stops the run with the names.
+    """
+    given = config.get("discovery") or {}
+    settings = {**DISCOVERY_DEFAULTS, **given}
+    if settings["baseline"] in config["variants"]:
+        return settings
+    if "baseline" in given:
+        raise ConfigError(
+            f"config.yaml: discovery/baseline {settings['baseline']!r} is not one of variants "
+            f"{sorted(config['variants'])}"
+        )
+    return None
+
+
+def discovery_groups(config: dict, by_rig: dict[str, list[str]]) -> dict[str, list[str]]:
+    """Group name → its rigs that have trials: each body of config ``bodies``, then every other rig by itself.
+
+    A body is one vehicle swung on several rigs (arm lengths, payloads); discovery pools its rigs'
+    trials with the body's hydrodynamic coefficients shared and each rig's torques its own.
+    """
+    groups, owner = {}, {}
+    for body, rigs in sorted((config.get("bodies") or {}).items()):
+        for rig in rigs:
+            if rig not in config["rigs"]:
+                raise ConfigError(
+                    f"config.yaml: bodies/{body} names rig {rig!r}, not one of rigs {sorted(config['rigs'])}"
+                )
+            if rig in owner:
+                raise ConfigError(
+                    f"config.yaml: rig {rig!r} is in bodies {owner[rig]!r} and {body!r}; a rig carries one body"
+                )
+            owner[rig] = body
+        if body in config["rigs"] and body not in rigs:
+            raise ConfigError(f"config.yaml: body {body!r} has the name of another rig; rename it")
+        members = sorted(r for r in rigs if r in by_rig)
+        if members:
+            groups[body] = members
+    for rig in sorted(by_rig):
+        if rig not in owner:
+            groups[rig] = [rig]
+    return groups
+
+
+def body_groups(config: dict, by_rig: dict[str, list[str]]) -> dict[str, list[str]]:
+    """Body name → its rigs that have trials, for the bodies of config ``bodies`` (their joint body fits)."""
+    bodies = config.get("bodies") or {}
+    return {g: rigs for g, rigs in discovery_groups(config, by_rig).items() if g in bodies}
+
+
+def group_trials(by_rig: dict[str, list[str]], groups: dict, group: str) -> list[str]:
+    """The trials of a group's rigs."""
+    if group not in groups:
+        raise ValueError(f"no discovery group {group!r} (a body or a rig with trials)")
+    return sorted(n for rig in groups[group] for n in by_rig[rig])
+
+
+def group_trial_rigs(settings: dict[str, dict], by_rig: dict[str, list[str]], groups: dict, group: str) -> dict:
+    """Trial → its rig's name and values (a sidecar may override values) and the rig's stated tolerances;
+    ``settings``: each trial's :func:`pendulum.trials.trial_settings`."""
+    return {
+        name: {
+            "name": settings[name]["rig_name"],
+            "values": settings[name]["rig"],
+            "tolerances": settings[name]["tolerances"],
+        }
+        for name in group_trials(by_rig, groups, group)
+    }
