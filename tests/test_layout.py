@@ -193,3 +193,37 @@ def test_no_module_is_long():
     sizes = {path: len(path.read_text(encoding="utf-8").splitlines()) for path in module_files().values()}
     long = {str(p.relative_to(LIBRARY.parent)): n for p, n in sizes.items() if n > MAX_LINES}
     assert not long, f"modules over {MAX_LINES} lines: {long}"
+
+
+def test_the_workflows_code_inputs_see_every_import_the_parser_sees():
+    """`pendulum.provenance.imported_modules` reads only import statements (the workflow's `code` inputs,
+    on every Snakemake call): on every module and script of the workflow it gives exactly what a full
+    parse gives, and on the tests at least that (an import inside a string template is extra)."""
+    import sys
+
+    sys.path.insert(0, str(LIBRARY.parent))
+    from pendulum.provenance import imported_modules
+
+    def parsed(source: str, package: tuple) -> set:
+        names = set()
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.ImportFrom):
+                base = package[: len(package) - (node.level - 1)] if node.level else ()
+                module = ".".join(base + ((node.module,) if node.module else ()))
+                names |= {module} | {f"{module}.{a.name}" for a in node.names}
+            elif isinstance(node, ast.Import):
+                names |= {a.name for a in node.names}
+        return names
+
+    workflow = sorted(LIBRARY.parent.rglob("*.py"))
+    assert len(workflow) > 80
+    for path in workflow:
+        package = path.parent.relative_to(LIBRARY.parent).parts
+        source = path.read_text(encoding="utf-8")
+        assert imported_modules(source, package) == parsed(source, package), path
+    for path in sorted(LIBRARY.parents[1].joinpath("tests").rglob("*.py")):
+        source = path.read_text(encoding="utf-8")
+        assert parsed(source, ()) <= imported_modules(source, ()), path
+    # a relative import, one inside a function, a parenthesised and a continued one
+    text = "from . import a\ndef f():\n    from ..b import (\n        c,\n        d,\n    )\nimport e.f, \\\n    g\n"
+    assert imported_modules(text, ("p", "q")) == {"p.q", "p.q.a", "p.b", "p.b.c", "p.b.d", "e.f", "g"}

@@ -1,17 +1,16 @@
 # Provenance: the library modules each stage's script imports (its `code` input, so that
 # editing a stage's science reruns that stage only) and the report's commit, configuration
 # digest and package versions.
-import ast
 import functools
 import os
 import platform
-import re
 
 from pendulum.io import write_text  # noqa: E402
 from pendulum.provenance import (
     code_digest_text,
     config_digest,
     git_state,
+    imported_modules,
     package_versions,
 )  # noqa: E402
 
@@ -41,43 +40,15 @@ def _with_packages(path):
     return files
 
 
-# An import statement on its own lines (a parenthesised or continued one spans several): reading only
-# these is ~50× faster than parsing every module, and the workflow is parsed on every Snakemake call.
-IMPORT_STATEMENT = re.compile(
-    r"^[ \t]*(?:from[ \t]+[\w.]+[ \t]+import[ \t]*(?:\([^)]*\)|(?:[^\n]*\\\n)*[^\n]*)"
-    r"|import[ \t]+(?:[^\n]*\\\n)*[^\n]*)",
-    re.M,
-)
-
-
-def _import_nodes(source):
-    """The import statements of a Python source, at any depth (also inside functions), parsed."""
-    for match in IMPORT_STATEMENT.finditer(source):
-        try:
-            yield from ast.parse(match.group(0).strip()).body
-        except SyntaxError:  # a line of prose in a docstring that starts with "import"
-            continue
-
-
 @functools.lru_cache(maxsize=None)  # each file read once per Snakemake run
 def _library_imports(path):
     """The `pendulum` module files a Python file imports (absolute or relative, also inside functions)."""
-    names = set()
-    for node in _import_nodes(Path(path).read_text()):
-        if isinstance(node, ast.ImportFrom):
-            if node.level:
-                package = path.parent.relative_to(LIBRARY_DIR.parent).parts
-                package = package[: len(package) - (node.level - 1)]
-                source = ".".join(package + ((node.module,) if node.module else ()))
-            else:
-                source = node.module or ""
-            if source == "pendulum" or source.startswith("pendulum."):
-                names.add(source)
-                names |= {
-                    f"{source}.{a.name}" for a in node.names
-                }  # `from pendulum.fit import decay`
-        elif isinstance(node, ast.Import):
-            names |= {a.name for a in node.names if a.name.startswith("pendulum.")}
+    package = path.parent.relative_to(LIBRARY_DIR.parent).parts
+    names = {
+        n
+        for n in imported_modules(path.read_text(), package)
+        if n == "pendulum" or n.startswith("pendulum.")
+    }
     files = {_module_file(n) for n in names} - {None}
     return frozenset(f for file in files for f in _with_packages(file))
 
