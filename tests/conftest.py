@@ -42,11 +42,26 @@ SLOW_FIXTURES = {
 }
 
 
+# Session fixtures that several files share, and the files that use them: under pytest-xdist (pytest.ini runs one
+# worker per core) each such set of files is one group, run by one worker, so the fixture is built once and a
+# test that changes and restores it (demo_project) never races another worker; every other file is a group of
+# its own (its module fixtures built once).
+SHARED_FIXTURES = ("demo_project", "hard_videos")
+
+
 def pytest_collection_modifyitems(config, items):
-    """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand)."""
+    """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand); every
+    test joins its file's xdist group, or the group of a :data:`SHARED_FIXTURES` fixture its file uses."""
+    shared: dict[Path, str] = {}
     for item in items:
-        if SLOW_FIXTURES & set(getattr(item, "fixturenames", ())):
+        names = set(getattr(item, "fixturenames", ()))
+        if SLOW_FIXTURES & names:
             item.add_marker(pytest.mark.slow)
+        for fixture in SHARED_FIXTURES:
+            if fixture in names:
+                shared.setdefault(item.path, fixture)
+    for item in items:
+        item.add_marker(pytest.mark.xdist_group(shared.get(item.path, item.path.name)))
 
 
 def demo_trials():
