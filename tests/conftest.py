@@ -42,26 +42,22 @@ SLOW_FIXTURES = {
 }
 
 
-# Session fixtures that several files share, and the files that use them: under pytest-xdist (pytest.ini runs one
-# worker per core) each such set of files is one group, run by one worker, so the fixture is built once and a
-# test that changes and restores it (demo_project) never races another worker; every other file is a group of
-# its own (its module fixtures built once).
+# Session fixtures that several files share: under pytest-xdist (pytest.ini runs one worker per core) the tests
+# that use one are one group, run by one worker, so it is built once and a test that changes and restores it
+# (demo_project) never races another worker; every other test is in its file's group (its module fixtures
+# built once).
 SHARED_FIXTURES = ("demo_project", "hard_videos")
 
 
 def pytest_collection_modifyitems(config, items):
-    """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand); every
-    test joins its file's xdist group, or the group of a :data:`SHARED_FIXTURES` fixture its file uses."""
-    shared: dict[Path, str] = {}
+    """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand); each
+    test joins the xdist group of the first :data:`SHARED_FIXTURES` fixture it uses, else its file's."""
     for item in items:
         names = set(getattr(item, "fixturenames", ()))
         if SLOW_FIXTURES & names:
             item.add_marker(pytest.mark.slow)
-        for fixture in SHARED_FIXTURES:
-            if fixture in names:
-                shared.setdefault(item.path, fixture)
-    for item in items:
-        item.add_marker(pytest.mark.xdist_group(shared.get(item.path, item.path.name)))
+        group = next((f for f in SHARED_FIXTURES if f in names), item.path.name)
+        item.add_marker(pytest.mark.xdist_group(group))
 
 
 def demo_trials():
