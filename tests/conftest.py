@@ -49,6 +49,7 @@ SLOW_FIXTURES = {
 SHARED_FIXTURES = ("demo_project", "hard_videos")
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook turns the xdist_group marks into the tests' groups
 def pytest_collection_modifyitems(config, items):
     """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand); each
     test joins the xdist group of the first :data:`SHARED_FIXTURES` fixture it uses, else its file's."""

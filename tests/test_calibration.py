@@ -2,7 +2,7 @@
 
 Renders are small (640×360) and made once per session. The acceptance figures
 (angle RMS against the truth after calibration, and without) are printed by
-``pytest -s -k through``.
+``pytest -n 0 -s -k through`` (in one process: under xdist, ``-s`` shows nothing).
 """
 
 import json

@@ -9,7 +9,7 @@ from pathlib import Path
 
 LIBRARY = Path(__file__).resolve().parents[1] / "workflow" / "pendulum"
 MAX_LINES = 550
-MAX_TOP_MODULES = 6  # plumbing beside the stage packages (io, status, provenance, freeze, trials)
+MAX_TOP_MODULES = 6  # plumbing beside the stage packages (io, status, provenance, freeze, trials, groups)
 
 
 def module_files(library: Path = LIBRARY) -> dict[str, Path]:
@@ -227,3 +227,8 @@ def test_the_workflows_code_inputs_see_every_import_the_parser_sees():
     # a relative import, one inside a function, a parenthesised and a continued one
     text = "from . import a\ndef f():\n    from ..b import (\n        c,\n        d,\n    )\nimport e.f, \\\n    g\n"
     assert imported_modules(text, ("p", "q")) == {"p.q", "p.q.a", "p.b", "p.b.c", "p.b.d", "e.f", "g"}
+    # a comment with a parenthesis inside the parentheses; imports after code on their line; a docstring line that
+    # reads like an unfinished import: never an import missed
+    assert imported_modules("from a import (\n    b,  # (c)\n    d,\n)\n") == {"a", "a.b", "a.d"}
+    assert imported_modules("x = 1; import a.b\nif T: from c import d\n") == {"a.b", "c", "c.d"}
+    assert imported_modules('"""\nfrom x import (\n"""\nimport a\n') == {"a"}

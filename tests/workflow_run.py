@@ -26,7 +26,10 @@ def copy_project(work: Path, raw_files=None) -> Path:
     for item in PROJECT_ITEMS:
         src = ROOT / item
         if src.exists():
-            (shutil.copytree if src.is_dir() else shutil.copy2)(src, work / item)
+            if src.is_dir():  # not the files other workers are writing (a module's .pyc, numba's cache) mid-copy
+                shutil.copytree(src, work / item, ignore=shutil.ignore_patterns("*.pyc.*", "*.tmp.*"))
+            else:
+                shutil.copy2(src, work / item)
     raw = work / "data" / "raw"
     raw.mkdir(parents=True, exist_ok=True)
     for path in raw_files if raw_files is not None else sorted(DEMO_RAW.iterdir()):

@@ -116,12 +116,15 @@ def code_digest_text(paths) -> str:
     return "\n".join(lines) + "\n"
 
 
-# An import statement on its own lines (a parenthesised or continued one spans several).
+# An import statement on its own lines (a parenthesised one, comments inside included, or a continued one
+# spans several).
 IMPORT_STATEMENT = re.compile(
-    r"^[ \t]*(?:from[ \t]+[\w.]+[ \t]+import[ \t]*(?:\([^)]*\)|(?:[^\n]*\\\n)*[^\n]*)"
+    r"^[ \t]*(?:from[ \t]+[\w.]+[ \t]+import[ \t]*(?:\((?:[^)#]|#[^\n]*)*\)|(?:[^\n]*\\\n)*[^\n]*)"
     r"|import[ \t]+(?:[^\n]*\\\n)*[^\n]*)",
     re.M,
 )
+# An import after other code on its line (`x = 1; import a`, `if TYPE_CHECKING: import a`): not seen above.
+IMPORT_AFTER_CODE = re.compile(r"[;:][ \t]*(?:from[ \t]+[\w.]+[ \t]+)?import[ \t]")
 
 
 def imported_modules(source: str, package: tuple[str, ...] = ()) -> set[str]:
@@ -130,23 +133,30 @@ def imported_modules(source: str, package: tuple[str, ...] = ()) -> set[str]:
     against ``package`` (the importing module's package, e.g. ``("pendulum", "fit")``).
 
     Only the import statements are parsed, not the whole module (~50× faster: the workflow runs this on
-    its library every time Snakemake parses it). A line of a docstring that reads like an import counts
-    too: a stage may then depend on a module it does not import (a rerun too many, never one too few).
+    its library every time Snakemake parses it); where one of them does not parse on its own (a docstring
+    line that reads like an unfinished import), or an import follows other code on its line, the whole
+    source is parsed instead. A docstring line that reads like a whole import counts too: a stage may then depend on
+    a module it does not import (a rerun too many, never one too few).
     """
+    if IMPORT_AFTER_CODE.search(source):
+        nodes = list(ast.walk(ast.parse(source)))
+    else:
+        nodes = []
+        for match in IMPORT_STATEMENT.finditer(source):
+            try:
+                nodes += ast.parse(match.group(0).strip()).body
+            except SyntaxError:
+                nodes = list(ast.walk(ast.parse(source)))
+                break
     names = set()
-    for match in IMPORT_STATEMENT.finditer(source):
-        try:
-            nodes = ast.parse(match.group(0).strip()).body
-        except SyntaxError:  # prose in a docstring that starts with "import"
-            continue
-        for node in nodes:
-            if isinstance(node, ast.ImportFrom):
-                base = package[: len(package) - (node.level - 1)] if node.level else ()
-                module = ".".join(base + ((node.module,) if node.module else ()))
-                names.add(module)
-                names |= {f"{module}.{a.name}" for a in node.names}
-            elif isinstance(node, ast.Import):
-                names |= {a.name for a in node.names}
+    for node in nodes:
+        if isinstance(node, ast.ImportFrom):
+            base = package[: len(package) - (node.level - 1)] if node.level else ()
+            module = ".".join(base + ((node.module,) if node.module else ()))
+            names.add(module)
+            names |= {f"{module}.{a.name}" for a in node.names}
+        elif isinstance(node, ast.Import):
+            names |= {a.name for a in node.names}
     return names
 
 
