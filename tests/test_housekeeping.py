@@ -49,3 +49,52 @@ def test_every_rule_records_its_time_and_memory_where_snakemake_users_look():
     assert [name for name, bench in rules.items() if bench is None] == []
     assert len(set(rules.values())) == len(rules)  # one file per job, no two rules sharing one
     assert "benchmarks/jobs/" in (ROOT / ".gitignore").read_text().splitlines()
+
+
+GROUP_CONFTEST = """
+import importlib.util, os, pytest
+
+spec = importlib.util.spec_from_file_location("suite_conftest", {conftest!r})
+suite = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(suite)
+pytest_collection_modifyitems = suite.pytest_collection_modifyitems
+
+
+@pytest.fixture(scope="session")
+def demo_project():
+    return "built"
+
+
+@pytest.fixture
+def seen(request):
+    yield
+    with open(os.path.join({out!r}, request.node.name), "w") as f:
+        f.write(os.environ["PYTEST_XDIST_WORKER"])
+"""
+
+
+def test_the_tests_that_share_a_build_run_in_one_worker(tmp_path):
+    """pytest.ini's ``--dist loadgroup`` with tests/conftest.py's groups, run for real: the tests of two files that use
+    ``demo_project`` run in one worker (one build), the others where xdist puts them. pytest 9.2 broke this silently
+    (pytest-dev/pytest-xdist#1386: every test ran alone and each worker built the demo)."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "seen"
+    out.mkdir()
+    (tmp_path / "conftest.py").write_text(GROUP_CONFTEST.format(conftest=str(ROOT / "tests/conftest.py"), out=str(out)))
+    for name in ("a", "b"):
+        tests = [f"def test_{name}_demo_{i}(demo_project, seen):\n    pass\n" for i in range(4)]
+        tests += [f"def test_{name}_alone_{i}(seen):\n    pass\n" for i in range(4)]
+        (tmp_path / f"test_{name}.py").write_text("\n\n".join(tests))
+    proc = subprocess.run(
+        [sys.executable, "-m", "pytest", "-n", "2", "--dist", "loadgroup", "-p", "no:cacheprovider", "-q"]
+        + ["-c", "/dev/null", "--rootdir", str(tmp_path), str(tmp_path)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    workers = {p.name: p.read_text() for p in out.iterdir()}
+    assert len(workers) == 16
+    assert len({w for name, w in workers.items() if "_demo_" in name}) == 1, workers
