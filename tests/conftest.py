@@ -20,6 +20,7 @@ DEMO_TRUTH = ROOT / "data" / "truth"
 # runs on every change; the full suite (what CI runs) is every test.
 SLOW_FIXTURES = {
     "demo_project",  # the README's build of the demo videos
+    "small_build",
     "hard_videos",
     "project",
     "repo",
@@ -44,21 +45,42 @@ SLOW_FIXTURES = {
 
 # Session fixtures that several files share: under pytest-xdist (pytest.ini runs one worker per core) the tests
 # that use one are one group, run by one worker, so it is built once and a test that changes and restores it
-# (demo_project) never races another worker; every other test is in its file's group (its module fixtures
-# built once).
-SHARED_FIXTURES = ("demo_project", "hard_videos")
+# (demo_project) never races another worker. A test that uses a module fixture of its file is in that file's
+# group (the fixture built once); every other test is scheduled on its own. Groups run longest first
+# (pytest.ini: --no-loadscope-reorder keeps this order): the shared builds, then the slow tier, then the rest.
+SHARED_FIXTURES = ("demo_project", "small_build", "hard_videos")
+
+
+def _uses_a_module_fixture(item) -> bool:
+    """A fixture of the project's (not pytest's) that lives longer than one test, other than the shared ones."""
+    info = getattr(item, "_fixtureinfo", None)
+    for name, defs in info.name2fixturedefs.items() if info else ():
+        if defs and defs[-1].scope != "function" and defs[-1].baseid and name not in SHARED_FIXTURES:
+            return True
+    return False
 
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook turns the xdist_group marks into the tests' groups
 def pytest_collection_modifyitems(config, items):
     """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand); each
-    test joins the xdist group of the first :data:`SHARED_FIXTURES` fixture it uses, else its file's."""
+    test joins the xdist group of the first :data:`SHARED_FIXTURES` fixture it uses, else its file's when it uses
+    one of its file's module fixtures; groups are ordered shared first, then slow, then fast."""
+    keys, rank = [], {}
     for item in items:
         names = set(getattr(item, "fixturenames", ()))
         if SLOW_FIXTURES & names:
             item.add_marker(pytest.mark.slow)
-        group = next((f for f in SHARED_FIXTURES if f in names), item.path.name)
-        item.add_marker(pytest.mark.xdist_group(group))
+        group = next((f for f in SHARED_FIXTURES if f in names), None)
+        if group is None and _uses_a_module_fixture(item):
+            group = item.path.name
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))
+        key = group or item.nodeid
+        order = SHARED_FIXTURES.index(group) if group in SHARED_FIXTURES else 10 if item.get_closest_marker("slow") else 20
+        rank[key] = min(rank.get(key, order), order)
+        keys.append(key)
+    order = {id(item): rank[key] for item, key in zip(items, keys, strict=True)}
+    items.sort(key=lambda item: order[id(item)])  # stable: a file's tests keep their order
 
 
 def demo_trials():
@@ -97,5 +119,16 @@ def demo_project(tmp_path_factory):
     from workflow_run import copy_project, run
 
     work = copy_project(tmp_path_factory.mktemp("demo_project"))
+    run(["-c2"], work)
+    return work
+
+
+@pytest.fixture(scope="session")
+def small_build(tmp_path_factory):
+    """One demo video, one variant, built (``workflow_run.small_project``): every rule in few jobs, the bytes the
+    cluster-profile and interrupted-run tests must reproduce. Tests copy it, never change it."""
+    from workflow_run import run, small_project
+
+    work = small_project(tmp_path_factory.mktemp("small_build"))
     run(["-c2"], work)
     return work

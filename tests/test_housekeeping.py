@@ -75,7 +75,8 @@ def seen(request):
 
 def test_the_tests_that_share_a_build_run_in_one_worker(tmp_path):
     """pytest.ini's ``--dist loadgroup`` with tests/conftest.py's groups, run for real: the tests of two files that use
-    ``demo_project`` run in one worker (one build), the others where xdist puts them. pytest 9.2 broke this silently
+    ``demo_project`` run in one worker (one build),
+    as do a file's tests that use its module fixture; the others are spread. pytest 9.2 broke this silently
     (pytest-dev/pytest-xdist#1386: every test ran alone and each worker built the demo)."""
     import subprocess
     import sys
@@ -87,6 +88,9 @@ def test_the_tests_that_share_a_build_run_in_one_worker(tmp_path):
         tests = [f"def test_{name}_demo_{i}(demo_project, seen):\n    pass\n" for i in range(4)]
         tests += [f"def test_{name}_alone_{i}(seen):\n    pass\n" for i in range(4)]
         (tmp_path / f"test_{name}.py").write_text("\n\n".join(tests))
+    module = ["import pytest\n\n\n@pytest.fixture(scope='module')\ndef built():\n    return 1\n"]
+    module += [f"def test_c_module_{i}(built, seen):\n    pass\n" for i in range(6)]
+    (tmp_path / "test_c.py").write_text("\n\n".join(module))
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-n", "2", "--dist", "loadgroup", "-p", "no:cacheprovider", "-q"]
         + ["-c", "/dev/null", "--rootdir", str(tmp_path), str(tmp_path)],
@@ -96,5 +100,6 @@ def test_the_tests_that_share_a_build_run_in_one_worker(tmp_path):
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     workers = {p.name: p.read_text() for p in out.iterdir()}
-    assert len(workers) == 16
+    assert len(workers) == 22
     assert len({w for name, w in workers.items() if "_demo_" in name}) == 1, workers
+    assert len({w for name, w in workers.items() if "_module_" in name}) == 1, workers

@@ -21,7 +21,7 @@ import pytest
 import yaml
 
 from conftest import DEMO_RAW, demo_trials
-from workflow_run import SNAKEMAKE, copy_project, digest, one_variant, planned_wildcards, run
+from workflow_run import SNAKEMAKE, copy_project, digest, one_variant, planned_wildcards, run, small_project
 
 VARIANTS = ("friction", "linear", "quadratic")
 AGGREGATES = {"fit_joint", "fit_summary", "status_table", "check_trials", "all", "report", "discovery", "design"}
@@ -155,16 +155,14 @@ def test_a_truncated_and_a_fake_video_cost_nothing_else(tmp_path):
     assert {rule for rule, _ in planned_wildcards(again.stdout)} <= {"check_trials", "all"}
 
 
-def _kill_mid_run(work: Path, sig: int, after_files: int, options=()) -> None:
-    """Start a build and send ``sig`` to its whole process group once ``after_files`` angle records exist."""
+def _kill_mid_run(work: Path, sig: int, after: str, options=()) -> None:
+    """Start a build and send ``sig`` to its whole process group once the file ``after`` exists."""
     output = work.parent / f"killed-{sig}.log"
     with open(output, "w") as out:
         proc = subprocess.Popen([*SNAKEMAKE, "-c2", *options], cwd=work, stdout=out, stderr=out, start_new_session=True)
         deadline = time.time() + 300
-        while time.time() < deadline and proc.poll() is None:
-            if len(list((work / "results/angles").glob("*.json"))) >= after_files:
-                break
-            time.sleep(0.2)
+        while time.time() < deadline and proc.poll() is None and not (work / after).exists():
+            time.sleep(0.1)
     assert proc.poll() is None, (
         f"the build ended (exit {proc.returncode}) before it could be interrupted:\n" + output.read_text()[-3000:]
     )
@@ -172,16 +170,16 @@ def _kill_mid_run(work: Path, sig: int, after_files: int, options=()) -> None:
     proc.wait(timeout=120)
 
 
-def test_an_interrupted_then_killed_run_resumes_to_the_same_bytes(tmp_path, demo_project):
-    """Ctrl-C (SIGINT) mid-build (a job caught between writing its outputs and Snakemake marking
-    them complete leaves them incomplete), then the rerun Snakemake asks for (--rerun-incomplete) is
-    itself killed (SIGKILL: no clean-up, the lock left): unlocked and rerun, the results are the clean
-    build's bytes. One build carries both interruptions."""
-    work = copy_project(tmp_path / "p")
-    _kill_mid_run(work, signal.SIGINT, after_files=2)
-    present = len(list((work / "results/angles").glob("*.json")))  # the rerun is killed after one more
-    _kill_mid_run(work, signal.SIGKILL, after_files=min(present + 1, 5), options=["--rerun-incomplete"])
+def test_an_interrupted_then_killed_run_resumes_to_the_same_bytes(tmp_path, small_build):
+    """Ctrl-C (SIGINT) mid-build, once the track is written (a job caught between writing its outputs and
+    Snakemake marking them complete leaves them incomplete), then the rerun Snakemake asks for
+    (--rerun-incomplete) is itself killed once the fit is written (SIGKILL: no clean-up, the lock left):
+    unlocked and rerun, the results are the clean build's bytes. One build carries both interruptions."""
+    work = small_project(tmp_path / "p")
+    _kill_mid_run(work, signal.SIGINT, after="results/tracks/demo_p20.json")
+    _kill_mid_run(work, signal.SIGKILL, after="results/fits/quadratic/demo_p20.json", options=["--rerun-incomplete"])
+    assert not (work / "results/report/report.html").exists()  # both interruptions came before the end
     run(["--unlock"], work)  # a killed Snakemake cannot remove its lock
     run(["-c2", "--rerun-incomplete"], work)
-    assert digest(work / "results") == digest(demo_project / "results")
+    assert digest(work / "results") == digest(small_build / "results")
     assert not list((work / "results").rglob(".*.tmp*"))

@@ -49,6 +49,11 @@ def one_variant(work: Path, variant: str = "quadratic", terms=("quadratic_drag",
     return work
 
 
+def small_project(work: Path) -> Path:
+    """One demo video (demo_p20), one variant: every rule of the workflow in few jobs."""
+    return one_variant(copy_project(work, raw_files=[DEMO_RAW / "demo_p20.mp4"]))
+
+
 def planned_wildcards(dry_run_output: str) -> list[tuple[str, dict]]:
     """(rule, {wildcard: value}) of every job in a dry run (jobs without wildcards: empty dict)."""
     jobs, rule, wildcards = [], None, {}
