@@ -76,7 +76,8 @@ def pytest_collection_modifyitems(config, items):
         if group is not None:
             item.add_marker(pytest.mark.xdist_group(group))
         key = group or item.nodeid
-        order = SHARED_FIXTURES.index(group) if group in SHARED_FIXTURES else 10 if item.get_closest_marker("slow") else 20
+        slow = item.get_closest_marker("slow") is not None
+        order = SHARED_FIXTURES.index(group) if group in SHARED_FIXTURES else 10 if slow else 20
         rank[key] = min(rank.get(key, order), order)
         keys.append(key)
     order = {id(item): rank[key] for item, key in zip(items, keys, strict=True)}
