@@ -155,14 +155,15 @@ def test_a_truncated_and_a_fake_video_cost_nothing_else(tmp_path):
     assert {rule for rule, _ in planned_wildcards(again.stdout)} <= {"check_trials", "all"}
 
 
-def _kill_mid_run(work: Path, sig: int, after: str, options=()) -> None:
-    """Start a build and send ``sig`` to its whole process group once the file ``after`` exists."""
+def _kill_mid_run(work: Path, sig: int, after: str, options=(), delay_s: float = 0.0) -> None:
+    """Start a build and send ``sig`` to its whole process group ``delay_s`` after the file ``after`` exists."""
     output = work.parent / f"killed-{sig}.log"
     with open(output, "w") as out:
         proc = subprocess.Popen([*SNAKEMAKE, "-c2", *options], cwd=work, stdout=out, stderr=out, start_new_session=True)
         deadline = time.time() + 300
         while time.time() < deadline and proc.poll() is None and not (work / after).exists():
             time.sleep(0.1)
+        time.sleep(delay_s)
     assert proc.poll() is None, (
         f"the build ended (exit {proc.returncode}) before it could be interrupted:\n" + output.read_text()[-3000:]
     )
@@ -171,13 +172,16 @@ def _kill_mid_run(work: Path, sig: int, after: str, options=()) -> None:
 
 
 def test_an_interrupted_then_killed_run_resumes_to_the_same_bytes(tmp_path, small_build):
-    """Ctrl-C (SIGINT) mid-build, once the track is written (a job caught between writing its outputs and
+    """Ctrl-C (SIGINT) mid-build, while the video is tracked (a job caught between writing its outputs and
     Snakemake marking them complete leaves them incomplete), then the rerun Snakemake asks for
-    (--rerun-incomplete) is itself killed once the fit is written (SIGKILL: no clean-up, the lock left):
+    (--rerun-incomplete) is itself killed once the angles are written (SIGKILL: no clean-up, the lock left):
     unlocked and rerun, the results are the clean build's bytes. One build carries both interruptions."""
     work = small_project(tmp_path / "p")
-    _kill_mid_run(work, signal.SIGINT, after="results/tracks/demo_p20.json")
-    _kill_mid_run(work, signal.SIGKILL, after="results/fits/quadratic/demo_p20.json", options=["--rerun-incomplete"])
+    # Snakemake's log handler drops a KeyboardInterrupt that arrives while it writes (a job's end): the Ctrl-C
+    # comes a second into the tracking job, while Snakemake waits
+    _kill_mid_run(work, signal.SIGINT, after="logs/tracks/demo_p20.log", delay_s=1.0)
+    assert not (work / "results/angles/demo_p20.json").exists()  # the interruption came mid-build
+    _kill_mid_run(work, signal.SIGKILL, after="results/angles/demo_p20.json", options=["--rerun-incomplete"])
     assert not (work / "results/report/report.html").exists()  # both interruptions came before the end
     run(["--unlock"], work)  # a killed Snakemake cannot remove its lock
     run(["-c2", "--rerun-incomplete"], work)
