@@ -46,41 +46,72 @@ SLOW_FIXTURES = {
 # Session fixtures that several files share: under pytest-xdist (pytest.ini runs one worker per core) the tests
 # that use one are one group, run by one worker, so it is built once and a test that changes and restores it
 # (demo_project) never races another worker. A test that uses a module fixture of its file is in that file's
-# group (the fixture built once); every other test is scheduled on its own. Groups run longest first
-# (pytest.ini: --no-loadscope-reorder keeps this order): the shared builds, then the slow tier, then the rest.
+# group (the fixture built once); every other test is scheduled on its own. The shared groups run first, the
+# demo's (the longest) before the others, then the slow tier, then the fast (pytest.ini:
+# --no-loadscope-reorder keeps this order).
 SHARED_FIXTURES = ("demo_project", "small_build", "hard_videos")
 
 
-def _uses_a_module_fixture(item) -> bool:
-    """A fixture of the project's (not pytest's) that lives longer than one test, other than the shared ones."""
+def _wide_fixtures(item) -> set[tuple[str, str]]:
+    """(where, name) of the project's (not pytest's) fixtures the test uses that live longer than one test."""
     info = getattr(item, "_fixtureinfo", None)
-    for name, defs in info.name2fixturedefs.items() if info else ():
-        if defs and defs[-1].scope != "function" and defs[-1].baseid and name not in SHARED_FIXTURES:
-            return True
-    return False
+    wide = set()
+    for name in info.names_closure if info else ():
+        defs = info.name2fixturedefs.get(name)
+        if defs and defs[-1].scope != "function" and defs[-1].baseid:
+            wide.add((defs[-1].baseid, name))
+    return wide
+
+
+def _merged(groups: list, wide: list) -> list:
+    """``groups`` with every two groups that use one fixture (``wide``: per test, its long-lived fixtures) made one,
+    named by a shared fixture where one is among them (a fixture used from two groups would be built in each)."""
+    parent: dict = {}
+
+    def root(group):
+        while parent.get(group, group) != group:
+            group = parent[group]
+        return group
+
+    def rank(group):
+        return SHARED_FIXTURES.index(group) if group in SHARED_FIXTURES else len(SHARED_FIXTURES)
+
+    first_group: dict = {}
+    for group, fixtures in zip(groups, wide, strict=True):
+        for fixture in fixtures:
+            a, b = root(first_group.setdefault(fixture, group)), root(group)
+            if a != b:
+                keep, drop = sorted((a, b), key=lambda g: (rank(g), g))
+                parent[drop] = keep
+    return [root(group) if group is not None else None for group in groups]
 
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook turns the xdist_group marks into the tests' groups
 def pytest_collection_modifyitems(config, items):
     """Tests that use a :data:`SLOW_FIXTURES` fixture are marked ``slow`` (besides those marked by hand); each
     test joins the xdist group of the first :data:`SHARED_FIXTURES` fixture it uses, else its file's when it uses
-    one of its file's module fixtures; groups are ordered shared first, then slow, then fast."""
-    keys, rank = [], {}
+    one of its file's module fixtures, groups that use one fixture merged (:func:`_merged`); groups are ordered
+    shared first, then slow, then fast."""
+    groups, wide = [], []
     for item in items:
         names = set(getattr(item, "fixturenames", ()))
         if SLOW_FIXTURES & names:
             item.add_marker(pytest.mark.slow)
+        fixtures = _wide_fixtures(item)
         group = next((f for f in SHARED_FIXTURES if f in names), None)
-        if group is None and _uses_a_module_fixture(item):
+        if group is None and any(name not in SHARED_FIXTURES for _, name in fixtures):
             group = item.path.name
+        groups.append(group)
+        wide.append(fixtures)
+    rank = {}
+    groups = _merged(groups, wide)
+    for item, group in zip(items, groups, strict=True):
         if group is not None:
             item.add_marker(pytest.mark.xdist_group(group))
-        key = group or item.nodeid
         slow = item.get_closest_marker("slow") is not None
         order = SHARED_FIXTURES.index(group) if group in SHARED_FIXTURES else 10 if slow else 20
-        rank[key] = min(rank.get(key, order), order)
-        keys.append(key)
-    order = {id(item): rank[key] for item, key in zip(items, keys, strict=True)}
+        rank[group or item.nodeid] = min(rank.get(group or item.nodeid, order), order)
+    order = {id(item): rank[group or item.nodeid] for item, group in zip(items, groups, strict=True)}
     items.sort(key=lambda item: order[id(item)])  # stable: a file's tests keep their order
 
 
@@ -127,7 +158,7 @@ def demo_project(tmp_path_factory):
 @pytest.fixture(scope="session")
 def small_build(tmp_path_factory):
     """One demo video, one variant, built (``workflow_run.small_project``): every rule in few jobs, the bytes the
-    cluster-profile and interrupted-run tests must reproduce. Tests copy it, never change it."""
+    cluster-profile and interrupted-run tests must reproduce from their own copies of the project. Never changed."""
     from workflow_run import run, small_project
 
     work = small_project(tmp_path_factory.mktemp("small_build"))

@@ -69,37 +69,65 @@ def demo_project():
 def seen(request):
     yield
     with open(os.path.join({out!r}, request.node.name), "w") as f:
-        f.write(os.environ["PYTEST_XDIST_WORKER"])
+        f.write(os.environ["PYTEST_XDIST_WORKER"] + " " + request.node.nodeid)
 """
+
+
+def _run_grouped(folder, files: dict):
+    """tests/conftest.py's hook under ``pytest -n 2 --dist loadgroup`` on test ``files`` in ``folder``: the process,
+    and per test the worker that ran it and its id as xdist saw it (``…@group`` when grouped)."""
+    import os
+    import subprocess
+    import sys
+
+    out = folder / "seen"
+    out.mkdir()
+    (folder / "conftest.py").write_text(GROUP_CONFTEST.format(conftest=str(ROOT / "tests/conftest.py"), out=str(out)))
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    env = {k: v for k, v in os.environ.items() if k != "PYTEST_ADDOPTS"}
+    proc = subprocess.run(
+        [sys.executable, "-m", "pytest", "-n", "2", "--dist", "loadgroup", "-p", "no:cacheprovider", "-q"]
+        + ["-c", "/dev/null", "--rootdir", str(folder), str(folder)],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    seen = {p.name: p.read_text().split(" ", 1) for p in out.iterdir()}
+    return proc, seen
 
 
 def test_the_tests_that_share_a_build_run_in_one_worker(tmp_path):
     """pytest.ini's ``--dist loadgroup`` with tests/conftest.py's groups, run for real: the tests of two files that use
-    ``demo_project`` run in one worker (one build),
-    as do a file's tests that use its module fixture; the others are spread. pytest 9.2 broke this silently
-    (pytest-dev/pytest-xdist#1386: every test ran alone and each worker built the demo)."""
-    import subprocess
-    import sys
-
-    out = tmp_path / "seen"
-    out.mkdir()
-    (tmp_path / "conftest.py").write_text(GROUP_CONFTEST.format(conftest=str(ROOT / "tests/conftest.py"), out=str(out)))
+    ``demo_project`` run in one worker (one build), as do a file's tests that use its module fixture; the others are
+    not grouped (spread one by one). pytest 9.2 broke this silently (pytest-dev/pytest-xdist#1386: every test ran
+    alone and each worker built the demo)."""
+    files = {}
     for name in ("a", "b"):
         tests = [f"def test_{name}_demo_{i}(demo_project, seen):\n    pass\n" for i in range(4)]
         tests += [f"def test_{name}_alone_{i}(seen):\n    pass\n" for i in range(4)]
-        (tmp_path / f"test_{name}.py").write_text("\n\n".join(tests))
+        files[f"test_{name}.py"] = "\n\n".join(tests)
     module = ["import pytest\n\n\n@pytest.fixture(scope='module')\ndef built():\n    return 1\n"]
     module += [f"def test_c_module_{i}(built, seen):\n    pass\n" for i in range(6)]
-    (tmp_path / "test_c.py").write_text("\n\n".join(module))
-    proc = subprocess.run(
-        [sys.executable, "-m", "pytest", "-n", "2", "--dist", "loadgroup", "-p", "no:cacheprovider", "-q"]
-        + ["-c", "/dev/null", "--rootdir", str(tmp_path), str(tmp_path)],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-    )
+    files["test_c.py"] = "\n\n".join(module)
+    proc, seen = _run_grouped(tmp_path, files)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    workers = {p.name: p.read_text() for p in out.iterdir()}
-    assert len(workers) == 22
-    assert len({w for name, w in workers.items() if "_demo_" in name}) == 1, workers
-    assert len({w for name, w in workers.items() if "_module_" in name}) == 1, workers
+    assert len(seen) == 22
+    assert len({worker for name, (worker, _) in seen.items() if "_demo_" in name}) == 1, seen
+    assert len({worker for name, (worker, _) in seen.items() if "_module_" in name}) == 1, seen
+    assert all(nodeid.endswith("@demo_project") for name, (_, nodeid) in seen.items() if "_demo_" in name), seen
+    assert not any("@" in nodeid for name, (_, nodeid) in seen.items() if "_alone_" in name), seen
+
+
+def test_a_module_fixture_used_inside_and_outside_a_shared_group_is_built_in_one_worker(tmp_path):
+    """A file's module fixture that one test uses beside ``demo_project``: all its tests join the demo's group
+    (else it would be built in two workers)."""
+    text = "import pytest\n\n\n@pytest.fixture(scope='module')\ndef built():\n    return 1\n\n\n"
+    tests = [f"def test_d_{i}(built, seen{', demo_project' if i == 0 else ''}):\n    pass\n" for i in range(6)]
+    text += "\n\n".join(tests)
+    proc, seen = _run_grouped(tmp_path, {"test_d.py": text})
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert len(seen) == 6 and len({worker for worker, _ in seen.values()}) == 1, seen
+    assert all(nodeid.endswith("@demo_project") for _, nodeid in seen.values()), seen

@@ -172,10 +172,10 @@ def _kill_mid_run(work: Path, sig: int, after: str, options=(), delay_s: float =
 
 
 def test_an_interrupted_then_killed_run_resumes_to_the_same_bytes(tmp_path, small_build):
-    """Ctrl-C (SIGINT) mid-build, while the video is tracked (a job caught between writing its outputs and
-    Snakemake marking them complete leaves them incomplete), then the rerun Snakemake asks for
-    (--rerun-incomplete) is itself killed once the angles are written (SIGKILL: no clean-up, the lock left):
-    unlocked and rerun, the results are the clean build's bytes. One build carries both interruptions."""
+    """Ctrl-C (SIGINT) mid-build, a second into tracking (the job stopped, its outputs unfinished), then the
+    rerun with --rerun-incomplete killed the moment the angles appear (SIGKILL: no clean-up, the lock left, the
+    angles job caught between writing its outputs and Snakemake marking them complete): unlocked and rerun,
+    the results are the clean build's bytes. One build carries both interruptions."""
     work = small_project(tmp_path / "p")
     # Snakemake's log handler drops a KeyboardInterrupt that arrives while it writes (a job's end): the Ctrl-C
     # comes a second into the tracking job, while Snakemake waits
