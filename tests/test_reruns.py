@@ -168,13 +168,20 @@ def _kill_mid_run(work: Path, sig: int, after: str, options=(), delay_s: float =
         f"the build ended (exit {proc.returncode}) before it could be interrupted:\n" + output.read_text()[-3000:]
     )
     os.killpg(proc.pid, sig)
-    for _ in range(10):  # a Ctrl-C that comes while Snakemake logs (another job's end) is dropped: pressed again
+    # Snakemake may drop a Ctrl-C: its log handler swallows a KeyboardInterrupt that comes while it logs, and under
+    # load whole runs ignored ten of them (CI at 208fd1b). Pressed again while it has not said it is stopping; if
+    # it never does within 5 s, the build is killed instead (what a user does next), so the resume is still tested.
+    for _ in range(4):
         try:
-            proc.wait(timeout=1.5)
+            proc.wait(timeout=1.25)
             break
         except subprocess.TimeoutExpired:
             if "Terminating processes on user request" not in output.read_text():
                 os.killpg(proc.pid, sig)
+    else:
+        if "Terminating processes on user request" not in output.read_text():
+            print(f"Snakemake ignored the {signal.Signals(sig).name}s: killed")
+            os.killpg(proc.pid, signal.SIGKILL)
     proc.wait(timeout=120)
 
 
@@ -184,8 +191,7 @@ def test_an_interrupted_then_killed_run_resumes_to_the_same_bytes(tmp_path, smal
     angles job caught between writing its outputs and Snakemake marking them complete): unlocked and rerun,
     the results are the clean build's bytes. One build carries both interruptions."""
     work = small_project(tmp_path / "p")
-    # Snakemake's log handler drops a KeyboardInterrupt that arrives while it writes (a job's end): the Ctrl-C
-    # comes a second into the tracking job, and again while Snakemake has not said it is stopping
+    # the Ctrl-C comes a second into the tracking job (not as an output appears: Snakemake is logging then)
     _kill_mid_run(work, signal.SIGINT, after="logs/tracks/demo_p20.log", delay_s=1.0)
     assert not (work / "results/angles/demo_p20.json").exists()  # the interruption came mid-build
     _kill_mid_run(work, signal.SIGKILL, after="results/angles/demo_p20.json", options=["--rerun-incomplete"])
