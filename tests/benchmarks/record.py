@@ -360,28 +360,19 @@ def full_suite(folder: Path) -> dict:
     (clone / ".venv").symlink_to(ROOT / ".venv")
     if (ROOT.parent / "shared").is_dir():
         (folder / "shared").symlink_to(ROOT.parent / "shared")
-    started = time.perf_counter()
-    proc = subprocess.run(
-        [str(clone / ".venv" / "bin" / "python"), "-m", "pytest", "-q", "-p", "no:cacheprovider"],
-        cwd=clone,
-        capture_output=True,
-        text=True,
-        env={**os.environ, "CI": "true"},
-    )
-    wall = time.perf_counter() - started
-    summary = (proc.stdout.strip().splitlines() or ["?"])[-1]
-    return {"wall_s": wall, "summary": summary.strip("= "), "returncode": proc.returncode}
+    return timed_pytest([str(clone / ".venv" / "bin" / "python")], clone, {**os.environ, "CI": "true"})
 
 
 def fast_tier() -> dict:
     """Wall time of the README's fast test tier (`pytest -m "not slow"`) in the repository."""
+    return timed_pytest([sys.executable], ROOT, None, "-m", "not slow")
+
+
+def timed_pytest(python: list, cwd: Path, env, *args) -> dict:
+    """Wall time, last summary line and exit code of ``python -m pytest -q`` with ``args`` in ``cwd``."""
     started = time.perf_counter()
-    proc = subprocess.run(
-        [sys.executable, "-m", "pytest", "-m", "not slow", "-q", "-p", "no:cacheprovider"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-    )
+    command = [*python, "-m", "pytest", *args, "-q", "-p", "no:cacheprovider"]
+    proc = subprocess.run(command, cwd=cwd, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - started
     summary = (proc.stdout.strip().splitlines() or ["?"])[-1]
     return {"wall_s": wall, "summary": summary.strip("= "), "returncode": proc.returncode}
@@ -841,7 +832,7 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="smaller and fewer runs, for development")
     parser.add_argument("--repeats", type=int, help="throughput repeats (default 3; --quick 1)")
     parser.add_argument(
-        "--full-suite", action="store_true", help="also time the full test suite on a fresh clone (~13 min more)"
+        "--full-suite", action="store_true", help="also time the full test suite on a fresh clone (~12 min more)"
     )
     parser.add_argument(
         "--compare",
