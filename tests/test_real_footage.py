@@ -131,18 +131,19 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
 # turning points flagged) and the body was not tried. With the swing leaving the frame at one end, the body was
 # refused (its size learnt from the first frame, where it is cut by the border) and the vertical was estimated
 # from turning points that were where the body left the frame (1.4° off). Before a soft dark band on the wall
-# (a shelf's shadow the swing crosses), the body was usable in 93.8 % of the frames: its contrast there fell to a
-# third and its silhouette broke up. The apple made a two-tone ball (its upper
+# (a shelf's shadow the swing crosses), the body's silhouette broke up where its contrast fell to a third (the
+# body is now found again above a quarter of its own contrast there). The apple made a two-tone ball (its upper
 # half bright and patterned) before that band was refused ("the body covers the same place in most frames"):
 # its silhouette, smaller in the band, was taken for a scene that holds the body. Until 2026-11-27 (session 11)
-# these two variants darkened the apple's lighter parts with the wall (its share of apple was 0.70–1.0 inside it):
-# easier than the scene they stand for, where the body before the band stays lit; lit, its lighter parts come
-# within a few grey levels of the band's wall and their frames are flagged (93.3 % and 93.7 % ok, the flagged
-# positions 1.9 and 2.6 px off): below the 95 % issue 23 asks of a held-out clip. The bars are what is measured,
-# less a margin, so that a change that loses more frames fails here.
+# these two variants darkened the apple's lighter parts with the wall (its share of apple was 0.70–1.0 inside it),
+# and the two-tone ball was painted over the banded frames (its halves split where the band had moved the apple's
+# centroid): easier, and other, than the scenes they stand for. With the body before the band lit, the apple's
+# lighter parts come within 12 grey levels of the band's wall and those frames are flagged (93.3 % ok, the flagged
+# positions 1.9 px off): below the 95 % issue 23 asks of a held-out clip. The bars are what is measured, less a
+# margin, so that a change that loses frames fails here.
 REAL_VARIANTS = {
     "shadow_band": (92.5, 0.0),
-    "two_tone_shadow_band": (92.5, 0.0),
+    "two_tone_shadow_band": (98.5, 0.0),
     "upside_down": (99.0, 180.0),
     "sideways": (99.0, -90.0),
     "15fps": (99.0, 0.0),
@@ -153,7 +154,7 @@ REAL_VARIANTS = {
 @pytest.mark.parametrize("variant", sorted(REAL_VARIANTS))
 def test_the_apple_filmed_other_ways(variant, tmp_path):
     """The same period (within 0.3 %) and record noise (≤ 0.03°) as the clip itself; the frames with the body partly
-    out of view flagged ``edge``; the vertical found, or said not to be found. 27 of the study's 31 variants pass."""
+    out of view flagged ``edge``; the vertical found, or said not to be found. 29 of the study's 31 variants pass."""
     if not APPLE.is_file():
         pytest.skip(f"{APPLE} not found (../shared beside the project)")
     import sys

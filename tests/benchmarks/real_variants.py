@@ -16,8 +16,8 @@ frames ``ok`` (and ``edge``), the vertical found, the angle record's period from
 against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
 The variants are real footage transformed, not renders: what they change is known exactly, and the rest
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
-Measured 2026-11-27 (session 11): 27 of 31 pass (not the post in front, nor the three before a shadow band:
-93.3 %, 93.7 % and 90.7 % of frames ok, below 95 %; docs/footage.md).
+Measured 2026-11-27 (session 11): 29 of 31 pass (not the post in front, nor the apple before a shadow band: 93.3 %
+of frames ok, below 95 %; docs/footage.md).
 """
 
 from __future__ import annotations
@@ -201,17 +201,19 @@ def _glossy(frames: list) -> list:
     return out
 
 
-def _two_tone(frames: list, lit=None) -> list:
-    """The apple as a two-tone ball: its upper half bright and patterned (the lit wall's grey +10 %, 6 px
-    squares ±25 grey levels), its lower half its own dark red; the halves split at its centre's height."""
+def _two_tone(frames: list, behind: list | None = None) -> list:
+    """The apple as a two-tone ball: its upper half bright and patterned (the wall's grey +10 %, 6 px squares ±25
+    grey levels), its lower half its own dark red; the halves split at its centre's height. Painted over
+    ``behind`` (the same frames with the wall changed, e.g. a shadow band) when given, the ball's place and share
+    of each pixel still taken from ``frames``, lit as before the change."""
     wall = _wall(frames)
-    lit = wall if lit is None else lit
     out = []
-    for image, apple, xs, ys, cx, cy in _apples(frames, wall):
+    for k, (image, apple, xs, ys, cx, cy) in enumerate(_apples(frames, wall)):
         squares = 25.0 * np.where(((xs - cx) // 6 + (ys - cy) // 6) % 2 == 0, 1.0, -1.0)
         top = np.clip((ys - cy) / -2.0 + 0.5, 0.0, 1.0) * apple  # a 2 px soft seam
-        bright = np.minimum(1.1 * lit + squares, 255.0)
-        out.append(np.clip(image * (1 - top) + bright * top, 0, 255).astype(np.uint8))
+        bright = np.minimum(1.1 * wall + squares, 255.0)
+        base = image if behind is None else behind[k]
+        out.append(np.clip(base * (1 - top) + bright * top, 0, 255).astype(np.uint8))
     return out
 
 
@@ -293,9 +295,8 @@ def make(name: str, workdir: Path) -> Path:
         frames = [np.clip(image * _band(image.shape), 0, 255).astype(np.uint8) for image in frames]
     if name == "two_tone":
         frames = _two_tone(frames)
-    if name.startswith("two_tone_shadow_band"):  # the band on the wall, then the ball's bright half lit as outside it
-        lit = _wall(frames)
-        frames = _two_tone(_shadow_band(frames), lit)
+    if name.startswith("two_tone_shadow_band"):  # the band on the wall, the ball before it lit as outside it
+        frames = _two_tone(frames, _shadow_band(frames))
     if name == "glossy":
         frames = _glossy(frames)
     if name.endswith("_1080p"):
