@@ -315,11 +315,16 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     return RenderedTrial(frames[n_lead:], truth, frames[:n_lead])
 
 
-def write_video(frames: list, path: Path, fps: float, crf: int, preset: str, lead_frames: list = ()) -> None:
-    """Encode grey frames as H.264 (yuv420p) in MP4, deterministically (one encoder thread).
+def write_video(
+    frames: list, path: Path, fps: float, crf: int, preset: str, lead_frames: list = (), plain_c: bool = False
+) -> None:
+    """Encode grey frames as H.264 (yuv420p) in MP4 (one encoder thread).
 
     ``lead_frames`` (a trimmed clip): encoded before ``frames`` with negative timestamps, so the
     file holds their packets but its edit list starts at ``frames[0]`` and decoders discard them.
+    ``plain_c``: x264 without its assembly (``no-asm``), about 3.5× slower. With its assembly the same
+    960×540 frames were seen to give different bytes from run to run (4 outcomes in 12 encodes, 2026-11-27;
+    the demo's 1280×720 frames always the same bytes); without it, the same bytes every time.
     """
     from fractions import Fraction
 
@@ -334,6 +339,8 @@ def write_video(frames: list, path: Path, fps: float, crf: int, preset: str, lea
         stream.pix_fmt = "yuv420p"
         keyint = str(max(1, int(round(2 * fps))))  # a key frame every 2 s, as cameras do
         stream.options = {"crf": str(crf), "preset": preset, "threads": "1", "g": keyint}
+        if plain_c:
+            stream.options = {**stream.options, "x264-params": "no-asm=1"}
         rate = Fraction(fps).limit_denominator(1001)
         for i, img in enumerate([*lead_frames, *frames]):
             vf = av.VideoFrame.from_ndarray(img, format="gray")
