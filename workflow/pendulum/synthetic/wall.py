@@ -66,6 +66,7 @@ class Wall:
     band_width_px: float = 40.0  # Gaussian σ of the band
     band_angle_deg: float = 10.0
     vignette: float = 8.0  # the frame's centre this much brighter than its sides
+    grain: float = 0.0  # a patterned wall's fine texture (wood, tiles, a print): its grey SD, ~4 px grain
     shadows: tuple = ((27.0, 58.0), (75.0, 58.0))  # offsets (px) of soft shadows that follow the body
     shadow_depth: float = 12.0
     shadow_blur_px: float = 8.0
@@ -93,6 +94,9 @@ def _wall_image(spec: TrialSpec, wall: Wall) -> np.ndarray:
     img = wall.level + wall.gradient * (yy / h - 0.5) + wall.vignette * (1 - 4 * (xx / w - 0.5) ** 2)
     small = rng.standard_normal((h // 80 + 2, w // 80 + 2)).astype(np.float32)
     img += 1.0 * cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)  # paint's unevenness
+    if wall.grain:
+        fine = cv2.resize(rng.standard_normal((h // 4 + 2, w // 4 + 2)).astype(np.float32), (w, h))
+        img += wall.grain * fine / float(fine.std())
     if wall.band_depth:
         a = math.radians(wall.band_angle_deg)
         u = yy * math.cos(a) - xx * math.sin(a) - wall.band_y_px

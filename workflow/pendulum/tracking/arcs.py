@@ -122,6 +122,7 @@ def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclud
             continue
         weights = blobs.s[cand] / blobs.s[cand].sum()
         best = None
+        tried = []
         for _ in range(iterations):
             pick = rng.choice(cand, size=3, replace=False, p=weights)
             if np.unique(blobs.sample[pick]).size < 3:
@@ -139,8 +140,10 @@ def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclud
             tol = max(1.5 * scale, 0.35 * radius)
             idx = arc_inliers(blobs, cand, circle[0], circle[1], circle[2], radius, tol)
             score = blobs.s[idx].sum()
-            if best is None or score > best[0]:
-                best = (score, circle, radius, tol)
+            tried.append((score, circle, radius, tol))
+        if not tried:
+            continue
+        best = _most_continuous(blobs, cand, tried, scale)
         if best is None:
             continue
         score, (cx, cy, arm), radius, tol = best
@@ -158,6 +161,35 @@ def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclud
             continue
         tracks.append(arc_track(blobs, idx, sign, (cx, cy, arm), scale, radius))
     return tracks
+
+
+def _most_continuous(blobs: Blobs, cand: np.ndarray, tried: list, scale: int, n_best: int = 12):
+    """Of RANSAC's circles, the one whose inliers one object can have visited in turn hold the most
+    response (:func:`continuous_members`), among the ``n_best`` circles of most response with distinct
+    inliers.
+
+    A circle that crosses two objects' paths (two pendulums side by side, each sample's blob taken from
+    whichever is on it there) can gather more inliers than either path's own circle; its members jump
+    from one object to the other, and only one object's piece counts.
+    """
+    tried.sort(key=lambda c: -c[0])
+    seen: list[set] = []
+    best = None
+    for score, circle, radius, tol in tried[: 8 * n_best]:
+        idx = arc_inliers(blobs, cand, *circle, radius, tol)
+        members = set(idx.tolist())
+        if idx.size < 5 or any(len(members & s) >= 0.8 * len(members | s) for s in seen):
+            continue  # another of the same blobs (an arc is found by many triples)
+        seen.append(members)
+        if len(seen) > n_best:
+            break
+        kept, _ = continuous_members(
+            blobs, arc_track(blobs, idx, int(blobs.sign[idx[0]]), circle, scale, radius), scale
+        )
+        held = float(blobs.s[kept].sum())
+        if best is None or held > best[0]:
+            best = (held, score, circle, radius, tol)
+    return None if best is None else best[1:]
 
 
 def arc_track(blobs: Blobs, idx: np.ndarray, sign: int, circle, scale: int, radius: float | None = None) -> ArcTrack:

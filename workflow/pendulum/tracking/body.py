@@ -54,13 +54,12 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import cv2
 import numpy as np
 import pandas as pd
-from scipy.ndimage import median_filter
 
 from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.body_scene import (
@@ -78,8 +77,10 @@ from pendulum.tracking.body_scene import (
     same_exposure,
     sample_clip,
     silhouette_fraction,
+    unseen,
+    unseen_behind,
 )
-from pendulum.tracking.checks import flag_jumps
+from pendulum.tracking.checks import flag_jumps, robust_outliers
 from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.settings import TrackerSettings
 
@@ -98,6 +99,7 @@ MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.
 CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
 REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body that holds its place is refused
 MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
+UNSEEN_FILL_SHARE = 0.8 * CONTRAST_FRACTION  # a scene filled in behind the body: off by less than the silhouette cut
 
 
 class BodyError(VideoError):
@@ -120,6 +122,7 @@ class BodyScene:
     rest_place_clear: bool | None = None  # the ends' scene is the median's at the rest place (None: not taken)
     polarity: str = "both"  # measured by |I − B| ("both"), −(I − B) ("dark") or I − B ("bright")
     one_sided: str | None = None  # the side of the scene the body lies on (body_polarity; None: not taken)
+    unseen: np.ndarray | None = field(default=None, repr=False, compare=False)  # pixels no sample shows clear
 
     def to_dict(self) -> dict:
         return {
@@ -280,6 +283,7 @@ def find_body(
         size = (first_pass.shape[1], first_pass.shape[0])
         excluded = np.stack([cv2.resize(e.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 for e in excluded])
     background = masked_median(stack, excluded, first_pass) if excluded.any() else first_pass
+    hidden = unseen(excluded) if excluded.any() else np.zeros(background.shape, bool)
     median_scene = background
     if track is not None:
         frames = [frame for frame, _ in samples]
@@ -328,6 +332,7 @@ def find_body(
         contrast_grey=whole.contrast,
         moving_samples=moving,
         n_samples=len(images),
+        unseen=hidden,
         silhouette_fraction=whole.fraction,
         polarity=polarity,
         # only for a scene from the swing's ends (what track_body retries with): the vote above a quarter of the
@@ -389,19 +394,6 @@ def _touches_border(component: np.ndarray) -> bool:
 def _centre(component: np.ndarray) -> tuple[float, float]:
     ys, xs = np.nonzero(component)
     return float(xs.mean()), float(ys.mean())
-
-
-def _robust_outliers(values: np.ndarray, usable: np.ndarray, window: int, sigmas: float, floor: float) -> np.ndarray:
-    """Samples that depart from their running median by more than ``sigmas`` robust σ of the series and ``floor``."""
-    out = np.zeros(values.size, bool)
-    if usable.sum() < 10:
-        return out
-    idx = np.flatnonzero(usable)
-    filled = np.interp(np.arange(values.size), idx, values[idx])
-    running = median_filter(filled, size=window, mode="nearest")
-    dev = values - running
-    spread = 1.4826 * np.median(np.abs(dev[usable]))
-    return usable & (np.abs(dev) > max(sigmas * spread, floor))
 
 
 def track_body(
@@ -479,10 +471,10 @@ def track_body(
     reference = float(np.median(mass[usable])) if usable.any() else 1.0
     table["quality"] = table["signal_ratio"] = np.where(np.isfinite(x), mass / reference, 0.0)
     window = max(5, int(round(len(table) / max(table.time_s.iloc[-1], 1e-9))) | 1)  # about one second
-    area_fault = _robust_outliers(mass / reference, usable, window, AREA_SIGMAS, MIN_AREA_CHANGE)
+    area_fault = robust_outliers(mass / reference, usable, window, AREA_SIGMAS, MIN_AREA_CHANGE)
     bxy = np.asarray(binary, float)
     disagreement = np.hypot(x - bxy[:, 0], y - bxy[:, 1])
-    centroid_fault = _robust_outliers(
+    centroid_fault = robust_outliers(
         disagreement,
         usable & np.isfinite(disagreement),
         window,
@@ -498,6 +490,16 @@ def track_body(
     n_ok = int(counts.get("ok", 0))
     table.attrs["video"] = report
     table.attrs["body"] = scene.to_dict()
+    fill_limit = max(3 * scene.noise_grey, UNSEEN_FILL_SHARE * contrast)
+    unseen_facts, refusal = (
+        unseen_behind(background, scene.unseen, np.column_stack([x, y])[usable], scene.radius_px, fill_limit)
+        if scene.unseen is not None
+        else ([], None)
+    )
+    if unseen_facts:
+        table.attrs["body"]["unseen_scene"] = unseen_facts
+    if refusal:
+        raise BodyError(f"{path}: {refusal}")
     if rest_place_from:  # earlier scenes held the body (their tracks' mid-swing area ratios)
         table.attrs["body"]["scene_from_swing_ends"] = {"earlier_mid_swing_area_ratios": list(rest_place_from)}
     table.attrs["marker"] = None

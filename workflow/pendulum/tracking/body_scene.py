@@ -100,7 +100,7 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
             continue
         moving += 1
         heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]]
-        excluded[k] = cv2.dilate(np.isin(labels, heavy).astype(np.uint8), grow) > 0
+        excluded[k] = cv2.dilate(_hulls(labels, heavy), grow) > 0
         a = order[0]
         areas.append(stats[a, cv2.CC_STAT_AREA])
         if len(order) > 1 and masses[order[1]] >= TWO_OBJECTS_MASS_RATIO * masses[a]:
@@ -113,6 +113,17 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
     typical = float(np.median(areas)) if areas else 0.0
     seen = [(p, q) for area, p, q in pairs if area >= typical / 3]
     return excluded, moving, len(seen), seen
+
+
+def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:
+    """The convex hulls of the ``chosen`` components (uint8 mask). Where the scene still holds part of the
+    body (where it dwells over half the samples), its pixels there do not differ: a bite or a hole in its
+    component, which the hull covers, so that the next scene leaves that sample out there too."""
+    mask = np.zeros(labels.shape, np.uint8)
+    for i in chosen:
+        points = cv2.findNonZero((labels == i).astype(np.uint8))
+        cv2.fillConvexPoly(mask, cv2.convexHull(points), 1)
+    return mask
 
 
 def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray) -> np.ndarray:
@@ -129,7 +140,84 @@ def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray)
         second = 0.5 * (lower + upper)
         enough = valid >= max(5, len(stack) // 10)
         background[union] = np.where(enough, second, fallback[union])
+        hidden = np.zeros(background.shape, bool)
+        hidden[union] = ~enough
+        if hidden.any():  # never seen clear (a body there, or a ghost of it, in nearly every sample): its surroundings
+            background = fill(background, hidden)
     return background
+
+
+def unseen(excluded: np.ndarray) -> np.ndarray:
+    """The pixels no sample shows clear: a moving object there in all but fewer than max(5, n/10) of the n samples
+    (:func:`masked_median` fills them from their surroundings)."""
+    n = len(excluded)
+    return excluded.any(axis=0) & (n - excluded.sum(axis=0) < max(5, n // 10))
+
+
+def fill(scene: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """``scene`` with the ``mask`` pixels filled from their surroundings (Telea's inpainting, 3 px)."""
+    return cv2.inpaint(scene.astype(np.float32), mask.astype(np.uint8), 3, cv2.INPAINT_TELEA)
+
+
+def unseen_regions(scene: np.ndarray, hidden: np.ndarray, avoid: np.ndarray) -> list[tuple[float, float, int, float]]:
+    """Per connected region of ``hidden``: its centre x, y, area (px) and how far off its fill (:func:`fill`) is
+    likely to be (grey levels): the region moved aside by its own size (left, right, up, down; onto pixels
+    outside ``avoid``, the scene's filled ones, in the frame), filled the same way and compared with the scene it
+    covers: the 90th percentile of |filled − scene|, the median over the directions (one may land on a rod or a
+    second pendulum; NaN where it fits nowhere). A plain wall or a smooth gradient fills to within the noise; a
+    patterned one does not."""
+    n, labels, stats, centres = cv2.connectedComponentsWithStats(hidden.astype(np.uint8), connectivity=8)
+    h, w = scene.shape
+    regions = []
+    for i in range(1, n):
+        x0, y0, bw, bh, area = (int(v) for v in stats[i])
+        errors = []
+        for dx, dy in ((-bw - 4, 0), (bw + 4, 0), (0, -bh - 4), (0, bh + 4)):
+            if not (0 <= x0 + dx and x0 + bw + dx <= w and 0 <= y0 + dy and y0 + bh + dy <= h):
+                continue
+            # a crop around the region and its moved copy (the fill reaches 3 px beyond them)
+            cx0, cy0 = max(min(x0, x0 + dx) - 8, 0), max(min(y0, y0 + dy) - 8, 0)
+            cx1, cy1 = min(max(x0, x0 + dx) + bw + 8, w), min(max(y0, y0 + dy) + bh + 8, h)
+            moved = np.zeros((cy1 - cy0, cx1 - cx0), bool)
+            own = labels[y0 : y0 + bh, x0 : x0 + bw] == i
+            moved[y0 + dy - cy0 : y0 + dy - cy0 + bh, x0 + dx - cx0 : x0 + dx - cx0 + bw] = own
+            filled_already = avoid[cy0:cy1, cx0:cx1]
+            if (moved & filled_already).any():
+                continue
+            crop = scene[cy0:cy1, cx0:cx1]
+            errors.append(np.abs(fill(crop, moved | filled_already)[moved] - crop[moved]))
+        error = float(np.median([np.percentile(e, 90) for e in errors])) if errors else math.nan
+        regions.append((float(centres[i][0]), float(centres[i][1]), area, error))
+    return regions
+
+
+def unseen_behind(scene: np.ndarray, hidden: np.ndarray, xy: np.ndarray, radius_px: float, threshold_grey: float):
+    """The scene's filled pixels (``hidden``, :func:`unseen`) that the body covers on its path (within
+    ``radius_px`` of a position in ``xy``), where they are at least 2 % of its area (a rod's place, another
+    pendulum's, do not count), per region (:func:`unseen_regions`) as facts; and a reason to refuse when one's
+    fill is likely off by more than ``threshold_grey`` (or cannot be checked), else None."""
+    covered = np.zeros(hidden.shape, np.uint8)
+    for x, y in xy[np.all(np.isfinite(xy), axis=1)]:
+        cv2.circle(covered, (int(round(x)), int(round(y))), int(math.ceil(radius_px)), 1, -1)
+    behind = hidden & (covered > 0)
+    if behind.sum() < 0.02 * math.pi * radius_px**2:
+        return [], None
+    facts, reason = [], None
+    for x, y, area, error in unseen_regions(scene, behind, hidden):
+        facts.append({"at_px": [round(x, 1), round(y, 1)], "area_px": area, "fill_error_grey": round(error, 2)})
+        if reason is None and area >= 0.02 * math.pi * radius_px**2 and not error <= threshold_grey:
+            why = (
+                f"a fill there is likely {error:.0f} grey levels off, above {threshold_grey:.0f}"
+                if math.isfinite(error)
+                else "too near the frame's border to check a fill"
+            )
+            reason = (
+                f"the scene behind the body near ({x:.0f}, {y:.0f}) px ({area} px) is in no sampled frame (the body "
+                "covers it in nearly all: a swing narrower than about its width), and the wall around it is not plain "
+                f"enough to fill it in ({why}): its positions would be biased; film a wider swing, or give start_px at "
+                "a marker dot on it"
+            )
+    return facts, reason
 
 
 def rest_place_scene(frames, images, background, track, radius_px: float, threshold: float) -> tuple[np.ndarray, bool]:

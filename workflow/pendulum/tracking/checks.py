@@ -1,5 +1,5 @@
 """What a finished track's motion tells: the exposure time from the streaks, the position at the frame
-time, and isolated jumps.
+time, isolated jumps, and samples that leave their running median.
 
 The exposure's centroid is the mean position over the shutter-open time τ (in frame intervals),
 x̄ = x(t) + ẍ τ²/24 + O(τ⁴); a jump is a position farther from a cubic through its eight
@@ -12,7 +12,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d
+from scipy.ndimage import maximum_filter1d, median_filter
 
 if TYPE_CHECKING:
     from pendulum.tracking.settings import TrackerSettings
@@ -121,3 +121,16 @@ def flag_jumps(x: np.ndarray, y: np.ndarray, usable: np.ndarray, settings: Track
         local_max = over & (padded >= maximum_filter1d(padded, window, mode="constant"))
         jumps |= local_max
     return jumps
+
+
+def robust_outliers(values: np.ndarray, usable: np.ndarray, window: int, sigmas: float, floor: float) -> np.ndarray:
+    """Samples that depart from their running median by more than ``sigmas`` robust σ of the series and ``floor``."""
+    out = np.zeros(values.size, bool)
+    if usable.sum() < 10:
+        return out
+    idx = np.flatnonzero(usable)
+    filled = np.interp(np.arange(values.size), idx, values[idx])
+    running = median_filter(filled, size=window, mode="nearest")
+    dev = values - running
+    spread = 1.4826 * np.median(np.abs(dev[usable]))
+    return usable & (np.abs(dev) > max(sigmas * spread, floor))
