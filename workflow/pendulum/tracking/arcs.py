@@ -112,7 +112,8 @@ def moves(angles: np.ndarray, noise: float) -> tuple[int, float]:
 
 
 def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclude=None, iterations: int = 1500):
-    """Best arc track per sign (RANSAC), then refit; tracks that move back and forth only."""
+    """Best arc track per sign (RANSAC; of its circles the one one object can have followed:
+    :func:`_most_continuous`), then refit; tracks that move back and forth only."""
     h, w = shape
     max_arm = 2.0 * math.hypot(h, w)
     tracks = []
@@ -140,7 +141,7 @@ def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclud
             tol = max(1.5 * scale, 0.35 * radius)
             idx = arc_inliers(blobs, cand, circle[0], circle[1], circle[2], radius, tol)
             score = blobs.s[idx].sum()
-            tried.append((score, circle, radius, tol))
+            tried.append((score, circle, radius, tol, idx))
         if not tried:
             continue
         best = _most_continuous(blobs, cand, tried, scale)
@@ -175,8 +176,7 @@ def _most_continuous(blobs: Blobs, cand: np.ndarray, tried: list, scale: int, n_
     tried.sort(key=lambda c: -c[0])
     seen: list[set] = []
     best = None
-    for score, circle, radius, tol in tried[: 8 * n_best]:
-        idx = arc_inliers(blobs, cand, *circle, radius, tol)
+    for score, circle, radius, tol, idx in tried:
         members = set(idx.tolist())
         if idx.size < 5 or any(len(members & s) >= 0.8 * len(members | s) for s in seen):
             continue  # another of the same blobs (an arc is found by many triples)
@@ -187,8 +187,8 @@ def _most_continuous(blobs: Blobs, cand: np.ndarray, tried: list, scale: int, n_
             blobs, arc_track(blobs, idx, int(blobs.sign[idx[0]]), circle, scale, radius), scale
         )
         held = float(blobs.s[kept].sum())
-        if best is None or held > best[0]:
-            best = (held, score, circle, radius, tol)
+        if best is None or (held, held / score) > best[0]:  # on a tie, the one that jumps less
+            best = ((held, held / score), score, circle, radius, tol)
     return None if best is None else best[1:]
 
 

@@ -5,9 +5,10 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
 
 1. **Scene.** ≤ 2 × :data:`SCENE_SAMPLES` frames spread over the clip, each brought to one exposure
    (gain and offset against their median: auto-exposure drift), and their per-pixel median; then
-   again, up to :data:`SCENE_PASSES` times, with each sample's moving pixels left out (a body seen
-   over many samples is only partly seen moving at first). Static shadows, wall gradients and
-   stripes are part of the scene; the frame-to-scene noise σ is the MAD of I − B.
+   again, up to :data:`SCENE_PASSES` times, with each sample's moving objects (by their hulls) left out;
+   pixels almost no sample shows clear (a swing narrower than the body) filled from around them, refused
+   where that fill is likely off by :data:`UNSEEN_FILL_SHARE` of C (``unseen_scene`` in the facts).
+   Static shadows, wall gradients and stripes are part of the scene; σ is the MAD of I − B.
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
    window's median offset, which follows slow exposure drift) above T = max(5σ, ¼ C), C the body's
    contrast, closed by a disk of about half the body's inner radius (a print's dark patches are one
@@ -66,8 +67,10 @@ from pendulum.tracking.body_scene import (
     MIN_BODY_AREA_PX,
     STRONG_FRACTION,
     body_polarity,
+    centre_of,
     close_size,
     components,
+    filled_warning,
     masked_median,
     moving_objects,
     noise_sigma,
@@ -77,6 +80,7 @@ from pendulum.tracking.body_scene import (
     same_exposure,
     sample_clip,
     silhouette_fraction,
+    touches_border,
     unseen,
     unseen_behind,
 )
@@ -99,6 +103,7 @@ MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.
 CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
 REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body that holds its place is refused
 MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
+FILLED_CLEAN_RATIO = 0.97  # mid_swing_area_ratio of a clean scene: 0.96–1.02; beyond, with a fill behind: a warning
 UNSEEN_FILL_SHARE = 0.8 * CONTRAST_FRACTION  # a scene filled in behind the body: off by less than the silhouette cut
 
 
@@ -287,7 +292,7 @@ def find_body(
     median_scene = background
     if track is not None:
         frames = [frame for frame, _ in samples]
-        background, ends_clear = rest_place_scene(frames, images, background, track, radius_px, threshold)
+        background, ends_clear = rest_place_scene(frames, images, background, track, radius_px, threshold, hidden)
     if moving < max(3, len(images) // 4):
         raise BodyError(
             f"{path}: nothing moves against the static scene in {len(images) - moving} of {len(images)} sampled "
@@ -308,10 +313,10 @@ def find_body(
     def measured(polarity: str) -> tuple[_Seen | None, _Seen | None]:
         first = _body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near)
         whole = first
-        if first is not None and first.component is not None and _touches_border(first.component) and near is None:
+        if first is not None and first.component is not None and touches_border(first.component) and near is None:
             for image in images[1:]:
                 seen = _body_measure(one_sided(image - background, polarity), threshold, close_px, None)
-                if seen is not None and seen.component is not None and not _touches_border(seen.component):
+                if seen is not None and seen.component is not None and not touches_border(seen.component):
                     return first, seen
         return first, whole
 
@@ -377,23 +382,13 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
     component = component if strong is None else strong
     inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
     close_px = max(close_px, _body_close_size(inner))
-    opened, _ = _body_in(diff, threshold, _open_size(inner), close_px, near=near or _centre(component))
+    opened, _ = _body_in(diff, threshold, _open_size(inner), close_px, near=near or centre_of(component))
     if opened is None:
         return _Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
     fraction = silhouette_fraction(diff[opened])
     x, y, _, _, _ = _soft_centroid(diff, opened, fraction)
     return _Seen(x, y, contrast, fraction, opened, inner)
-
-
-def _touches_border(component: np.ndarray) -> bool:
-    """Whether a body's pixels reach the frame's outermost rows or columns (part of it out of view)."""
-    return bool(component[0].any() or component[-1].any() or component[:, 0].any() or component[:, -1].any())
-
-
-def _centre(component: np.ndarray) -> tuple[float, float]:
-    ys, xs = np.nonzero(component)
-    return float(xs.mean()), float(ys.mean())
 
 
 def track_body(
@@ -546,4 +541,6 @@ def track_body(
             "(a swing narrower than about twice the body's width), so the scene behind it is never seen clearly "
             "and its positions would be biased; film a wider swing, or give start_px at a marker dot on it"
         )
+    if unseen_facts and ratio is not None and not FILLED_CLEAN_RATIO <= ratio <= 1 / FILLED_CLEAN_RATIO:
+        table.attrs["body"]["warning"] = filled_warning(ratio)
     return table

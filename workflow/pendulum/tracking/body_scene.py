@@ -1,8 +1,10 @@
 """The static scene behind a swinging body, from frames sampled over the clip (:mod:`pendulum.tracking.body`).
 
 Samples brought to one exposure, their moving objects found against a scene estimate and left out of the
-next (the per-pixel median of the rest), and, for a body that covers its own rest place in most samples,
-the scene there from the two ends of its swing (:func:`rest_place_scene`).
+next (the per-pixel median of the rest; a body by its convex hull, so that a ghost of it in the scene leaves
+with it), the pixels that almost no sample shows clear filled from their surroundings and that fill checked
+(:func:`unseen_regions`), and, for a body that covers its own rest place in most samples, the scene there
+from the two ends of its swing (:func:`rest_place_scene`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from pendulum.camera.video import VideoError, iter_luma
 # closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
 CLOSE_FRACTION = 1 / 72
 MIN_BODY_AREA_PX = 12  # a moving component smaller than this is noise
+HULL_AREA_RATIO = 4.0
 TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D) in most samples: ambiguous
 
 
@@ -87,8 +90,9 @@ def reduced(image: np.ndarray, scale: int) -> np.ndarray:
 
 
 def moving_objects(images: list, background: np.ndarray, threshold: float):
-    """Per sample, the pixels of its heavier moving objects (grown by 4 px); how many samples show one; how many
-    show two far-apart objects of similar weight, and where."""
+    """Per sample, the pixels of its heavier moving objects (each by its convex hull where that is compact:
+    :func:`_hulls`; grown by 4 px); how many samples show one; how many show two far-apart objects of similar
+    weight, and where."""
     excluded = np.zeros((len(images),) + background.shape, bool)
     moving, areas, pairs = 0, [], []
     grow = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
@@ -116,18 +120,23 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
 
 
 def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:
-    """The convex hulls of the ``chosen`` components (uint8 mask). Where the scene still holds part of the
-    body (where it dwells over half the samples), its pixels there do not differ: a bite or a hole in its
-    component, which the hull covers, so that the next scene leaves that sample out there too."""
+    """The ``chosen`` components (uint8 mask), each filled to its convex hull where the hull is at most twice its
+    area (a body, bitten; not a long edge or a curved shadow). Where the scene still holds part of the body
+    (where it dwells over half the samples), its pixels there do not differ: a bite or a hole in its component,
+    which the hull covers, so that the next scene leaves that sample out there too."""
     mask = np.zeros(labels.shape, np.uint8)
     for i in chosen:
-        points = cv2.findNonZero((labels == i).astype(np.uint8))
-        cv2.fillConvexPoly(mask, cv2.convexHull(points), 1)
+        own = (labels == i).astype(np.uint8)
+        hull = cv2.convexHull(cv2.findNonZero(own))
+        if cv2.contourArea(hull) <= HULL_AREA_RATIO * int(own.sum()):
+            cv2.fillConvexPoly(mask, hull, 1)
+        mask |= own
     return mask
 
 
 def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """Per pixel, the median of the samples not excluded there (``fallback`` where fewer than max(5, n/10) are left)."""
+    """Per pixel, the median of the samples not excluded there; where fewer than max(5, n/10) are left
+    (:func:`unseen`), ``fallback`` filled from its surroundings there (:func:`fill`)."""
     background = fallback.copy()
     union = excluded.any(axis=0)
     if union.any():
@@ -155,17 +164,19 @@ def unseen(excluded: np.ndarray) -> np.ndarray:
 
 
 def fill(scene: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """``scene`` with the ``mask`` pixels filled from their surroundings (Telea's inpainting, 3 px)."""
-    return cv2.inpaint(scene.astype(np.float32), mask.astype(np.uint8), 3, cv2.INPAINT_TELEA)
+    """``scene`` with the ``mask`` pixels filled from their surroundings (Navier–Stokes inpainting: a plain wall
+    exactly, a gradient of 0.2 grey levels per px to within 2 over a 20 px radius; Telea's is 1.5 off a plain
+    one)."""
+    return cv2.inpaint(scene.astype(np.float32), mask.astype(np.uint8), 3, cv2.INPAINT_NS)
 
 
 def unseen_regions(scene: np.ndarray, hidden: np.ndarray, avoid: np.ndarray) -> list[tuple[float, float, int, float]]:
     """Per connected region of ``hidden``: its centre x, y, area (px) and how far off its fill (:func:`fill`) is
-    likely to be (grey levels): the region moved aside by its own size (left, right, up, down; onto pixels
-    outside ``avoid``, the scene's filled ones, in the frame), filled the same way and compared with the scene it
-    covers: the 90th percentile of |filled − scene|, the median over the directions (one may land on a rod or a
-    second pendulum; NaN where it fits nowhere). A plain wall or a smooth gradient fills to within the noise; a
-    patterned one does not."""
+    likely to be (grey levels): the region moved aside by its own size (left, right, up, down, in the frame),
+    filled the same way (with the scene's other filled pixels, ``avoid``) and compared with the scene it covers
+    where that is known (at least half of it): the 90th percentile of |filled − scene|, the median over the
+    directions (one may land on a rod or a second pendulum; NaN where none fits). A plain wall or a smooth
+    gradient fills to within the noise; a patterned one does not."""
     n, labels, stats, centres = cv2.connectedComponentsWithStats(hidden.astype(np.uint8), connectivity=8)
     h, w = scene.shape
     regions = []
@@ -182,10 +193,11 @@ def unseen_regions(scene: np.ndarray, hidden: np.ndarray, avoid: np.ndarray) -> 
             own = labels[y0 : y0 + bh, x0 : x0 + bw] == i
             moved[y0 + dy - cy0 : y0 + dy - cy0 + bh, x0 + dx - cx0 : x0 + dx - cx0 + bw] = own
             filled_already = avoid[cy0:cy1, cx0:cx1]
-            if (moved & filled_already).any():
+            compared = moved & ~filled_already  # where the scene there is known (a rod's, another's place is not)
+            if compared.sum() < 0.5 * area:
                 continue
             crop = scene[cy0:cy1, cx0:cx1]
-            errors.append(np.abs(fill(crop, moved | filled_already)[moved] - crop[moved]))
+            errors.append(np.abs(fill(crop, moved | filled_already)[compared] - crop[compared]))
         error = float(np.median([np.percentile(e, 90) for e in errors])) if errors else math.nan
         regions.append((float(centres[i][0]), float(centres[i][1]), area, error))
     return regions
@@ -193,12 +205,14 @@ def unseen_regions(scene: np.ndarray, hidden: np.ndarray, avoid: np.ndarray) -> 
 
 def unseen_behind(scene: np.ndarray, hidden: np.ndarray, xy: np.ndarray, radius_px: float, threshold_grey: float):
     """The scene's filled pixels (``hidden``, :func:`unseen`) that the body covers on its path (within
-    ``radius_px`` of a position in ``xy``), where they are at least 2 % of its area (a rod's place, another
-    pendulum's, do not count), per region (:func:`unseen_regions`) as facts; and a reason to refuse when one's
-    fill is likely off by more than ``threshold_grey`` (or cannot be checked), else None."""
+    ``radius_px`` of a position in ``xy``: a rod's place or another pendulum's does not count), where they are at
+    least 2 % of its area, per region (:func:`unseen_regions`) as facts; and a reason to refuse when one's fill
+    is likely off by more than ``threshold_grey`` (or cannot be checked), else None."""
+    if not hidden.any():
+        return [], None
     covered = np.zeros(hidden.shape, np.uint8)
-    for x, y in xy[np.all(np.isfinite(xy), axis=1)]:
-        cv2.circle(covered, (int(round(x)), int(round(y))), int(math.ceil(radius_px)), 1, -1)
+    for x, y in np.unique(np.round(xy[np.all(np.isfinite(xy), axis=1)]).astype(int), axis=0):
+        cv2.circle(covered, (int(x), int(y)), int(math.ceil(radius_px)), 1, -1)
     behind = hidden & (covered > 0)
     if behind.sum() < 0.02 * math.pi * radius_px**2:
         return [], None
@@ -209,18 +223,20 @@ def unseen_behind(scene: np.ndarray, hidden: np.ndarray, xy: np.ndarray, radius_
             why = (
                 f"a fill there is likely {error:.0f} grey levels off, above {threshold_grey:.0f}"
                 if math.isfinite(error)
-                else "too near the frame's border to check a fill"
+                else "no place nearby where the scene is known to check a fill"
             )
             reason = (
-                f"the scene behind the body near ({x:.0f}, {y:.0f}) px ({area} px) is in no sampled frame (the body "
-                "covers it in nearly all: a swing narrower than about its width), and the wall around it is not plain "
-                f"enough to fill it in ({why}): its positions would be biased; film a wider swing, or give start_px at "
-                "a marker dot on it"
+                f"the scene behind the body near ({x:.0f}, {y:.0f}) px ({area} px) is seen clear in almost no sampled "
+                "frame (something moving covers it in nearly all: a swing narrower than about the body's width), and "
+                f"the wall around it is not plain enough to fill it in ({why}): its positions would be biased; film a "
+                "wider swing, or give start_px at a marker dot on it"
             )
     return facts, reason
 
 
-def rest_place_scene(frames, images, background, track, radius_px: float, threshold: float) -> tuple[np.ndarray, bool]:
+def rest_place_scene(
+    frames, images, background, track, radius_px: float, threshold: float, keep=None
+) -> tuple[np.ndarray, bool]:
     """The scene with the body's rest place filled from the two ends of its swing.
 
     A body that covers its rest place in most samples is part of the median scene there. At the ends of a
@@ -231,7 +247,8 @@ def rest_place_scene(frames, images, background, track, radius_px: float, thresh
     the scene there is taken from the other; where they agree but the median scene differs from them (the
     body between its two ends), from them. Only within 2 ``radius_px`` + 10 px of the segment between the
     two ends (another moving object elsewhere is left as the median has it). Second: whether the ends saw
-    the rest place clear (each more than 1.2 ``radius_px`` from the middle between them).
+    the rest place clear (each more than 1.2 ``radius_px`` from the middle between them). The ``keep`` pixels
+    (:func:`unseen`: filled in, the ends show the body there too) stay as ``background`` has them.
     """
     ok = track[track.flag == "ok"].set_index("frame")
     at = [(k, float(ok.x_px[f]), float(ok.y_px[f])) for k, f in enumerate(frames) if f in ok.index]
@@ -261,6 +278,8 @@ def rest_place_scene(frames, images, background, track, radius_px: float, thresh
     both = 0.5 * (low + high)  # where the two ends agree, neither holds the body: the wall, if the median had it
     held = near & ~differs & (np.abs(background - both) > threshold)
     scene = np.where(differs, composite, np.where(held, both, background)).astype(np.float32)
+    if keep is not None:
+        scene = np.where(keep, background, scene).astype(np.float32)
     return scene, length / 2 > 1.2 * radius_px
 
 
@@ -322,3 +341,23 @@ def silhouette_fraction(values: np.ndarray) -> float:
     if between < 0.75 * values.var() or low.mean() > 0.45 * high.mean():
         return STRONG_FRACTION
     return max(STRONG_FRACTION, cut / top)
+
+
+def touches_border(component: np.ndarray) -> bool:
+    """Whether a body's pixels reach the frame's outermost rows or columns (part of it out of view)."""
+    return bool(component[0].any() or component[-1].any() or component[:, 0].any() or component[:, -1].any())
+
+
+def centre_of(component: np.ndarray) -> tuple[float, float]:
+    ys, xs = np.nonzero(component)
+    return float(xs.mean()), float(ys.mean())
+
+
+def filled_warning(ratio: float) -> str:
+    """The warning for a body whose path crosses a filled-in scene (:func:`unseen_behind`) and whose silhouette is
+    ``ratio`` as large mid-swing as at the ends of its swing, beyond a clean scene's."""
+    return (
+        f"the scene behind the body's path was filled in from around it, and its silhouette is "
+        f"{abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} mid-swing than at the ends of its "
+        "swing: what is followed may not be the body alone (a rod, a ghost of it), and its positions may be biased"
+    )

@@ -13,7 +13,8 @@ the whole clip, reduced to ≤ ~640 px wide):
    DoG_σ = G_σ ∗ F − G_1.5σ ∗ F (a disk of radius r responds most near σ ≈ r / 1.7), on a
    Gaussian pyramid, each peak placed to a fraction of its level's sample (parabola vertex);
 3. per sign, RANSAC finds the circle through blobs of different samples that holds most
-   samples: |‖p − c‖ − R| ≤ tol, blob sizes alike; its least-squares refit gives the pivot
+   response one object can have visited in turn (a circle through two pendulums' paths does not):
+   |‖p − c‖ − R| ≤ tol, blob sizes alike; its least-squares refit gives the pivot
    c and arm R. An object qualifies when it moves (spans more than two radii of the arc)
    back and forth (its angle about c reverses at least twice, with about as many moves one
    way as the other: a bubble that rises and starts again does not) on a path that is a
