@@ -67,7 +67,6 @@ from pendulum.tracking.body_scene import (
     MIN_BODY_AREA_PX,
     STRONG_FRACTION,
     body_polarity,
-    centre_of,
     close_size,
     components,
     filled_warning,
@@ -380,9 +379,11 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
     threshold = max(threshold, CONTRAST_FRACTION * contrast)
     strong, _ = _body_in(diff, threshold, 3, close_px, near=near)
     component = component if strong is None else strong
-    inner = float(cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5).max())
+    depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
+    inner, (ty, tx) = float(depth.max()), np.unravel_index(int(np.argmax(depth)), depth.shape)
     close_px = max(close_px, _body_close_size(inner))
-    opened, _ = _body_in(diff, threshold, _open_size(inner), close_px, near=near or centre_of(component))
+    # of its parts after the opening, the one at ``near``, else at its thickest point (its centre may be on a rod)
+    opened, _ = _body_in(diff, threshold, _open_size(inner), close_px, near=near or (float(tx), float(ty)))
     if opened is None:
         return _Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())

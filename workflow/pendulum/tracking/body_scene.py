@@ -348,11 +348,6 @@ def touches_border(component: np.ndarray) -> bool:
     return bool(component[0].any() or component[-1].any() or component[:, 0].any() or component[:, -1].any())
 
 
-def centre_of(component: np.ndarray) -> tuple[float, float]:
-    ys, xs = np.nonzero(component)
-    return float(xs.mean()), float(ys.mean())
-
-
 def filled_warning(ratio: float) -> str:
     """The warning for a body whose path crosses a filled-in scene (:func:`unseen_behind`) and whose silhouette is
     ``ratio`` as large mid-swing as at the ends of its swing, beyond a clean scene's."""
