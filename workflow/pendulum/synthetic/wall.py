@@ -269,14 +269,15 @@ def render_wall_trial(trial: WallTrial, progress=None) -> tuple[list, pd.DataFra
     return frames, truth
 
 
-def write_wall_trial(trial: WallTrial, video_dir, truth_dir=None) -> tuple:
-    """Render and encode ``<name>.mp4`` (H.264, the camera's crf); the truth to ``<name>.csv`` in ``truth_dir``."""
+def write_wall_trial(trial: WallTrial, video_dir, truth_dir=None, plain_c: bool = False) -> tuple:
+    """Render and encode ``<name>.mp4`` (H.264, the camera's crf; ``plain_c``: the same bytes every run, see
+    :func:`~pendulum.synthetic.experiment.write_video`); the truth to ``<name>.csv`` in ``truth_dir``."""
     from pathlib import Path
 
     frames, truth = render_wall_trial(trial)
     cam = trial.spec.camera
     video = Path(video_dir) / f"{trial.spec.name}.mp4"
-    write_video(frames, video, cam.fps, cam.crf, cam.preset)
+    write_video(frames, video, cam.fps, cam.crf, cam.preset, plain_c=plain_c)
     if truth_dir is not None:
         truth.to_csv(Path(truth_dir) / f"{trial.spec.name}.csv", index=False)
     return video, truth

@@ -7,7 +7,8 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    (gain and offset against their median: auto-exposure drift), and their per-pixel median; then
    again, up to :data:`SCENE_PASSES` times, with each sample's moving objects (by their hulls) left out;
    pixels almost no sample shows clear (a swing narrower than the body) filled from around them, refused
-   where that fill is likely off by :data:`UNSEEN_FILL_SHARE` of C (``unseen_scene`` in the facts).
+   where that fill is likely off by max(3σ, :data:`UNSEEN_FILL_SHARE` C) or cannot be checked, and warned
+   of where the silhouette then changes mid-swing (``unseen_scene``, ``warning`` in the facts).
    Static shadows, wall gradients and stripes are part of the scene; σ is the MAD of I − B.
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
    window's median offset, which follows slow exposure drift) above T = max(5σ, ¼ C), C the body's
@@ -15,7 +16,7 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
    soft shadow is below T); the connected component nearest the prediction, with every component
    within two closing widths of it. The first frame's body is the heaviest moving object above a
-   quarter of its own contrast, or the one at ``start_px`` (two pendulums in view). Where the body's
+   quarter of its own contrast (its part at its thickest point), or the one at ``start_px``. Where the body's
    contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
    again above ¼ of its own contrast there.
 3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
@@ -102,7 +103,7 @@ MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.
 CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
 REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body that holds its place is refused
 MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
-FILLED_CLEAN_RATIO = 0.97  # mid_swing_area_ratio of a clean scene: 0.96–1.02; beyond, with a fill behind: a warning
+FILLED_CLEAN_RATIO = 0.96  # mid_swing_area_ratio of a clean scene: 0.96–1.02; beyond, with a fill behind: a warning
 UNSEEN_FILL_SHARE = 0.8 * CONTRAST_FRACTION  # a scene filled in behind the body: off by less than the silhouette cut
 
 
@@ -371,7 +372,7 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
     """The body in one frame's difference from the scene (:class:`_Seen`); None when nothing moves.
 
     The heaviest moving object (or the one at ``near``), again above a quarter of its own contrast (a soft
-    shadow beside it falls away), then opened to cut its thread."""
+    shadow beside it falls away), then opened to cut its thread (the part at its thickest point kept)."""
     component, _ = _body_in(diff, threshold, 3, close_px, near=near)
     if component is None:
         return None

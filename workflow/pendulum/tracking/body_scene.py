@@ -1,8 +1,8 @@
 """The static scene behind a swinging body, from frames sampled over the clip (:mod:`pendulum.tracking.body`).
 
 Samples brought to one exposure, their moving objects found against a scene estimate and left out of the
-next (the per-pixel median of the rest; a body by its convex hull, so that a ghost of it in the scene leaves
-with it), the pixels that almost no sample shows clear filled from their surroundings and that fill checked
+next (the per-pixel median of the rest; a compact one by its convex hull, so that a ghost of it in the scene
+leaves with it), the pixels that almost no sample shows clear filled from their surroundings and that fill checked
 (:func:`unseen_regions`), and, for a body that covers its own rest place in most samples, the scene there
 from the two ends of its swing (:func:`rest_place_scene`).
 """
@@ -19,7 +19,7 @@ from pendulum.camera.video import VideoError, iter_luma
 # closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
 CLOSE_FRACTION = 1 / 72
 MIN_BODY_AREA_PX = 12  # a moving component smaller than this is noise
-HULL_AREA_RATIO = 4.0
+HULL_AREA_RATIO = 4.0  # a moving object's convex hull is left out where at most this many times its area
 TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D) in most samples: ambiguous
 
 
@@ -120,10 +120,11 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
 
 
 def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:
-    """The ``chosen`` components (uint8 mask), each filled to its convex hull where the hull is at most twice its
-    area (a body, bitten; not a long edge or a curved shadow). Where the scene still holds part of the body
-    (where it dwells over half the samples), its pixels there do not differ: a bite or a hole in its component,
-    which the hull covers, so that the next scene leaves that sample out there too."""
+    """The ``chosen`` components (uint8 mask), each filled to its convex hull where the hull is at most
+    :data:`HULL_AREA_RATIO` times its area (a body, bitten, with its rod: 2–3.5×; not an L-shaped edge). Where
+    the scene still holds part of the body (where it dwells over half the samples), its pixels there do not
+    differ: a bite or a hole in its component, which the hull covers, so that the next scene leaves that
+    sample out there too."""
     mask = np.zeros(labels.shape, np.uint8)
     for i in chosen:
         own = (labels == i).astype(np.uint8)
@@ -165,8 +166,8 @@ def unseen(excluded: np.ndarray) -> np.ndarray:
 
 def fill(scene: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """``scene`` with the ``mask`` pixels filled from their surroundings (Navier–Stokes inpainting: a plain wall
-    exactly, a gradient of 0.2 grey levels per px to within 2 over a 20 px radius; Telea's is 1.5 off a plain
-    one)."""
+    exactly, a gradient of 0.2 grey levels per px over a 20 px radius to 1.7 (90th percentile; 2.8 at most);
+    Telea's is 1.5 off a plain one)."""
     return cv2.inpaint(scene.astype(np.float32), mask.astype(np.uint8), 3, cv2.INPAINT_NS)
 
 
@@ -221,15 +222,15 @@ def unseen_behind(scene: np.ndarray, hidden: np.ndarray, xy: np.ndarray, radius_
         facts.append({"at_px": [round(x, 1), round(y, 1)], "area_px": area, "fill_error_grey": round(error, 2)})
         if reason is None and area >= 0.02 * math.pi * radius_px**2 and not error <= threshold_grey:
             why = (
-                f"a fill there is likely {error:.0f} grey levels off, above {threshold_grey:.0f}"
+                f"the wall around it is not plain enough to fill it in (a fill there is likely {error:.0f} grey levels "
+                f"off, above {threshold_grey:.0f})"
                 if math.isfinite(error)
-                else "no place nearby where the scene is known to check a fill"
+                else "a fill of it cannot be checked (no place nearby where the scene is known)"
             )
             reason = (
                 f"the scene behind the body near ({x:.0f}, {y:.0f}) px ({area} px) is seen clear in almost no sampled "
-                "frame (something moving covers it in nearly all: a swing narrower than about the body's width), and "
-                f"the wall around it is not plain enough to fill it in ({why}): its positions would be biased; film a "
-                "wider swing, or give start_px at a marker dot on it"
+                f"frame (something moving covers it in nearly all: a swing narrower than about the body's width), and "
+                f"{why}: its positions would be biased; film a wider swing, or give start_px at a marker dot on it"
             )
     return facts, reason
 
