@@ -494,3 +494,31 @@ def test_a_fill_of_the_unseen_scene_is_checked_where_the_scene_is_known():
         None,
     )
     assert unseen_behind(patterned, hidden, np.array([[40.0, 40.0]]), 20.0, 3.0) == ([], None)
+
+
+def test_samples_of_a_plain_wall_keep_their_bob_s_contrast_when_brought_to_one_exposure():
+    """A plain wall (a dark clock case, 80 grey levels, no noise) with a static dark rod (40) and a bright bob
+    (160) moving across it, one sample 3 grey levels brighter. The residuals' MAD is 0 there, so the gain fit
+    kept only the pixels that fit exactly, too few grey levels to tell a gain from an offset (numpy warned
+    "poorly conditioned"; on clock renders it gave gains of 0.5 and offsets of 85): the bob crossing the rod came
+    out 160 grey levels above the wall. Now at least 1.5 grey levels of residual are kept, the fit is made about
+    the mean grey, and a span under 4 is matched by its offset: every sample's wall at 80 and its bob 80 above."""
+    import warnings
+
+    from pendulum.tracking.body_scene import same_exposure
+
+    yy, xx = np.mgrid[0:120, 0:160]
+    wall = np.full(yy.shape, 80.0)
+    wall[:, 78:84] = 40.0
+    images = []
+    for k in range(12):
+        image = wall + (3.0 if k == 5 else 0.0)
+        image[(yy - 60) ** 2 + (xx - 20 - 10 * k) ** 2 <= 100] = 160.0 + (3.0 if k == 5 else 0.0)
+        images.append(image.astype(np.uint8))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no poorly conditioned fit
+        out = same_exposure(images)
+    for k, after in enumerate(out):
+        wall_level = float(np.median(after[:20, :60]))
+        assert abs(wall_level - 80) <= 0.6, (k, wall_level)
+        assert 77 <= float(after[60, 20 + 10 * k]) - wall_level <= 83, (k, after[60, 20 + 10 * k])
