@@ -122,7 +122,6 @@ def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclud
         if cand.size < 6 or np.unique(blobs.sample[cand]).size < 6:
             continue
         weights = blobs.s[cand] / blobs.s[cand].sum()
-        best = None
         tried = []
         for _ in range(iterations):
             pick = rng.choice(cand, size=3, replace=False, p=weights)

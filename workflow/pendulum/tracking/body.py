@@ -288,7 +288,7 @@ def find_body(
         size = (first_pass.shape[1], first_pass.shape[0])
         excluded = np.stack([cv2.resize(e.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 for e in excluded])
     background = masked_median(stack, excluded, first_pass) if excluded.any() else first_pass
-    hidden = unseen(excluded) if excluded.any() else np.zeros(background.shape, bool)
+    hidden = unseen(excluded)
     median_scene = background
     if track is not None:
         frames = [frame for frame, _ in samples]

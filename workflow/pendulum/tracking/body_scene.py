@@ -143,8 +143,8 @@ def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:
 
 
 def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """Per pixel, the median of the samples not excluded there; where fewer than max(5, n/10) are left
-    (:func:`unseen`), ``fallback`` filled from its surroundings there (:func:`fill`)."""
+    """Per pixel, the median of the samples not excluded there; where fewer than :func:`min_clear_samples` are
+    left (:func:`unseen`), ``fallback`` filled from its surroundings there (:func:`fill`)."""
     background = fallback.copy()
     union = excluded.any(axis=0)
     if union.any():
@@ -155,7 +155,7 @@ def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray)
         lower = np.take_along_axis(column, np.maximum((valid - 1) // 2, 0)[None], axis=0)[0]
         upper = np.take_along_axis(column, np.maximum(valid // 2, 0)[None], axis=0)[0]
         second = 0.5 * (lower + upper)
-        enough = valid >= max(5, len(stack) // 10)
+        enough = valid >= min_clear_samples(len(stack))
         background[union] = np.where(enough, second, fallback[union])
         hidden = np.zeros(background.shape, bool)
         hidden[union] = ~enough
@@ -164,11 +164,16 @@ def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray)
     return background
 
 
+def min_clear_samples(n: int) -> int:
+    """Samples that must show a pixel clear for the scene there to be their median: max(5, n/10) of ``n``."""
+    return max(5, n // 10)
+
+
 def unseen(excluded: np.ndarray) -> np.ndarray:
-    """The pixels no sample shows clear: a moving object there in all but fewer than max(5, n/10) of the n samples
+    """The pixels no sample shows clear: a moving object there in all but fewer than :func:`min_clear_samples`
     (:func:`masked_median` fills them from their surroundings)."""
     n = len(excluded)
-    return excluded.any(axis=0) & (n - excluded.sum(axis=0) < max(5, n // 10))
+    return excluded.any(axis=0) & (n - excluded.sum(axis=0) < min_clear_samples(n))
 
 
 def fill(scene: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -281,13 +286,13 @@ def rest_place_scene(
     across = np.abs((xx - c_low[0]) * span[1] - (yy - c_low[1]) * span[0]) / length
     beyond = np.maximum(np.maximum(-along, along - length), 0.0)
     near = np.hypot(across, beyond) <= 2 * radius_px + 10
+    if keep is not None:
+        near &= ~keep
     differs = near & (np.abs(low - high) > threshold)
     composite = np.where(along < 0.5 * length, high, low)  # the low end's body is on its side: the high end's scene
     both = 0.5 * (low + high)  # where the two ends agree, neither holds the body: the wall, if the median had it
     held = near & ~differs & (np.abs(background - both) > threshold)
     scene = np.where(differs, composite, np.where(held, both, background)).astype(np.float32)
-    if keep is not None:
-        scene = np.where(keep, background, scene).astype(np.float32)
     return scene, length / 2 > 1.2 * radius_px
 
 
