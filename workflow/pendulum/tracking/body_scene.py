@@ -41,16 +41,17 @@ def close_size(shape) -> int:
 
 
 def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int = 5):
-    """Connected components of ``diff > threshold`` after a closing and an opening: (labels, stats, masses)."""
+    """Connected components of ``diff > threshold`` after a closing (the image continued by background) and an
+    opening (the image continued by the body where it is cut): (labels, stats, masses)."""
     mask = (diff > threshold).astype(np.uint8)
     # closed first: the dark squares of a print, or a body's dark patches, are one object; with the image
-    # continued by background (OpenCV's default border erodes nothing there, so a closing would stretch a body
-    # near the border out to it, and call it cut by the border)
+    # continued by background (OpenCV's default border counts beyond the image as foreground for the erosion,
+    # so a closing would stretch a body near the border out to it, and call it cut by the border)
     pad = close_px // 2 + 1
     padded = cv2.copyMakeBorder(mask, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
     closed = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px,) * 2))
     mask = closed[pad:-pad, pad:-pad]
-    if open_px > 1:
+    if open_px > 1:  # OpenCV's default border on purpose: a body the border cuts is not opened away there
         kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px, open_px))
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
