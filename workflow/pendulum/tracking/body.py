@@ -11,7 +11,12 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    of where the silhouette then changes mid-swing (``unseen_scene``, ``warning`` in the facts).
    Static shadows, wall gradients and stripes are part of the scene; σ is the MAD of I − B.
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
-   window's median offset, which follows slow exposure drift) above T = max(5σ, ¼ C), C the body's
+   window's median offset, which follows slow exposure drift), or for a one-sided body
+   (``body_scene.body_polarity``: at least 80 % of its first-frame pixels' |I − B| on one side of the scene,
+   an apple or a two-tone ball's dark half before a light wall, and measured so the same body) that side's
+   only, D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays out wherever
+   the wall behind it is darker or lighter; a wall darker than a dark body hides it), above T = max(5σ, ¼ C),
+   C the body's
    contrast, closed by a disk of about half the body's inner radius (a print's dark patches are one
    object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
    soft shadow is below T); the connected component nearest the prediction, with every component
@@ -42,9 +47,8 @@ taken again from the two ends of the swing (:func:`pendulum.tracking.body_scene.
 and the body tracked again, up to :data:`REST_PLACE_REPAIRS` times; then refused, unless the scene from
 the swing's ends saw the rest place and is the median's there (``rest_place_clear``: it never held the body;
 the body's look changes with the wall behind it, a two-tone ball's light half before a shadow band): then
-a one-sided body (``body_scene.body_polarity``: darker or lighter than the scene) is measured by that side
-of the scene only, D = −(I − B) or I − B, and a silhouette still smaller or larger mid-swing is kept with
-a ``warning`` in the track's body facts.
+a one-sided body not yet measured by its side only is (step 2), and a silhouette still smaller or larger
+mid-swing is kept with a ``warning`` in the track's body facts.
 
 ECC alignment of the body's own look (``cv2.findTransformECCWithMask``, Euclidean) was measured
 against this on renders with known truth and not taken: where the look changes (a body turning on
@@ -67,6 +71,7 @@ from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.body_scene import (
     MIN_BODY_AREA_PX,
     STRONG_FRACTION,
+    body_core,
     body_polarity,
     close_size,
     components,
@@ -126,7 +131,7 @@ class BodyScene:
     silhouette_fraction: float = STRONG_FRACTION  # share of the body's contrast a silhouette pixel needs
     rest_place_clear: bool | None = None  # the ends' scene is the median's at the rest place (None: not taken)
     polarity: str = "both"  # measured by |I − B| ("both"), −(I − B) ("dark") or I − B ("bright")
-    one_sided: str | None = None  # the side of the scene the body lies on (body_polarity; None: not taken)
+    one_sided: str | None = None  # the side of the scene the first-frame body lies on (body_polarity)
     unseen: np.ndarray | None = field(default=None, repr=False, compare=False)  # pixels no sample shows clear
 
     def to_dict(self) -> dict:
@@ -236,18 +241,6 @@ def _body_in(diff: np.ndarray, threshold: float, open_px: int, close_px: int, ne
     return mask, tuple(box)
 
 
-def _core(component: np.ndarray, reach_px: float):
-    """The body without what sticks out of it: the component's pixels within ``reach_px`` of its thickest
-    point (the maximum of its distance transform), and their box ``(x, y, w, h)``: whether the body itself
-    touches the frame's border, not a rod or thread leaving it."""
-    dist = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 3)
-    cy, cx = np.unravel_index(int(np.argmax(dist)), dist.shape)
-    yy, xx = np.ogrid[: component.shape[0], : component.shape[1]]
-    kept = component & ((xx - cx) ** 2 + (yy - cy) ** 2 <= reach_px**2)
-    ys, xs = np.nonzero(kept)
-    return kept, (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
-
-
 def find_body(
     path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, radius_px=None, polarity: str = "both"
 ) -> BodyScene:
@@ -328,6 +321,16 @@ def find_body(
         )
     if first.component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
+    # the side of the scene the body lies on, voted by its own pixels in the first frame (not a rod's or a second
+    # pendulum's) above a quarter of its contrast
+    side = body_polarity([images[0]], background, [first.component], max(threshold, CONTRAST_FRACTION * first.contrast))
+    if polarity == "both" and side in ("dark", "bright"):  # a one-sided body: measured by its own side throughout
+        first_side, whole_side = measured(side)
+        found = first_side is not None and first_side.component is not None and whole_side.component is not None
+        # the same body (its centre and most of its area), not a shadow or another object
+        if found and math.dist(first_side[:2], first[:2]) <= max(2, first.inner_radius_px / 2):
+            if whole_side.component.sum() >= 0.5 * whole.component.sum():
+                first, whole, polarity = first_side, whole_side, side
     return BodyScene(
         background=background,
         noise_grey=sigma,
@@ -340,11 +343,8 @@ def find_body(
         unseen=hidden,
         silhouette_fraction=whole.fraction,
         polarity=polarity,
-        # only for a scene from the swing's ends (what track_body retries with): the vote above a quarter of the
-        # body's contrast, not its soft shadow nor the noise around it
-        one_sided=None
-        if track is None
-        else body_polarity(images, background, excluded, max(threshold, CONTRAST_FRACTION * whole.contrast)),
+        # the vote above a quarter of the body's contrast, not its soft shadow nor the noise around it
+        one_sided=side,
         # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
         # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body
         rest_place_clear=None
@@ -435,7 +435,7 @@ def track_body(
                     low = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * here)
                     component, box = _body_in(diff, low, open_px, close_px, near=(px - x0, py - y0))
             if component is not None:
-                _, box = _core(component, edge_px)  # in view or not: the body itself, without its rod
+                _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
                 sx, sy, mass, bx, by = _soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
@@ -514,7 +514,9 @@ def track_body(
         # the scene holds the body where it spends most samples (its rest place, or the ends of a narrow
         # swing): the scene there again, from the two ends of the swing as this track finds them
         start = settings.start_px or scene.start_px
-        repaired = find_body(path, start, track=table, radius_px=max(scene.radius_px, scene.inner_radius_px))
+        repaired = find_body(
+            path, start, track=table, radius_px=max(scene.radius_px, scene.inner_radius_px), polarity=scene.polarity
+        )
         return track_body(path, settings, progress, repaired, rest_place_from=[*tries, round(ratio, 4)])
     if held and scene.rest_place_clear and scene.polarity == "both" and scene.one_sided in ("dark", "bright"):
         # the swing's ends show the scene at the rest place as the median has it (it never held the body): the

@@ -375,3 +375,15 @@ def filled_warning(ratio: float) -> str:
         f"{abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} mid-swing than at the ends of its "
         "swing: what is followed may not be the body alone (a rod, a ghost of it), and its positions may be biased"
     )
+
+
+def body_core(component: np.ndarray, reach_px: float):
+    """The body without what sticks out of it: the component's pixels within ``reach_px`` of its thickest
+    point (the maximum of its distance transform), and their box ``(x, y, w, h)``: whether the body itself
+    touches the frame's border, not a rod or thread leaving it."""
+    dist = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 3)
+    cy, cx = np.unravel_index(int(np.argmax(dist)), dist.shape)
+    yy, xx = np.ogrid[: component.shape[0], : component.shape[1]]
+    kept = component & ((xx - cx) ** 2 + (yy - cy) ** 2 <= reach_px**2)
+    ys, xs = np.nonzero(kept)
+    return kept, (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
