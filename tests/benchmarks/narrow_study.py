@@ -27,8 +27,8 @@ import pandas as pd
 from body_study import MAX_RMS_DEG, MIN_OK, summary
 
 
-def scene(seed: int, radii: tuple[float, float]) -> tuple[float, bool, float]:
-    """``(swing_radii, dot, grain)`` of scene ``seed``."""
+def scene(seed: int, radii: tuple[float, float]) -> tuple[float, float, bool]:
+    """``(swing_radii, grain, dot)`` of scene ``seed``."""
     draw = random.Random(seed)
     return draw.uniform(*radii), draw.choice([0.0, 0.0, 4.0, 8.0]), draw.choice([True, False])
 
@@ -56,8 +56,7 @@ def judge(seed: int, workdir: Path, radii: tuple[float, float] = (0.5, 2.0)) -> 
             wall=replace(left.wall, grain=grain),
         )
         # x264 without its assembly: the same bytes every run (with it, grain-8 scenes moved by 0.01° run to run)
-        video, truth = write_wall_trial(trial, workdir, workdir, plain_c=True)
-        truth.to_csv(truth_csv, index=False)
+        write_wall_trial(trial, workdir, workdir, plain_c=True)  # the video and its truth, <name>.csv
     truth = pd.read_csv(truth_csv)
     try:
         track = track_body(video, TrackerSettings())

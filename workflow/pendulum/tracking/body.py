@@ -13,12 +13,11 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
    window's median offset, which follows slow exposure drift), or for a one-sided body
    (``body_scene.body_polarity``: at least 80 % of its first-frame pixels' |I − B| on one side of the scene,
-   an apple or a two-tone ball's dark half before a light wall, and measured so the same body) that side's
-   only, D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays out wherever
-   the wall behind it is darker or lighter; a wall darker than a dark body hides it), above T = max(5σ, ¼ C),
-   C the body's
-   contrast, closed by a disk of about half the body's inner radius (a print's dark patches are one
-   object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
+   an apple or a two-tone ball's dark half before a light wall, where that side alone finds the same body)
+   that side's only, D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays
+   out wherever the wall behind it is darker or lighter; a wall darker than a dark body hides it), above
+   T = max(5σ, ¼ C), C the body's contrast, closed by a disk of about half the body's inner radius (a print's
+   dark patches are one object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
    soft shadow is below T); the connected component nearest the prediction, with every component
    within two closing widths of it. The first frame's body is the heaviest moving object above a
    quarter of its own contrast (its part at its thickest point), or the one at ``start_px``. Where the body's
@@ -47,8 +46,8 @@ taken again from the two ends of the swing (:func:`pendulum.tracking.body_scene.
 and the body tracked again, up to :data:`REST_PLACE_REPAIRS` times; then refused, unless the scene from
 the swing's ends saw the rest place and is the median's there (``rest_place_clear``: it never held the body;
 the body's look changes with the wall behind it, a two-tone ball's light half before a shadow band): then
-a one-sided body not yet measured by its side only is (step 2), and a silhouette still smaller or larger
-mid-swing is kept with a ``warning`` in the track's body facts.
+a one-sided body is measured by its side only (as in step 2, where that was not taken), and a silhouette
+still smaller or larger mid-swing is kept with a ``warning`` in the track's body facts.
 
 ECC alignment of the body's own look (``cv2.findTransformECCWithMask``, Euclidean) was measured
 against this on renders with known truth and not taken: where the look changes (a body turning on
