@@ -111,9 +111,97 @@ def moves(angles: np.ndarray, noise: float) -> tuple[int, float]:
     return count, (min(ups, downs) / max(ups, downs) if max(ups, downs) else 0.0)
 
 
+def _weighted_triples(rng, cand: np.ndarray, weights: np.ndarray, n: int) -> np.ndarray:
+    """``n`` rows of ``rng.choice(cand, size=3, replace=False, p=weights)``, drawn at once: the same rows and the
+    same ``rng`` state after as ``n`` such calls (NumPy's rule: three uniforms through the weights' cumulative
+    sum; a repeated pick is drawn again from the weights with the picks so far set to 0)."""
+    p = np.asarray(weights, dtype=np.float64)
+    cdf = np.cumsum(p)
+    cdf /= cdf[-1]
+    state = rng.bit_generator.state
+    uniforms = rng.random(3 * n + 16)
+    first = cdf.searchsorted(uniforms, side="right").tolist()
+    rows = np.empty((n, 3), np.int64)
+    pos = 0
+    for k in range(n):
+        if pos + 3 > len(first):  # many repeats: more of the same stream
+            more = rng.random(3 * n + 16)
+            uniforms = np.concatenate([uniforms, more])
+            first += cdf.searchsorted(more, side="right").tolist()
+        a, b, c = first[pos : pos + 3]
+        pos += 3
+        if a != b and a != c and b != c:
+            rows[k] = a, b, c
+            continue
+        found = list(dict.fromkeys((a, b, c)))
+        left = p.copy()
+        while len(found) < 3:
+            need = 3 - len(found)
+            if pos + need > uniforms.size:
+                more = rng.random(3 * n + 16)
+                uniforms = np.concatenate([uniforms, more])
+                first += cdf.searchsorted(more, side="right").tolist()
+            left[found] = 0.0
+            again = np.cumsum(left)
+            again /= again[-1]
+            found += list(dict.fromkeys(again.searchsorted(uniforms[pos : pos + need], side="right").tolist()))
+            pos += need
+        rows[k] = found
+    rng.bit_generator.state = state
+    rng.random(pos)  # the state as after exactly the uniforms used
+    return cand[rows]
+
+
+def _ransac_circles(blobs: Blobs, cand: np.ndarray, picks: np.ndarray, scale: int, max_arm: float):
+    """The circle through each triple of ``picks`` that RANSAC tries (three samples, radii alike, points apart,
+    arm 3 r … ``max_arm``), in order: ``(cx, cy, arm, radius, tol)`` arrays."""
+    sample = blobs.sample[picks]
+    distinct = (sample[:, 0] != sample[:, 1]) & (sample[:, 0] != sample[:, 2]) & (sample[:, 1] != sample[:, 2])
+    rs = np.sort(blobs.r[picks], axis=1)
+    radius = rs[:, 1]
+    x, y = blobs.x[picks], blobs.y[picks]
+    apart = (
+        np.minimum.reduce([np.hypot(x[:, i] - x[:, j], y[:, i] - y[:, j]) for i, j in ((0, 1), (0, 2), (1, 2))])
+        >= 1.5 * radius
+    )
+    keep = distinct & ~(rs[:, 2] > 2.2 * rs[:, 0]) & apart
+    (ax, bx, cx), (ay, by, cy) = x[keep].T, y[keep].T
+    d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
+    line = np.abs(d) < 1e-9
+    d = np.where(line, 1.0, d)
+    a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
+    ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
+    uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
+    arm = np.array([math.hypot(px - qx, py - qy) for px, py, qx, qy in zip(ax, ay, ux, uy, strict=True)])
+    radius = radius[keep]
+    good = ~line & (3 * radius <= arm) & (arm <= max_arm)
+    radius = radius[good]
+    return ux[good], uy[good], arm[good], radius, np.maximum(1.5 * scale, 0.35 * radius)
+
+
+def _arc_scores(blobs: Blobs, cand: np.ndarray, cx, cy, arm, radius, tol, block: int = 256) -> np.ndarray:
+    """Per circle, the summed response of its inliers (:func:`arc_inliers`: on the circle within ``tol``, radius
+    alike, one blob per sample, the one nearest the circle), for many circles at once."""
+    bx, by, br, bs, bsample = blobs.x[cand], blobs.y[cand], blobs.r[cand], blobs.s[cand], blobs.sample[cand]
+    scores = np.zeros(cx.size)
+    for start in range(0, cx.size, block):
+        part = slice(start, start + block)
+        d = np.abs(np.hypot(bx[None, :] - cx[part, None], by[None, :] - cy[part, None]) - arm[part, None])
+        size = radius[part, None]
+        ok = (d <= tol[part, None]) & (br[None, :] <= 2.2 * size) & (br[None, :] >= size / 2.2)
+        row, col = np.nonzero(ok)
+        order = np.lexsort((d[row, col], bsample[col], row))
+        row, col = row[order], col[order]
+        first = np.ones(row.size, bool)
+        first[1:] = (row[1:] != row[:-1]) | (bsample[col[1:]] != bsample[col[:-1]])
+        scores[part] = np.bincount(row[first], weights=bs[col[first]], minlength=min(block, cx.size - start))
+    return scores
+
+
 def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclude=None, iterations: int = 1500):
     """Best arc track per sign (RANSAC; of its circles the one one object can have followed:
-    :func:`_most_continuous`), then refit; tracks that move back and forth only."""
+    :func:`_most_continuous`), then refit; tracks that move back and forth only. The ``iterations`` triples
+    are drawn and their circles scored at once (:func:`_weighted_triples`, :func:`_arc_scores`)."""
     h, w = shape
     max_arm = 2.0 * math.hypot(h, w)
     tracks = []
@@ -122,27 +210,15 @@ def find_arc_tracks(blobs: Blobs, n_samples: int, shape, scale: int, rng, exclud
         if cand.size < 6 or np.unique(blobs.sample[cand]).size < 6:
             continue
         weights = blobs.s[cand] / blobs.s[cand].sum()
-        tried = []
-        for _ in range(iterations):
-            pick = rng.choice(cand, size=3, replace=False, p=weights)
-            if np.unique(blobs.sample[pick]).size < 3:
-                continue
-            rs = sorted(blobs.r[pick])
-            radius = float(rs[1])
-            if rs[2] > 2.2 * rs[0]:
-                continue
-            pts = list(zip(blobs.x[pick], blobs.y[pick], strict=True))
-            if min(math.dist(pts[i], pts[j]) for i, j in ((0, 1), (0, 2), (1, 2))) < 1.5 * radius:
-                continue
-            circle = circle_through(*pts)
-            if circle is None or not 3 * radius <= circle[2] <= max_arm:
-                continue
-            tol = max(1.5 * scale, 0.35 * radius)
-            idx = arc_inliers(blobs, cand, circle[0], circle[1], circle[2], radius, tol)
-            score = blobs.s[idx].sum()
-            tried.append((score, circle, radius, tol, idx))
-        if not tried:
+        picks = _weighted_triples(rng, cand, weights, iterations)
+        cx, cy, arm, radius, tol = _ransac_circles(blobs, cand, picks, scale, max_arm)
+        if not cx.size:
             continue
+        scores = _arc_scores(blobs, cand, cx, cy, arm, radius, tol)
+        tried = [
+            (float(scores[k]), (float(cx[k]), float(cy[k]), float(arm[k])), float(radius[k]), float(tol[k]))
+            for k in range(cx.size)
+        ]
         best = _most_continuous(blobs, cand, tried, scale)
         if best is None:
             continue
@@ -175,7 +251,9 @@ def _most_continuous(blobs: Blobs, cand: np.ndarray, tried: list, scale: int, n_
     tried.sort(key=lambda c: -c[0])
     seen: list[set] = []
     best = None
-    for score, circle, radius, tol, idx in tried:
+    for _, circle, radius, tol in tried:
+        idx = arc_inliers(blobs, cand, *circle, radius, tol)
+        score = blobs.s[idx].sum()
         members = set(idx.tolist())
         if idx.size < 5 or any(len(members & s) >= 0.8 * len(members | s) for s in seen):
             continue  # another of the same blobs (an arc is found by many triples)

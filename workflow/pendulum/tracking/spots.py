@@ -99,14 +99,19 @@ def dog_blobs(fg, scale: int, threshold: float, per_sign: int, signs: tuple[int,
         for sign in signs:
             best = top if sign > 0 else cv2.multiply(low, -1.0)
             peaks = (best >= cv2.dilate(best, kernel)) & (best > threshold)
-            ys, xs = np.nonzero(peaks)
+            points = cv2.findNonZero(peaks.view(np.uint8))  # (x, y) row by row, as np.nonzero
+            if points is None:
+                continue
+            points = points.reshape(-1, 2).astype(np.intp)
+            xs, ys = points[:, 0], points[:, 1]
             if ys.size > per_sign:
                 keep = np.argsort(best[ys, xs])[-per_sign:]
                 ys, xs = ys[keep], xs[keep]
-            for yy, xx in zip(ys, xs, strict=True):
-                which = int(np.argmax([sign * d[yy, xx] for d in dogs]))
-                sigma = PYRAMID_SIGMAS[which] * 1.22
-                dx, dy = _peak_offset(dogs[which], yy, xx, sign)
+            responses = np.stack([d[ys, xs] for d in dogs])
+            which = np.argmax(sign * responses, axis=0)
+            for yy, xx, k in zip(ys.tolist(), xs.tolist(), which.tolist(), strict=True):
+                sigma = PYRAMID_SIGMAS[k] * 1.22
+                dx, dy = _peak_offset(dogs[k], yy, xx, sign)
                 found.append(
                     (
                         sign,
