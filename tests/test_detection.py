@@ -474,3 +474,27 @@ def test_two_pendulums_side_by_side_are_not_fused_into_one_arc():
     ok = joined.flag == "ok"
     error = np.degrees(joined.theta_rad[ok] - joined.theta_rad_true[ok])
     assert float(np.sqrt(np.mean((error - error.mean()) ** 2))) <= 0.03
+
+
+def test_ransac_triples_are_numpys_weighted_choice_drawn_at_once():
+    """Detection's RANSAC draws its triples in one go (:func:`pendulum.tracking.arcs._weighted_triples`): the
+    rows and the generator's state after must be exactly those of as many ``rng.choice(cand, 3, replace=False,
+    p=w)`` calls (NumPy itself is the reference), also with weights so uneven that picks repeat and are drawn
+    again."""
+    import numpy as np
+
+    from pendulum.tracking.arcs import _weighted_triples
+
+    for seed in range(40):
+        g = np.random.default_rng(seed)
+        m = int(g.integers(3, 300))
+        w = g.random(m) ** float(g.choice([1.0, 6.0, 20.0]))
+        if seed % 4 == 0:  # one blob holds most of the response: it is picked twice in most calls
+            m, w = 5, np.array([0.9, 0.05, 0.03, 0.015, 0.005])
+        w /= w.sum()
+        cand = np.sort(g.choice(10_000, m, replace=False))
+        n = int(g.integers(1, 400))
+        ours, numpys = np.random.default_rng(seed + 99), np.random.default_rng(seed + 99)
+        reference = np.array([numpys.choice(cand, size=3, replace=False, p=w) for _ in range(n)])
+        assert np.array_equal(_weighted_triples(ours, cand, w, n), reference), seed
+        assert ours.random() == numpys.random(), seed
