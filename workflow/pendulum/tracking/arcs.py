@@ -290,6 +290,20 @@ def arc_track(blobs: Blobs, idx: np.ndarray, sign: int, circle, scale: int, radi
     return ArcTrack(sign, cx, cy, arm, idx, radius, float(np.median(blobs.s[idx])), reversals, span, curved, balance)
 
 
+def _local_medians(values: np.ndarray, used: np.ndarray, half: int, fallback: float) -> np.ndarray:
+    """Per i, the median of the ``used`` values among ``values[i - half : i + half + 1]`` (``fallback`` where
+    fewer than 3): NumPy's median (the middle one, or the mean of the two middle ones) for every window at once."""
+    n = values.size
+    window = 2 * half + 1
+    rows = np.lib.stride_tricks.sliding_window_view(np.pad(values, half), window)
+    taken = np.lib.stride_tricks.sliding_window_view(np.pad(used, half), window)
+    ordered = np.sort(np.where(taken, rows, np.inf), axis=1)
+    count = taken.sum(axis=1)
+    at = np.arange(n)
+    middle = (ordered[at, np.maximum((count - 1) // 2, 0)] + ordered[at, count // 2]) / 2
+    return np.where(count >= 3, middle, fallback)
+
+
 def continuous_members(blobs: Blobs, track: ArcTrack, scale: int) -> tuple[np.ndarray, float]:
     """The track's members that one object can have visited in turn, and the step allowed per sample there.
 
@@ -312,10 +326,7 @@ def continuous_members(blobs: Blobs, track: ArcTrack, scale: int) -> tuple[np.nd
     if moving.sum() < 5:
         return m, math.inf
     overall = float(np.median(steps[moving]))
-    limits = np.empty(steps.size)
-    for i in range(steps.size):
-        near = steps[max(0, i - 6) : i + 7][moving[max(0, i - 6) : i + 7]]
-        limits[i] = max(3.5 * (float(np.median(near)) if near.size >= 3 else overall), 1.5 * track.radius)
+    limits = np.maximum(3.5 * _local_medians(steps, moving, 6, overall), 1.5 * track.radius)
     piece = np.concatenate([[0], np.cumsum(steps > limits * np.maximum(gaps, 1))])
     keep = piece == int(np.argmax(np.bincount(piece)))
 

@@ -14,7 +14,7 @@ import math
 import cv2
 import numpy as np
 
-from pendulum.camera.video import VideoError, iter_luma
+from pendulum.tracking.samples import spread_frames
 
 # closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
 CLOSE_FRACTION = 1 / 72
@@ -24,16 +24,9 @@ TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D
 
 
 def sample_clip(path, n_samples: int) -> list[tuple[int, np.ndarray]]:
-    """Every k-th decoded frame (k doubling as needed): between n and 2n frames over the whole clip, frame 0 first."""
-    kept, stride = [], 1
-    for index, _t, image in iter_luma(path):
-        if index % stride == 0:
-            kept.append((index, image.copy()))
-            if len(kept) >= 2 * n_samples:
-                kept, stride = kept[::2], stride * 2
-    if not kept:
-        raise VideoError(f"{path}: no frame could be decoded")
-    return kept
+    """Every k-th decoded frame (k doubling as needed): between n and 2n frames over the whole clip, frame 0 first
+    (read-only; :func:`pendulum.tracking.samples.spread_frames`: decoded once per clip)."""
+    return spread_frames(path, n_samples)[0]
 
 
 def close_size(shape) -> int:

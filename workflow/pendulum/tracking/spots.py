@@ -14,40 +14,24 @@ import warnings
 import cv2
 import numpy as np
 
-from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.arcs import ArcTrack, Blobs
 from pendulum.tracking.centroids import edge_radius, linear_centroid
+from pendulum.tracking.samples import spread_frames, spread_indices
 
 PYRAMID_SIGMAS = (1.0, 1.5, 2.25, 3.375)  # DoG σ at each pyramid level (× 2^level), ratio 1.5
 RADIUS_PER_SIGMA = 1.7  # disk radius ≈ 1.7 σ of the DoG scale where it responds most
 
 
 def sample_frames(path, max_samples: int, max_full: int, max_frames: int):
-    """Every k-th frame (k doubling as needed) of the first ``max_frames``, at reduced scale; fewer at full size."""
-    small, full = [], []  # (frame index, image)
-    stride, stride_full, scale = 1, 1, None
-    first = None
-    for index, _t, image in iter_luma(path):
-        if index >= max_frames:
-            break
-        if scale is None:
-            scale = max(1, int(round(max(image.shape) / 640)))
-            first = image.copy()
-        if index % stride == 0:
-            reduced = (
-                image
-                if scale == 1
-                else cv2.resize(image, (image.shape[1] // scale, image.shape[0] // scale), interpolation=cv2.INTER_AREA)
-            )
-            small.append((index, reduced.copy()))
-            if len(small) >= 2 * max_samples:
-                small, stride = small[::2], stride * 2
-        if index % stride_full == 0:
-            full.append((index, image.copy()))
-            if len(full) >= 2 * max_full:
-                full, stride_full = full[::2], stride_full * 2
-    if first is None:
-        raise VideoError(f"{path}: no frame could be decoded")
+    """Every k-th frame (k doubling as needed) of the first ``max_frames``, at reduced scale; fewer at full size
+    (:func:`pendulum.tracking.samples.spread_frames`: decoded once per clip)."""
+    frames, decoded = spread_frames(path, max_samples, max_frames)
+    first = frames[0][1]
+    scale = max(1, int(round(max(first.shape) / 640)))
+    size = (first.shape[1] // scale, first.shape[0] // scale)
+    small = [(i, image if scale == 1 else cv2.resize(image, size, interpolation=cv2.INTER_AREA)) for i, image in frames]
+    wanted = set(spread_indices(decoded, max_full))
+    full = [(i, image) for i, image in frames if i in wanted]
     return small, full, scale, first
 
 

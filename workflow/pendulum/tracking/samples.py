@@ -1,0 +1,66 @@
+"""Frames spread over a clip, decoded once and shared by the searches that need them.
+
+Marker detection (:func:`pendulum.tracking.spots.sample_frames`) and the body's static scene
+(:func:`pendulum.tracking.body_scene.sample_clip`, also when the scene is taken again from the swing's
+ends) each take every k-th decoded frame, k doubling whenever 2n frames are held, so that n to 2n frames
+spread over the clip remain, frame 0 first. With k a power of two, a smaller set (larger k) is a subset of a
+larger one. The last clip's set is kept (one clip at a time, its frames read-only): a body tracked after a
+marker search, or tracked again with a scene from its swing's ends, does not decode the clip again for them.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from pendulum.camera.video import VideoError, iter_luma
+
+_held: dict = {}  # the last clip's spread frames: key, n, frames, frames decoded, whether to the clip's end
+
+
+def spread_indices(n_frames: int, n: int) -> list[int]:
+    """The indices of the frames that every-k-th sampling keeps of ``n_frames`` (k doubling when 2n are held)."""
+    kept, stride = [], 1
+    for index in range(n_frames):
+        if index % stride == 0:
+            kept.append(index)
+            if len(kept) >= 2 * n:
+                kept, stride = kept[::2], stride * 2
+    return kept
+
+
+def _key(path) -> tuple:
+    stat = os.stat(path)
+    return str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns
+
+
+def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tuple[int, np.ndarray]], int]:
+    """Every k-th decoded frame of the clip's first ``max_frames`` (all when None): ``n`` to ``2n`` of them
+    as ``(index, image)`` (read-only), and how many frames were decoded. Raises
+    :class:`~pendulum.camera.video.VideoError` when no frame decodes."""
+    key = _key(path)
+    held = _held.get("clip")
+    if held is not None and held["key"] == key and held["n"] >= n:  # fewer samples: a subset
+        complete, decoded = held["complete"], held["decoded"]
+        if (complete and (max_frames is None or decoded <= max_frames)) or held["max_frames"] == max_frames:
+            wanted = set(spread_indices(decoded, n))
+            return [(i, image) for i, image in held["frames"] if i in wanted], decoded
+    kept, stride, decoded = [], 1, 0
+    for index, _t, image in iter_luma(path):
+        if max_frames is not None and index >= max_frames:
+            break
+        decoded = index + 1
+        if index % stride == 0:
+            image = image.copy()
+            image.flags.writeable = False
+            kept.append((index, image))
+            if len(kept) >= 2 * n:
+                kept, stride = kept[::2], stride * 2
+    if not kept:
+        raise VideoError(f"{path}: no frame could be decoded")
+    complete = max_frames is None or decoded < max_frames
+    _held["clip"] = {"key": key, "n": n, "frames": kept, "decoded": decoded, "complete": complete}
+    _held["clip"]["max_frames"] = max_frames
+    return list(kept), decoded
