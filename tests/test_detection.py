@@ -498,3 +498,47 @@ def test_ransac_triples_are_numpys_weighted_choice_drawn_at_once():
         reference = np.array([numpys.choice(cand, size=3, replace=False, p=w) for _ in range(n)])
         assert np.array_equal(_weighted_triples(ours, cand, w, n), reference), seed
         assert ours.random() == numpys.random(), seed
+
+
+def test_local_medians_are_numpys_median_of_each_window():
+    """continuous_members' step limits: per step, NumPy's median of the moving steps within ±6 (a fallback where
+    fewer than 3), computed for every window at once; checked against np.median window by window, ties included."""
+    from pendulum.tracking.arcs import _local_medians
+
+    for seed in range(300):
+        g = np.random.default_rng(seed)
+        n = int(g.integers(1, 50))
+        values = g.random(n) * 10
+        if seed % 3 == 0:
+            values = np.round(values)
+        used = g.random(n) < g.random()
+        expected = [
+            float(np.median(values[max(0, i - 6) : i + 7][used[max(0, i - 6) : i + 7]]))
+            if used[max(0, i - 6) : i + 7].sum() >= 3
+            else -1.0
+            for i in range(n)
+        ]
+        assert np.array_equal(_local_medians(values, used, 6, -1.0), expected), seed
+
+
+def test_sampled_frames_are_decoded_once_and_never_stale(tmp_path):
+    """The spread samples (detection's and the body's scene's) come from one decode per clip: a smaller set is the
+    larger one's frames at the indices a fresh sampling takes; a clip written again at the same path is decoded
+    again, not served from the last one."""
+    from pendulum.tracking import samples
+
+    path = tmp_path / "ramp.mp4"
+    frames = [np.full((64, 96), 10 + 2 * k, np.uint8) for k in range(70)]
+    write_video(frames, path, 30.0, 0, "ultrafast")
+    many, decoded = samples.spread_frames(path, 12)
+    assert decoded == 70 and [i for i, _ in many] == samples.spread_indices(70, 12)
+    assert [i for i, _ in many] == list(range(0, 70, 4))  # 18 frames: between n and 2n, stride doubled twice
+    few, _ = samples.spread_frames(path, 5)
+    assert [i for i, _ in few] == samples.spread_indices(70, 5) == list(range(0, 70, 8))
+    assert all(image is dict(many)[i] for i, image in few)  # the held frames, not a second decode
+    assert abs(float(few[1][1].mean()) - (16 + 26 * 219 / 255)) <= 1  # frame 8's grey 26, as limited-range luma
+    with pytest.raises(ValueError):
+        few[0][1][0, 0] = 0  # read-only: no search can change another's samples
+    write_video([255 - f for f in frames], path, 30.0, 0, "ultrafast")
+    again, _ = samples.spread_frames(path, 5)
+    assert abs(float(again[1][1].mean()) - (16 + 229 * 219 / 255)) <= 1  # the new clip's frame 8: grey 229

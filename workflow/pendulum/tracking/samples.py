@@ -33,7 +33,7 @@ def spread_indices(n_frames: int, n: int) -> list[int]:
 
 def _key(path) -> tuple:
     stat = os.stat(path)
-    return str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns
+    return str(Path(path).resolve()), stat.st_ino, stat.st_size, stat.st_mtime_ns
 
 
 def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tuple[int, np.ndarray]], int]:
