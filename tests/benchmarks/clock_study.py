@@ -37,9 +37,9 @@ def render(seed: int, workdir: Path, duration_s: float = 6.0) -> tuple[Path, lis
     if not (video.is_file() and all(p.is_file() for p in paths)):
         frames, *truths = render_wall_pair(*trials)
         cam = trials[0].spec.camera
-        # x264 without its assembly: the same bytes in every run (with it, scene 9003's left pendulum was tracked
-        # well or 0.59° off depending on the run: docs/footage.md)
-        write_video(frames, video, cam.fps, cam.crf, cam.preset, plain_c=True)
+        # the same bytes in every run (x264's AVX-512 code once gave scene 9003 bytes whose left pendulum was
+        # tracked 0.59° off: docs/footage.md; write_video now keeps x264 to its AVX2 code)
+        write_video(frames, video, cam.fps, cam.crf, cam.preset)
         for truth, path in zip(truths, paths, strict=True):
             truth.to_csv(path, index=False)
     return video, [(t, pd.read_csv(p)) for t, p in zip(trials, paths, strict=True)]

@@ -55,8 +55,9 @@ def judge(seed: int, workdir: Path, radii: tuple[float, float] = (0.5, 2.0)) -> 
             body=left.body if dot else replace(left.body, dot_radius_px=0.0),
             wall=replace(left.wall, grain=grain),
         )
-        # x264 without its assembly: the same bytes every run (with it, grain-8 scenes moved by 0.01° run to run)
-        write_wall_trial(trial, workdir, workdir, plain_c=True)  # the video and its truth, <name>.csv
+        # the same bytes every run (x264's AVX-512 code moved grain-8 scenes by 0.01° run to run; write_video now
+        # keeps x264 to its AVX2 code)
+        write_wall_trial(trial, workdir, workdir)  # the video and its truth, <name>.csv
     truth = pd.read_csv(truth_csv)
     try:
         track = track_body(video, TrackerSettings())

@@ -21,6 +21,7 @@ marker at arm radius R and the camera rolled by φ, the marker is at
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import sys
 from dataclasses import asdict, dataclass, field
@@ -315,6 +316,19 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
     return RenderedTrial(frames[n_lead:], truth, frames[:n_lead])
 
 
+@functools.lru_cache
+def x264_cpu(cpuinfo: str = "/proc/cpuinfo") -> str | None:
+    """x264's CPU features for a deterministic encode: ``"AVX2"`` on an x86 CPU with AVX-512 and AVX2 (and the
+    FMA3, BMI1/2 and LZCNT that x264's AVX2 level includes), else None (x264's own detection)."""
+    try:
+        text = Path(cpuinfo).read_text()
+    except OSError:
+        return None
+    flags = next((line.split(":", 1)[1].split() for line in text.splitlines() if line.startswith("flags")), [])
+    needed = {"avx512f", "avx2", "fma", "bmi1", "bmi2", "abm"}
+    return "AVX2" if needed <= set(flags) else None
+
+
 def write_video(
     frames: list, path: Path, fps: float, crf: int, preset: str, lead_frames: list = (), plain_c: bool = False
 ) -> None:
@@ -322,9 +336,10 @@ def write_video(
 
     ``lead_frames`` (a trimmed clip): encoded before ``frames`` with negative timestamps, so the
     file holds their packets but its edit list starts at ``frames[0]`` and decoders discard them.
-    ``plain_c``: x264 without its assembly (``no-asm``), about 3.5× slower. With its assembly the same
-    960×540 frames were seen to give different bytes from run to run (4 outcomes in 12 encodes, 2026-11-27;
-    the demo's 1280×720 frames always the same bytes); without it, the same bytes every time.
+    ``plain_c``: x264 without its assembly (``no-asm``), about 3.5× slower. x264's AVX-512 code gave the same
+    960×540 frames different bytes in about one encode in ten (2026-11-27: 15 of 148; one outcome in 90
+    encodes with its AVX2 or SSE4.2 code, the bytes of most AVX-512 encodes): on a CPU with AVX-512 it is
+    told to use its AVX2 code (:func:`x264_cpu`), and every render is the same bytes in every run.
     """
     from fractions import Fraction
 
@@ -341,6 +356,8 @@ def write_video(
         stream.options = {"crf": str(crf), "preset": preset, "threads": "1", "g": keyint}
         if plain_c:
             stream.options = {**stream.options, "x264-params": "no-asm=1"}
+        elif cpu := x264_cpu():
+            stream.options = {**stream.options, "x264-params": f"asm={cpu}"}
         rate = Fraction(fps).limit_denominator(1001)
         for i, img in enumerate([*lead_frames, *frames]):
             vf = av.VideoFrame.from_ndarray(img, format="gray")
