@@ -448,7 +448,8 @@ DATA = Path(__file__).resolve().parent / "data"
 
 
 def test_two_pendulums_side_by_side_are_not_fused_into_one_arc():
-    """One encode of the clock study's scene 9003 (x264 with its assembly; the study now encodes without it):
+    """One encode of the clock study's scene 9003 (x264's AVX-512 code, whose bytes vary run to run; renders now
+    keep x264 to its AVX2 code):
     two pendulums side by side, the user pointing at the left one's dot. The samples' small bright blobs are the
     two rods' upper parts, hardly moving: a circle through both (about (424, 230) px, arm 200 px, the true
     pivot (287, 53) px, arm 284 px) gathered more of them than either's own arc, and detection took it. The
