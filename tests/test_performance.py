@@ -115,11 +115,13 @@ def _run_setup(threads):
         "import _setup\n"
         "numpy_before = 'numpy' in sys.modules\n"
         "from pendulum.camera import video\n"
-        "keys = ['OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS', 'PENDULUM_DECODER_THREADS']\n"
+        "import cv2\n"
+        "keys = ['OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS', 'OPENCV_FOR_THREADS_NUM',"
+        " 'PENDULUM_DECODER_THREADS']\n"
         "print(json.dumps({'env': {k: os.environ.get(k) for k in keys}, 'numpy_before': numpy_before,"
-        " 'decoder': video.DECODER_THREADS}))\n"
+        " 'decoder': video.DECODER_THREADS, 'opencv': cv2.getNumThreads()}))\n"
     )
-    env = {k: v for k, v in os.environ.items() if not k.endswith("_THREADS")}
+    env = {k: v for k, v in os.environ.items() if "THREADS" not in k}
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
     return json.loads(proc.stdout)
 
@@ -130,6 +132,7 @@ def test_setup_ties_blas_and_decoder_threads_to_the_rule(threads):
     assert result["env"] == dict.fromkeys(result["env"], str(threads))
     assert result["numpy_before"] is False  # set before any BLAS library loads
     assert result["decoder"] == threads
+    assert result["opencv"] == threads  # OpenCV's loops too (before, 2 threads in a 1-thread job on 2 cores)
 
 
 def test_setup_outside_snakemake_leaves_threads_alone():

@@ -17,6 +17,7 @@ THREAD_VARIABLES = (
     "GOTO_NUM_THREADS",
     "VECLIB_MAXIMUM_THREADS",
     "NUMEXPR_NUM_THREADS",
+    "OPENCV_FOR_THREADS_NUM",  # OpenCV's parallel loops (blurs, morphology, resizing): all cores unless told
     "PENDULUM_DECODER_THREADS",
 )
 
