@@ -7,8 +7,6 @@ import pytest
 # One BLAS thread per process: the suite and its workflow runs already use both cores, and
 # oversubscribed OpenBLAS made small SVDs ~100x slower on a busy 2-core machine.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-# And one OpenCV thread (its blurs and morphology otherwise take both cores in each of the two workers).
-os.environ.setdefault("OPENCV_FOR_THREADS_NUM", "1")
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "workflow"))
 SHARED = ROOT.parent / "shared"
