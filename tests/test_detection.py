@@ -540,6 +540,101 @@ def test_sampled_frames_are_decoded_once_and_never_stale(tmp_path):
     assert abs(float(few[1][1].mean()) - (16 + 26 * 219 / 255)) <= 1  # frame 8's grey 26, as limited-range luma
     with pytest.raises(ValueError):
         few[0][1][0, 0] = 0  # read-only: no search can change another's samples
+    more, _ = samples.spread_frames(path, 20)  # more samples than held: decoded again
+    assert [i for i, _ in more] == samples.spread_indices(70, 20) == list(range(0, 70, 2))
+    capped, decoded = samples.spread_frames(path, 5, max_frames=30)  # detection's first max_frames only
+    assert decoded == 30 and [i for i, _ in capped] == samples.spread_indices(30, 5)
+    whole, decoded = samples.spread_frames(path, 5)  # the body's: the whole clip, not the capped set
+    assert decoded == 70 and [i for i, _ in whole] == list(range(0, 70, 8))
     write_video([255 - f for f in frames], path, 30.0, 0, "ultrafast")
     again, _ = samples.spread_frames(path, 5)
     assert abs(float(again[1][1].mean()) - (16 + 229 * 219 / 255)) <= 1  # the new clip's frame 8: grey 229
+    with pytest.raises(VideoError, match="no_such"):
+        samples.spread_frames(tmp_path / "no_such.mp4", 5)
+    samples.release()
+
+
+def _old_ransac_tried(blobs, cand, rng, scale, max_arm, iterations):
+    """RANSAC's circles as detection drew them one by one until 2026-11-28 (the reference for the batched
+    version): (score, circle, radius, tol) per kept triple, in order."""
+    from pendulum.tracking.arcs import arc_inliers, circle_through
+
+    weights = blobs.s[cand] / blobs.s[cand].sum()
+    tried = []
+    for _ in range(iterations):
+        pick = rng.choice(cand, size=3, replace=False, p=weights)
+        if np.unique(blobs.sample[pick]).size < 3:
+            continue
+        rs = sorted(blobs.r[pick])
+        radius = float(rs[1])
+        if rs[2] > 2.2 * rs[0]:
+            continue
+        pts = list(zip(blobs.x[pick], blobs.y[pick], strict=True))
+        if min(math.dist(pts[i], pts[j]) for i, j in ((0, 1), (0, 2), (1, 2))) < 1.5 * radius:
+            continue
+        circle = circle_through(*pts)
+        if circle is None or not 3 * radius <= circle[2] <= max_arm:
+            continue
+        tol = max(1.5 * scale, 0.35 * radius)
+        idx = arc_inliers(blobs, cand, circle[0], circle[1], circle[2], radius, tol)
+        tried.append((blobs.s[idx].sum(), circle, radius, tol))
+    return tried
+
+
+def test_batched_ransac_tries_the_circles_the_one_by_one_loop_tried():
+    """Detection's RANSAC draws, fits and scores its 1,500 triples per sign as arrays: on random blob sets (two
+    swinging spots, a line mover, clutter; sizes and responses varied) every circle, radius, tolerance and score
+    is exactly what the one-by-one loop gave, in the same order, and the generator ends in the same state."""
+    from pendulum.tracking.arcs import Blobs, _arc_scores, _ransac_circles, _weighted_triples
+
+    for seed in range(12):
+        g = np.random.default_rng(seed)
+        n, rows = 40, []
+        for k in range(n):
+            for cx, cy, arm, amp, r in ((320, -50, 300, 0.3, 12.0), (500, 20, 200, 0.2, 8.0)):
+                a = amp * math.sin(0.7 * k + seed)
+                rows.append(
+                    (k, 1, cx + arm * math.sin(a) + g.normal(0, 0.3), cy + arm * math.cos(a), r, g.uniform(5, 30))
+                )
+            rows.append((k, 1, 10 + 9 * k, 300 + g.normal(0, 0.3), 10.0, g.uniform(5, 30)))  # on a line
+            for _ in range(int(g.integers(0, 4))):  # clutter
+                rows.append((k, 1, g.uniform(0, 640), g.uniform(0, 360), g.choice([4.0, 8.0, 16.0]), g.uniform(2, 9)))
+        a = np.array(rows, float)
+        blobs = Blobs(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2], a[:, 3], a[:, 4], np.round(a[:, 5], 1))
+        cand = np.arange(len(a))
+        old_rng, new_rng = np.random.default_rng(seed), np.random.default_rng(seed)
+        max_arm = 2.0 * math.hypot(360, 640)
+        expected = _old_ransac_tried(blobs, cand, old_rng, 2, max_arm, 400)
+        picks = _weighted_triples(new_rng, cand, blobs.s[cand] / blobs.s[cand].sum(), 400)
+        cx, cy, arm, radius, tol = _ransac_circles(blobs, cand, picks, 2, max_arm)
+        scores = _arc_scores(blobs, cand, cx, cy, arm, radius, tol, block=64)
+        got = [(scores[k], (cx[k], cy[k], arm[k]), radius[k], tol[k]) for k in range(cx.size)]
+        assert len(got) == len(expected) > 50, seed
+        assert got == expected, seed
+        assert old_rng.random() == new_rng.random(), seed
+
+
+def test_triples_refuse_weights_numpy_refuses():
+    """Fewer than three blobs with any response: an error, as NumPy's choice gives, not repeated picks."""
+    from pendulum.tracking.arcs import _weighted_triples
+
+    with pytest.raises(ValueError, match="non-zero"):
+        _weighted_triples(np.random.default_rng(0), np.arange(4), np.array([0.5, 0.5, 0.0, 0.0]), 10)
+    with pytest.raises(ValueError, match="non-zero"):
+        np.random.default_rng(0).choice(np.arange(4), size=3, replace=False, p=np.array([0.5, 0.5, 0.0, 0.0]))
+
+
+def test_x264_is_kept_from_its_avx512_code(tmp_path):
+    """Renders are the same bytes every run: x264's AVX-512 code (whose bytes varied) is left out where the CPU
+    has it; elsewhere (no AVX-512, no flags line as on ARM, no /proc) x264 chooses."""
+    from pendulum.synthetic.experiment import x264_cpu
+
+    def cpu(flags):
+        path = tmp_path / f"cpuinfo_{len(flags or '')}"
+        path.write_text("processor\t: 0\n" + (f"flags\t\t: {flags}\n" if flags is not None else "Features\t: neon\n"))
+        return x264_cpu(str(path))
+
+    assert cpu("fpu sse4_2 avx avx2 fma bmi1 bmi2 abm avx512f avx512bw") == "AVX2"
+    assert cpu("fpu sse4_2 avx avx2 fma bmi1 bmi2 abm") is None
+    assert cpu(None) is None
+    assert x264_cpu(str(tmp_path / "missing")) is None

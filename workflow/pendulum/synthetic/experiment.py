@@ -338,8 +338,9 @@ def write_video(
     file holds their packets but its edit list starts at ``frames[0]`` and decoders discard them.
     ``plain_c``: x264 without its assembly (``no-asm``), about 3.5× slower. x264's AVX-512 code gave the same
     960×540 frames different bytes in about one encode in ten (2026-11-27: 15 of 148; one outcome in 90
-    encodes with its AVX2 or SSE4.2 code, the bytes of most AVX-512 encodes): on a CPU with AVX-512 it is
-    told to use its AVX2 code (:func:`x264_cpu`), and every render is the same bytes in every run.
+    encodes with its AVX2 or SSE4.2 code, the bytes of most AVX-512 encodes): on a Linux machine whose CPU has
+    AVX-512 it is told to use its AVX2 code (:func:`x264_cpu`), and every render is the same bytes in every run
+    (elsewhere x264 chooses, and an AVX-512 CPU may vary).
     """
     from fractions import Fraction
 

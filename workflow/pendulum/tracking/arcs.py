@@ -116,6 +116,8 @@ def _weighted_triples(rng, cand: np.ndarray, weights: np.ndarray, n: int) -> np.
     same ``rng`` state after as ``n`` such calls (NumPy's rule: three uniforms through the weights' cumulative
     sum; a repeated pick is drawn again from the weights with the picks so far set to 0)."""
     p = np.asarray(weights, dtype=np.float64)
+    if np.count_nonzero(p > 0) < 3 or not np.all(p >= 0):
+        raise ValueError("Fewer non-zero entries in p than size")  # as NumPy's choice
     cdf = np.cumsum(p)
     cdf /= cdf[-1]
     state = rng.bit_generator.state
@@ -160,10 +162,8 @@ def _ransac_circles(blobs: Blobs, cand: np.ndarray, picks: np.ndarray, scale: in
     rs = np.sort(blobs.r[picks], axis=1)
     radius = rs[:, 1]
     x, y = blobs.x[picks], blobs.y[picks]
-    apart = (
-        np.minimum.reduce([np.hypot(x[:, i] - x[:, j], y[:, i] - y[:, j]) for i, j in ((0, 1), (0, 2), (1, 2))])
-        >= 1.5 * radius
-    )
+    points = [list(zip(px, py, strict=True)) for px, py in zip(x.tolist(), y.tolist(), strict=True)]
+    apart = np.array([min(math.dist(a, b), math.dist(a, c), math.dist(b, c)) for a, b, c in points]) >= 1.5 * radius
     keep = distinct & ~(rs[:, 2] > 2.2 * rs[:, 0]) & apart
     (ax, bx, cx), (ay, by, cy) = x[keep].T, y[keep].T
     d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
@@ -180,8 +180,8 @@ def _ransac_circles(blobs: Blobs, cand: np.ndarray, picks: np.ndarray, scale: in
 
 
 def _arc_scores(blobs: Blobs, cand: np.ndarray, cx, cy, arm, radius, tol, block: int = 256) -> np.ndarray:
-    """Per circle, the summed response of its inliers (:func:`arc_inliers`: on the circle within ``tol``, radius
-    alike, one blob per sample, the one nearest the circle), for many circles at once."""
+    """Per circle, ``blobs.s[idx].sum()`` of its inliers ``idx`` (:func:`arc_inliers`: on the circle within ``tol``,
+    radius alike, one blob per sample, the one nearest the circle), the inliers of many circles found at once."""
     bx, by, br, bs, bsample = blobs.x[cand], blobs.y[cand], blobs.r[cand], blobs.s[cand], blobs.sample[cand]
     scores = np.zeros(cx.size)
     for start in range(0, cx.size, block):
@@ -194,7 +194,10 @@ def _arc_scores(blobs: Blobs, cand: np.ndarray, cx, cy, arm, radius, tol, block:
         row, col = row[order], col[order]
         first = np.ones(row.size, bool)
         first[1:] = (row[1:] != row[:-1]) | (bsample[col[1:]] != bsample[col[:-1]])
-        scores[part] = np.bincount(row[first], weights=bs[col[first]], minlength=min(block, cx.size - start))
+        row, values = row[first], bs[col[first]]  # per circle its inliers, in arc_inliers' order
+        ends = np.searchsorted(row, np.arange(min(block, cx.size - start) + 1))
+        # NumPy's sum of each circle's inliers (as blobs.s[idx].sum(): the same order of additions)
+        scores[part] = [values[a:b].sum() for a, b in zip(ends[:-1], ends[1:], strict=True)]
     return scores
 
 

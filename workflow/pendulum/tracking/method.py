@@ -14,6 +14,7 @@ from __future__ import annotations
 import pandas as pd
 
 from pendulum.camera.video import VideoError
+from pendulum.tracking import samples
 from pendulum.tracking.body import track_body
 from pendulum.tracking.marker import track_video
 from pendulum.tracking.settings import TrackerSettings
@@ -29,8 +30,15 @@ def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
     """The track by ``settings.method`` (module docstring); ``attrs["method"]``: ``used``, ``reason``, ``tried``.
 
     Raises :class:`~pendulum.camera.video.VideoError` when no method gives a record; the message holds
-    what each one said.
+    what each one said. The clip's sampled frames, shared by the searches, are let go at the end.
     """
+    try:
+        return _track_trial(path, settings, progress)
+    finally:
+        samples.release()
+
+
+def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
     method = settings.method
     if method == "marker":
         track = track_video(path, settings, progress=progress)

@@ -4,8 +4,9 @@ Marker detection (:func:`pendulum.tracking.spots.sample_frames`) and the body's 
 (:func:`pendulum.tracking.body_scene.sample_clip`, also when the scene is taken again from the swing's
 ends) each take every k-th decoded frame, k doubling whenever 2n frames are held, so that n to 2n frames
 spread over the clip remain, frame 0 first. With k a power of two, a smaller set (larger k) is a subset of a
-larger one. The last clip's set is kept (one clip at a time, its frames read-only): a body tracked after a
-marker search, or tracked again with a scene from its swing's ends, does not decode the clip again for them.
+larger one. The last clip's set is kept (one clip at a time, its frames read-only, until :func:`release`): a
+body tracked after a marker search (of a clip within the search's first ``max_frames``, 30 s at 60 fps), or
+tracked again with a scene from its swing's ends, does not decode the clip again for them.
 """
 
 from __future__ import annotations
@@ -31,18 +32,21 @@ def spread_indices(n_frames: int, n: int) -> list[int]:
     return kept
 
 
-def _key(path) -> tuple:
-    stat = os.stat(path)
-    return str(Path(path).resolve()), stat.st_ino, stat.st_size, stat.st_mtime_ns
+def _key(path) -> tuple | None:
+    try:
+        stat = os.stat(path)
+    except OSError:  # not cached: the decoder says what is wrong with the path
+        return None
+    return str(Path(path).resolve()), stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns
 
 
 def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tuple[int, np.ndarray]], int]:
-    """Every k-th decoded frame of the clip's first ``max_frames`` (all when None): ``n`` to ``2n`` of them
-    as ``(index, image)`` (read-only), and how many frames were decoded. Raises
-    :class:`~pendulum.camera.video.VideoError` when no frame decodes."""
+    """Every k-th decoded frame of the clip's first ``max_frames`` (all when None): ``n`` to ``2n − 1`` of them
+    (all of a clip shorter than ``n`` frames) as ``(index, image)`` (read-only), and how many frames were decoded.
+    Raises :class:`~pendulum.camera.video.VideoError` when no frame decodes."""
     key = _key(path)
     held = _held.get("clip")
-    if held is not None and held["key"] == key and held["n"] >= n:  # fewer samples: a subset
+    if key is not None and held is not None and held["key"] == key and held["n"] >= n:  # fewer samples: a subset
         complete, decoded = held["complete"], held["decoded"]
         if (complete and (max_frames is None or decoded <= max_frames)) or held["max_frames"] == max_frames:
             wanted = set(spread_indices(decoded, n))
@@ -64,3 +68,8 @@ def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tup
     _held["clip"] = {"key": key, "n": n, "frames": kept, "decoded": decoded, "complete": complete}
     _held["clip"]["max_frames"] = max_frames
     return list(kept), decoded
+
+
+def release() -> None:
+    """Let the last clip's frames go (a trial's tracking is done)."""
+    _held.clear()

@@ -25,11 +25,16 @@ RADIUS_PER_SIGMA = 1.7  # disk radius ≈ 1.7 σ of the DoG scale where it respo
 def sample_frames(path, max_samples: int, max_full: int, max_frames: int):
     """Every k-th frame (k doubling as needed) of the first ``max_frames``, at reduced scale; fewer at full size
     (:func:`pendulum.tracking.samples.spread_frames`: decoded once per clip)."""
-    frames, decoded = spread_frames(path, max_samples, max_frames)
+    frames, decoded = spread_frames(path, max(max_samples, max_full), max_frames)  # the larger set holds the other
     first = frames[0][1]
     scale = max(1, int(round(max(first.shape) / 640)))
     size = (first.shape[1] // scale, first.shape[0] // scale)
-    small = [(i, image if scale == 1 else cv2.resize(image, size, interpolation=cv2.INTER_AREA)) for i, image in frames]
+    wanted = set(spread_indices(decoded, max_samples))
+    small = [
+        (i, image if scale == 1 else cv2.resize(image, size, interpolation=cv2.INTER_AREA))
+        for i, image in frames
+        if i in wanted
+    ]
     wanted = set(spread_indices(decoded, max_full))
     full = [(i, image) for i, image in frames if i in wanted]
     return small, full, scale, first
