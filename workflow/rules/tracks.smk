@@ -15,7 +15,7 @@ rule tracks:
         "benchmarks/jobs/tracks/{trial}.tsv"
     threads: 1  # the decoder's threads (video.iter_luma); `--set-threads tracks=2` for long 1080p clips
     resources:
-        mem_mb=2000,  # marker detection holds ~50 sampled frames: ~0.6 GB at 720p, ~1 GB at 1080p
+        mem_mb=2000,  # 60–119 sampled frames at full size, shared by the searches: peak 0.41 GB at 720p, ~1 GB at 1080p
         runtime=60,
     params:
         tracking=tracking_settings,
