@@ -549,3 +549,53 @@ def test_a_body_near_the_frame_s_border_is_not_stretched_out_to_it():
         assert stats[body, cv2.CC_STAT_AREA] <= np.count_nonzero(
             cv2.circle(np.zeros_like(diff), (100, top_px + radius), radius + 1, 1.0, -1)
         )
+
+
+def _flags_track(n_ok: int, n: int = 100):
+    import pandas as pd
+
+    flags = ["ok"] * n_ok + ["occluded"] * (n - n_ok)
+    return pd.DataFrame({"frame": range(n), "time_s": np.arange(n) / 30.0, "x_px": 1.0, "y_px": 2.0, "flag": flags})
+
+
+@pytest.mark.parametrize(
+    "most, body_ok, whole_ok, body_fails, used, passes",
+    [
+        (0.90, 97, None, False, "body", 1),  # the body beats all the marker could have had: no second pass
+        (0.90, 85, 88, False, "marker", 2),  # the marker might do as well: its whole pass decides (88 >= 85)
+        (0.90, 85, 80, False, "body", 2),
+        (0.90, None, 88, True, "marker", 2),  # no body: the marker's whole record, as before the early stop
+    ],
+)
+def test_a_marker_pass_stopped_early_decides_as_the_whole_pass_would(
+    monkeypatch, most, body_ok, whole_ok, body_fails, used, passes
+):
+    """``method: auto`` stops the marker pass where it can no longer reach 95 % ok; the choice between marker and
+    body must be the one the whole pass would have given: the body only where it beats the most the marker could
+    have had, else (or without a body) the marker's whole pass is run and compared as before."""
+    from pendulum.camera.video import VideoError
+    from pendulum.tracking import method
+    from pendulum.tracking.marker import MarkerAbandoned
+    from pendulum.tracking.settings import TrackerSettings
+
+    calls = []
+
+    def fake_marker(path, settings, progress=None, abandon_below=None, detection=None):
+        calls.append(abandon_below)
+        if abandon_below is not None:
+            raise MarkerAbandoned("stopped", most, settings, detection="found")
+        assert detection == "found"  # the whole pass reuses the stopped pass's detection
+        return _flags_track(whole_ok)
+
+    def fake_body(path, settings, progress=None):
+        if body_fails:
+            raise VideoError("no body")
+        return _flags_track(body_ok)
+
+    monkeypatch.setattr(method, "track_video", fake_marker)
+    monkeypatch.setattr(method, "track_body", fake_body)
+    track = method.track_trial("clip.mp4", TrackerSettings())
+    assert track.attrs["method"]["used"] == used
+    assert len(calls) == passes and calls[0] == method.MARKER_USABLE_FRACTION
+    if passes == 1:
+        assert "under 95 %" in track.attrs["method"]["tried"]["marker"] and "90.00 %" in track.attrs["method"]["reason"]

@@ -58,6 +58,7 @@ from pendulum.tracking.acquisition import Candidate, inner_grey, marker_candidat
 from pendulum.tracking.centroids import measure_marker
 from pendulum.tracking.checks import estimate_exposure_fraction, exposure_centre_correction, flag_jumps
 from pendulum.tracking.marker_arc import ArcReference, MarkerArc
+from pendulum.tracking.samples import frame_count
 from pendulum.tracking.settings import TrackerSettings
 
 log = logging.getLogger(__name__)
@@ -126,8 +127,22 @@ def _agrees(settings: TrackerSettings, polarity: str, radius: float) -> bool:
     )
 
 
+class MarkerAbandoned(VideoError):
+    """The marker pass stopped where too many frames were already not ``ok`` for the share asked of it."""
+
+    def __init__(self, message: str, most_usable: float, settings: TrackerSettings, detection=None):
+        super().__init__(message)
+        self.most_usable = most_usable  # the most of the clip's frames the whole pass could have had ok
+        self.settings, self.detection = settings, detection  # as resolved: the whole pass without detecting again
+
+
 def track_video(
-    path, settings: TrackerSettings, progress=None, progress_every: int = 200, detection=None
+    path,
+    settings: TrackerSettings,
+    progress=None,
+    progress_every: int = 200,
+    detection=None,
+    abandon_below: float | None = None,
 ) -> pd.DataFrame:
     """Track the marker through the whole video in one decode pass.
 
@@ -158,6 +173,11 @@ def track_video(
     marker anywhere, two equally marker-like spots at the first acquisition (a
     reflection; ``start_px`` resolves it), or fewer than ``min_usable_fraction``
     of the frames usable (marker out of the frame or hidden most of the time).
+
+    ``abandon_below``: a share of ``ok`` frames the caller needs; where the clip's frame count is known
+    (:func:`pendulum.tracking.samples.frame_count`) and more frames than the rest of that share allows are already
+    not ``ok`` (a flag set in the pass is final, and only an ``ok`` frame becomes a ``jump`` after it), the pass
+    stops with :class:`MarkerAbandoned`, which holds the most the whole pass could have had ``ok``.
     """
     found_by = "detection" if detection is not None or settings.needs_detection else "given in the settings"
     if detection is None:
@@ -211,7 +231,21 @@ def track_video(
     off_arc_px = 1.5 * r + 2.0
     max_step = 0.0  # largest frame-to-frame step of the marker seen
     best_seen: Candidate | None = None  # best spot of any failed acquisition, for the error message
+    total = frame_count(path) if abandon_below is not None else None
+    allowed = math.inf if total is None else (1.0 - abandon_below) * total  # frames that may be not ok
+    not_ok = counted = 0
     for index, t, image in iter_luma(path, damaged=True, report=video_report):
+        not_ok += sum(row[6] != "ok" for row in rows[counted:])
+        counted = len(rows)
+        if not_ok > allowed:
+            most = (total - not_ok) / total
+            raise MarkerAbandoned(
+                f"{path}: the marker pass stopped at frame {index}, {not_ok} frames not ok: at most "
+                f"{100 * most:.1f} % of the {total} frames usable",
+                most,
+                settings,
+                detection,
+            )
         n_frames = index + 1
         if image is None:  # damaged in the file
             rows.append((index, t, np.nan, np.nan, 0.0, 0.0, "lost"))

@@ -16,7 +16,7 @@ import pandas as pd
 from pendulum.camera.video import VideoError
 from pendulum.tracking import samples
 from pendulum.tracking.body import track_body
-from pendulum.tracking.marker import track_video
+from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.settings import TrackerSettings
 
 MARKER_USABLE_FRACTION = 0.95  # issue 23: a record ≥ 95 % usable; below it the body is tried too, the better kept
@@ -50,8 +50,15 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         return track
     tried: dict[str, str] = {}
     marker = None
+    most_usable = stopped = None  # where the marker pass stopped early: the most of the frames it could have had ok
     try:
-        marker = track_video(path, settings, progress=progress)
+        marker = track_video(path, settings, progress=progress, abandon_below=MARKER_USABLE_FRACTION)
+    except MarkerAbandoned as error:
+        stopped, most_usable = error, error.most_usable
+        tried["marker"] = (
+            f"usable in under {100 * MARKER_USABLE_FRACTION:.0f} % of the frames (its pass stopped early, where at "
+            f"most {100 * most_usable:.2f} % could be)"
+        )
     except VideoError as error:
         tried["marker"] = f"failed: {error}"
     if marker is not None:
@@ -70,6 +77,8 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         body = track_body(path, settings, progress=progress)
     except VideoError as error:
         tried["body"] = f"failed: {error}"
+        if most_usable is not None:  # the whole marker pass after all: its record, or why there is none
+            marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
         if marker is not None:
             marker.attrs["method"] = {
                 "used": "marker",
@@ -83,6 +92,8 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         ) from error
     body_fraction = usable_fraction(body)
     tried["body"] = f"usable in {100 * body_fraction:.1f} % of the frames"
+    if most_usable is not None and most_usable >= body_fraction:  # the marker might do as well: its whole pass
+        marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
     if marker is not None and usable_fraction(marker) >= body_fraction:
         marker.attrs["method"] = {
             "used": "marker",
@@ -90,10 +101,29 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
             "tried": tried,
         }
         return marker
-    why = "no marker disk could be followed" if marker is None else f"the marker disk is {tried['marker']}"
+    why = (
+        f"the marker disk is {tried['marker']}"
+        if marker is not None or most_usable is not None
+        else "no marker disk could be followed"
+    )
     body.attrs["method"] = {
         "used": "body",
         "reason": f"{why}; the body's silhouette is {tried['body']}",
         "tried": tried,
     }
     return body
+
+
+def _whole_marker_pass(
+    path, settings: TrackerSettings, stopped: MarkerAbandoned, progress=None
+) -> tuple[pd.DataFrame | None, str]:
+    """The marker's track over the whole clip (no early stop; with the stopped pass's detection, not run again)
+    and what it gave, as ``tried`` says it."""
+    try:
+        if stopped.detection is not None:
+            marker = track_video(path, stopped.settings, progress=progress, detection=stopped.detection)
+        else:
+            marker = track_video(path, settings, progress=progress)
+    except VideoError as error:
+        return None, f"failed: {error}"
+    return marker, f"usable in {100 * usable_fraction(marker):.1f} % of the frames"

@@ -51,8 +51,8 @@ def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tup
         if (complete and (max_frames is None or decoded <= max_frames)) or held["max_frames"] == max_frames:
             wanted = set(spread_indices(decoded, n))
             return [(i, image) for i, image in held["frames"] if i in wanted], decoded
-    kept, stride, decoded = [], 1, 0
-    for index, _t, image in iter_luma(path):
+    kept, stride, decoded, report = [], 1, 0, {}
+    for index, _t, image in iter_luma(path, report=report):
         if max_frames is not None and index >= max_frames:
             break
         decoded = index + 1
@@ -65,9 +65,21 @@ def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tup
     if not kept:
         raise VideoError(f"{path}: no frame could be decoded")
     complete = max_frames is None or decoded < max_frames
-    _held["clip"] = {"key": key, "n": n, "frames": kept, "decoded": decoded, "complete": complete}
+    # its frame count is the clip's where every frame decoded (a damaged one is left out of the samples' count)
+    whole = complete and not report.get("damaged_frames") and not report.get("stopped_early")
+    _held["clip"] = {"key": key, "n": n, "frames": kept, "decoded": decoded, "complete": complete, "whole": whole}
     _held["clip"]["max_frames"] = max_frames
     return list(kept), decoded
+
+
+def frame_count(path) -> int | None:
+    """The clip's number of frames, where its held samples were taken to its end and every frame decoded (else
+    None)."""
+    held = _held.get("clip")
+    key = _key(path)
+    if key is None or held is None or held["key"] != key or not held["whole"]:
+        return None
+    return held["decoded"]
 
 
 def release() -> None:
