@@ -241,7 +241,7 @@ def track_video(
             most = (total - not_ok) / total
             raise MarkerAbandoned(
                 f"{path}: the marker pass stopped at frame {index}, {not_ok} frames not ok: at most "
-                f"{100 * most:.1f} % of the {total} frames usable",
+                f"{math.floor(1000 * most) / 10:.1f} % of the {total} frames usable",
                 most,
                 settings,
                 detection,

@@ -11,6 +11,8 @@ is taken. Either way the track's ``attrs["method"]`` says which, and why.
 
 from __future__ import annotations
 
+import math
+
 import pandas as pd
 
 from pendulum.camera.video import VideoError
@@ -57,7 +59,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         stopped, most_usable = error, error.most_usable
         tried["marker"] = (
             f"usable in under {100 * MARKER_USABLE_FRACTION:.0f} % of the frames (its pass stopped early, where at "
-            f"most {100 * most_usable:.2f} % could be)"
+            f"most {math.floor(10_000 * most_usable) / 100:.2f} % could be)"
         )
     except VideoError as error:
         tried["marker"] = f"failed: {error}"
