@@ -557,7 +557,17 @@ def test_sampled_frames_are_decoded_once_and_never_stale(tmp_path):
 def _old_ransac_tried(blobs, cand, rng, scale, max_arm, iterations):
     """RANSAC's circles as detection drew them one by one until 2026-11-28 (the reference for the batched
     version): (score, circle, radius, tol) per kept triple, in order."""
-    from pendulum.tracking.arcs import arc_inliers, circle_through
+    from pendulum.tracking.arcs import arc_inliers
+
+    def circle_through(p1, p2, p3):  # as detection had it, one triple at a time
+        (ax, ay), (bx, by), (cx, cy) = p1, p2, p3
+        d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
+        if abs(d) < 1e-9:
+            return None
+        a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
+        ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
+        uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
+        return ux, uy, math.hypot(ax - ux, ay - uy)
 
     weights = blobs.s[cand] / blobs.s[cand].sum()
     tried = []

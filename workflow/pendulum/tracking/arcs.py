@@ -29,16 +29,17 @@ class Blobs:
     s: np.ndarray  # DoG response (grey levels)
 
 
-def circle_through(p1, p2, p3):
-    """Centre and radius of the circle through three points, or None when they lie on a line."""
-    (ax, ay), (bx, by), (cx, cy) = p1, p2, p3
+def circles_through(ax, ay, bx, by, cx, cy):
+    """Centres and radii of the circles through three points each (arrays): ``(ux, uy, r, on_line)``, where
+    ``on_line`` marks points on a line (no circle; their centre and radius are not meaningful)."""
     d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
-    if abs(d) < 1e-9:
-        return None
+    on_line = np.abs(d) < 1e-9
+    d = np.where(on_line, 1.0, d)
     a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
     ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
     uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
-    return ux, uy, math.hypot(ax - ux, ay - uy)
+    r = np.array([math.hypot(px - qx, py - qy) for px, py, qx, qy in zip(ax, ay, ux, uy, strict=True)])
+    return ux, uy, r, on_line
 
 
 def fit_circle(x, y):
@@ -121,15 +122,19 @@ def _weighted_triples(rng, cand: np.ndarray, weights: np.ndarray, n: int) -> np.
     cdf = np.cumsum(p)
     cdf /= cdf[-1]
     state = rng.bit_generator.state
-    uniforms = rng.random(3 * n + 16)
-    first = cdf.searchsorted(uniforms, side="right").tolist()
+    uniforms, first = np.empty(0), []  # the stream's uniforms, and each one's pick through the whole cdf
+
+    def drawn(upto: int) -> None:  # at least ``upto`` uniforms of the same stream
+        nonlocal uniforms
+        if upto > uniforms.size:
+            more = rng.random(3 * n + 16)
+            uniforms = np.concatenate([uniforms, more])
+            first.extend(cdf.searchsorted(more, side="right").tolist())
+
     rows = np.empty((n, 3), np.int64)
     pos = 0
     for k in range(n):
-        if pos + 3 > len(first):  # many repeats: more of the same stream
-            more = rng.random(3 * n + 16)
-            uniforms = np.concatenate([uniforms, more])
-            first += cdf.searchsorted(more, side="right").tolist()
+        drawn(pos + 3)
         a, b, c = first[pos : pos + 3]
         pos += 3
         if a != b and a != c and b != c:
@@ -139,10 +144,7 @@ def _weighted_triples(rng, cand: np.ndarray, weights: np.ndarray, n: int) -> np.
         left = p.copy()
         while len(found) < 3:
             need = 3 - len(found)
-            if pos + need > uniforms.size:
-                more = rng.random(3 * n + 16)
-                uniforms = np.concatenate([uniforms, more])
-                first += cdf.searchsorted(more, side="right").tolist()
+            drawn(pos + need)
             left[found] = 0.0
             again = np.cumsum(left)
             again /= again[-1]
@@ -166,13 +168,7 @@ def _ransac_circles(blobs: Blobs, cand: np.ndarray, picks: np.ndarray, scale: in
     apart = np.array([min(math.dist(a, b), math.dist(a, c), math.dist(b, c)) for a, b, c in points]) >= 1.5 * radius
     keep = distinct & ~(rs[:, 2] > 2.2 * rs[:, 0]) & apart
     (ax, bx, cx), (ay, by, cy) = x[keep].T, y[keep].T
-    d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
-    line = np.abs(d) < 1e-9
-    d = np.where(line, 1.0, d)
-    a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
-    ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
-    uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
-    arm = np.array([math.hypot(px - qx, py - qy) for px, py, qx, qy in zip(ax, ay, ux, uy, strict=True)])
+    ux, uy, arm, line = circles_through(ax, ay, bx, by, cx, cy)
     radius = radius[keep]
     good = ~line & (3 * radius <= arm) & (arm <= max_arm)
     radius = radius[good]

@@ -52,14 +52,14 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         return track
     tried: dict[str, str] = {}
     marker = None
-    most_usable = stopped = None  # where the marker pass stopped early: the most of the frames it could have had ok
+    stopped = None  # a marker pass stopped early (it holds the most of the frames it could have had ok)
     try:
         marker = track_video(path, settings, progress=progress, abandon_below=MARKER_USABLE_FRACTION)
     except MarkerAbandoned as error:
-        stopped, most_usable = error, error.most_usable
+        stopped = error
         tried["marker"] = (
             f"usable in under {100 * MARKER_USABLE_FRACTION:.0f} % of the frames (its pass stopped early, where at "
-            f"most {math.floor(10_000 * most_usable) / 100:.2f} % could be)"
+            f"most {math.floor(10_000 * stopped.most_usable) / 100:.2f} % could be)"
         )
     except VideoError as error:
         tried["marker"] = f"failed: {error}"
@@ -79,7 +79,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         body = track_body(path, settings, progress=progress)
     except VideoError as error:
         tried["body"] = f"failed: {error}"
-        if most_usable is not None:  # the whole marker pass after all: its record, or why there is none
+        if stopped is not None:  # the whole marker pass after all: its record, or why there is none
             marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
         if marker is not None:
             marker.attrs["method"] = {
@@ -94,7 +94,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         ) from error
     body_fraction = usable_fraction(body)
     tried["body"] = f"usable in {100 * body_fraction:.1f} % of the frames"
-    if most_usable is not None and most_usable >= body_fraction:  # the marker might do as well: its whole pass
+    if stopped is not None and stopped.most_usable >= body_fraction:  # the marker might do as well: its whole pass
         marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
     if marker is not None and usable_fraction(marker) >= body_fraction:
         marker.attrs["method"] = {
@@ -105,7 +105,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         return marker
     why = (
         f"the marker disk is {tried['marker']}"
-        if marker is not None or most_usable is not None
+        if marker is not None or stopped is not None
         else "no marker disk could be followed"
     )
     body.attrs["method"] = {
