@@ -99,6 +99,38 @@ def test_apple_camera_creep_is_measured_said_and_corrected(apple):
     assert not path["not_a_pendulum"]
 
 
+def test_apple_frames_lost_and_repeated_by_the_phone_are_found_and_put_right(apple, tmp_path):
+    """The clip's stamps are even, but its frames are not: a frame step twice the steps beside it at 7.7 and 21.5 s
+    (a frame lost), no motion at all from frame 406 to 407 at full speed (a frame shown twice), a step 1.8× its
+    neighbours at 4.6 s (the clock 0.8 of a period late). Found from the motion and the times put right; the same
+    moments, at half the periods, in the clip kept at every second frame (30 fps): a property of the footage."""
+    import sys
+
+    track, _, _, _ = apple
+    timing = track.attrs["timing"]
+    slips = dict(map(tuple, timing["slips"]))
+    assert 407 in timing["repeated"]
+    assert (track.set_index("frame").flag[timing["repeated"]] == "duplicate").all()
+    assert slips.keys() >= {276, 463, 1290}, slips
+    assert abs(slips[276] - 0.8) <= 0.1 and abs(slips[463] - 1) <= 0.1 and abs(slips[1290] - 1) <= 0.1
+    assert timing["checked_fraction"] >= 0.85
+    # frame 407 is taken at the moment of frame 406, frame 500 as late as the slips and repeats before it make it
+    times = track.set_index("frame").time_s
+    assert times[407] == pytest.approx(times[406], abs=1e-9)
+    late = sum(p for f, p in slips.items() if f <= 500) - sum(f <= 500 for f in timing["repeated"])
+    assert times[500] - 500 * timing["period_s"] == pytest.approx(late * timing["period_s"], abs=1e-6)
+    sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
+    from real_variants import make
+
+    from pendulum.tracking.method import track_trial
+
+    half = track_trial(make("30fps", tmp_path), default_settings()).attrs["timing"]
+    at_half = dict(map(tuple, half["slips"]))
+    # frame k at 30 fps is frame 2k of the clip: the clip's slips, halved, between the same frames
+    assert {138, 232} <= at_half.keys(), at_half
+    assert abs(at_half[138] - slips[276] / 2) <= 0.1 and abs(at_half[232] - slips[463] / 2) <= 0.1
+
+
 def test_spinning_star_is_not_taken_for_a_pendulum():
     if not STAR.is_file():
         pytest.skip(f"{STAR} not found")

@@ -18,6 +18,7 @@ from pendulum.status import empty_table, failure_image, run_stage
 from pendulum.tracking.method import track_trial
 from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
+from pendulum.tracking.timing import slip_sentence
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "tracks")
@@ -38,6 +39,9 @@ def work():
     flags = track.flag.value_counts().to_dict()
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
+    timing = track.attrs.get("timing") or {}
+    if timing.get("slips") or timing.get("repeated"):
+        log.warning("%s: %s", video, slip_sentence(timing))
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)
@@ -58,6 +62,7 @@ def work():
             "flags": {k: int(v) for k, v in sorted(flags.items())},
             "method": method,  # marker or body, why, and what each tried gave
             "path": path,  # departure from one circle, a creeping pivot (corrected), what is left
+            "timing": track.attrs.get("timing"),  # frames lost or repeated under even stamps, found from the motion
             "exposure_fraction": track.attrs.get("exposure_fraction"),
             "marker": track.attrs.get("marker"),  # polarity, radius and start used (given or detected)
             "detection": track.attrs.get("detection"),  # what detection found (None: all given)

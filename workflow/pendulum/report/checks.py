@@ -17,6 +17,7 @@ from pendulum.report.format import (
     td,
     with_minus_sign,
 )
+from pendulum.tracking.timing import slip_sentence
 
 NOTES_STYLE = "max-width:22em;min-width:14em"  # one note a line, wider than Table 3's warning column
 # Frames-stage warnings that :func:`frame_notes` says in its own words (video.probe's sentences).
@@ -306,6 +307,8 @@ class CheckSections(ReportData):
                 notes.append(esc(f"tracked the body: {method.get('reason', '')}"))
                 if ((tracks or {}).get("body") or {}).get("warning"):
                     notes.append(esc(tracks["body"]["warning"]))
+            if kind == "video" and is_ok(tracks) and slip_sentence((tracks or {}).get("timing") or {}):
+                notes.append(esc(slip_sentence(tracks["timing"])))
             notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
             problems = record_problems(fit) or self.trial_problems(trial)
             if problems:
@@ -351,8 +354,9 @@ class CheckSections(ReportData):
             "recommended variant's fit used (after the release transient and outliers). fps: mean rate of the "
             "frames the decoder yields (“variable”: a variable-frame-rate file, every frame keeps its own time "
             "stamp). Notes: only what is notable — a trimmed clip's discarded packets, rotation metadata, more than "
-            "8 bits, dropped or duplicate frames, other warnings of the frames stage, and a record that failed the "
-            "fit's garbage checks."
+            "8 bits, dropped or duplicate frames, frames the camera lost or repeated under even time stamps (found "
+            "from the motion, their times put right), other warnings of the frames stage, and a record that failed "
+            "the fit's garbage checks."
         )
         out = table_html(header, rows, caption=caption, table_id="tracking-table", row_attrs=attrs)
         if self.calibration:

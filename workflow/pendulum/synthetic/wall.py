@@ -77,6 +77,9 @@ class Wall:
     defocus_px: float = 0.0  # Gaussian σ of the whole picture
     creep_px: tuple = (0.0, 0.0)  # the picture moves by this much over the clip (camera creeping)
     start_s: float = 0.0  # the first frame is this long after the release (mid-swing start)
+    # a phone's clock under even time stamps: (frame, periods) — from that frame on every frame is taken that many
+    # frame periods later (1: a frame lost; -1: the frame before shown twice; a fraction: the clock slipped)
+    clock_slips: tuple = ()
 
 
 @dataclass
@@ -182,12 +185,15 @@ def render_wall_trial(trial: WallTrial, progress=None) -> tuple[list, pd.DataFra
     spec, body, wall = trial.spec, trial.body, trial.wall
     cam = spec.camera
     n = int(round(spec.duration_s * cam.fps))
-    video_t = np.arange(n) / cam.fps
+    video_t = np.arange(n) / cam.fps  # when each frame was taken (its stamp: frame / fps)
+    for first, periods in wall.clock_slips:
+        video_t[int(first) :] += periods / cam.fps
     exposure = cam.exposure_fraction / cam.fps
     arm = cam.marker_arm_px
     roll = math.radians(cam.roll_deg)
     # sub-exposures no more than blur_step_px apart at the fastest swing
-    omega = np.gradient(_theta(spec, video_t + wall.start_s), video_t) if n > 1 else np.zeros(1)
+    even = np.arange(n) / cam.fps
+    omega = np.gradient(_theta(spec, even + wall.start_s), even) if n > 1 else np.zeros(1)
     k = max(cam.exposure_subsamples, int(math.ceil(float(np.max(np.abs(omega))) * arm * exposure / cam.blur_step_px)))
     offsets = ((np.arange(k) + 0.5) / k - 0.5) * exposure
     sub_t = video_t[:, None] + offsets[None, :]

@@ -20,6 +20,7 @@ from pendulum.tracking import samples
 from pendulum.tracking.body import track_body
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.settings import TrackerSettings
+from pendulum.tracking.timing import correct_slips
 
 MARKER_USABLE_FRACTION = 0.95  # issue 23: a record ≥ 95 % usable; below it the body is tried too, the better kept
 
@@ -30,12 +31,14 @@ def usable_fraction(track: pd.DataFrame) -> float:
 
 def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
     """The track by ``settings.method`` (module docstring); ``attrs["method"]``: ``used``, ``reason``, ``tried``.
+    Its ``time_s`` is put right where the camera lost or repeated frames under even time stamps
+    (:func:`pendulum.tracking.timing.correct_slips`; ``attrs["timing"]``).
 
     Raises :class:`~pendulum.camera.video.VideoError` when no method gives a record; the message holds
     what each one said. The clip's sampled frames, shared by the searches, are let go at the end.
     """
     try:
-        return _track_trial(path, settings, progress)
+        return correct_slips(_track_trial(path, settings, progress))
     finally:
         samples.release()
 

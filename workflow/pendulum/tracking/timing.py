@@ -1,0 +1,264 @@
+"""Frames the camera dropped or repeated under even time stamps, found from the motion and put right.
+
+A phone that films at a constant frame rate still loses a frame now and then, or repeats one, while the
+file's time stamps stay evenly spaced (the real apple clip: one frame lost at 4.6, 7.7 and 21.5 s, one
+repeated at 6.8 s). Every later frame is then shown one frame period earlier or later than it was
+taken: the record's phase steps by ω·Δt (0.5–1° at mid-swing there), which a fit cannot absorb and
+discovery would blame on physics. The container cannot tell (its stamps are even); the motion can.
+
+Between consecutive usable frames i | j, one polynomial of degree :data:`DEGREE` in time is fitted to the
+:data:`HALF_WINDOW` positions on each side, with the frames from j on taken ``s`` frame periods later
+(s = −2 … 2; x and y together). Where the motion is smooth a slip of s frames leaves a misfit of about
+the step per frame (about 10 px at mid-swing on the apple clip, against 0.03 px of noise); the
+boundary is a slip when shifting by s brings the misfit down to the clip's usual level (≤ 4× the median
+over all boundaries) from at least 25× that level, and it is the only such boundary within its window.
+A repeated frame (no motion from the frame before where the motion is fast) is taken out first and
+flagged ``duplicate``. Near the turning points, where the pendulum hardly moves during one frame
+period, a slip cannot be seen: the figures say how much of the record was checked.
+
+Implemented: ``time_s`` of frame k becomes t_k + Δ·m_k (m_k: the frames lost minus the frames repeated
+before k, Δ the median stamp interval); the stamps are those of the frames summary.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+HALF_WINDOW = 6  # usable frames on each side of a boundary
+DEGREE = 4  # of the polynomial through a window (x and y)
+MAX_SHIFT = 2.5  # frame periods a slip may be late (lost frames) ...
+LONGEST_GAP = 10  # flagged frames between a boundary's two sides, at most (a slip inside them is found after them)
+MOST_EARLY = 1.0  # ... or early (a frame shown twice: time does not run backwards)
+SMALLEST_SLIP = 0.15  # frame periods: smaller shifts are not reported or applied
+MOVING = 20.0  # a window's half moves by at least this × the position noise (a slip shows only in motion)
+CLEAN_FACTOR = 4.0  # a shifted fit at most this × the usual misfit
+SLIP_FACTOR = 5.0  # the shift lowers the misfit by at least this × the usual (about 70 σ² of noise)
+STILL_FRACTION = 0.05  # a repeated frame: a step under this share of the steps around it
+MAX_ROUNDS = 3
+
+
+def _window_misfits(tau: np.ndarray, x: np.ndarray, y: np.ndarray, b: np.ndarray, shift) -> np.ndarray:
+    """Residual sum of squares of one polynomial through each boundary's window: boundary ``b`` lies after
+    usable frame b, its window is usable frames b−W+1 … b+W (``tau`` in frame periods; x and y together),
+    the frames after the boundary taken ``shift`` periods later (a number, or one per boundary)."""
+    w = HALF_WINDOW
+    idx = b[:, None] + np.arange(-w + 1, w + 1)[None, :]
+    t = tau[idx] - 0.5 * (tau[b] + tau[b + 1])[:, None]
+    values = np.stack([x[idx], y[idx]], axis=-1)  # (B, 2W, 2)
+    values = values - values.mean(axis=1, keepdims=True)
+    right = (np.arange(2 * w) >= w)[None, :]
+    u = (t + np.reshape(shift, (-1, 1)) * right) / w
+    q, _ = np.linalg.qr(u[..., None] ** np.arange(DEGREE + 1))
+    fitted = q @ (np.swapaxes(q, 1, 2) @ values)
+    return ((values - fitted) ** 2).sum(axis=(1, 2))
+
+
+def _boundaries(tau: np.ndarray) -> np.ndarray:
+    """Boundaries whose windows hold nearly consecutive frames: at most two frames missing (flagged) between
+    any two of a window's frames, four in all, besides the boundary's own gap (up to MAX_SHIFT + 1 periods)."""
+    w = HALF_WINDOW
+    b = np.arange(w - 1, tau.size - w)
+    gaps = np.diff(tau)
+    idx = b[:, None] + np.arange(-w + 1, w)[None, :]  # the window's 2W − 1 gaps
+    inner = np.delete(gaps[idx], w - 1, axis=1)
+    fits = (inner < 3.5).all(axis=1) & (inner.sum(axis=1) < 2 * w - 2 + 4.5) & (gaps[b] < MAX_SHIFT + LONGEST_GAP)
+    return b[fits]
+
+
+def _moving(x: np.ndarray, y: np.ndarray, b: np.ndarray, noise_px: float) -> np.ndarray:
+    """Boundaries whose window halves both move by MOVING × the noise or more (not a still hang, not a release)."""
+    w = HALF_WINDOW
+    before = np.hypot(x[b] - x[b - w + 1], y[b] - y[b - w + 1])
+    after = np.hypot(x[b + w] - x[b + 1], y[b + w] - y[b + 1])
+    return np.minimum(before, after) >= MOVING * max(noise_px, 1e-3)
+
+
+def _best_shifts(tau, x, y, b) -> np.ndarray:
+    """Per boundary: the shift (periods, within ±MAX_SHIFT) that fits best and its misfit, as two columns."""
+    grid = np.arange(-MOST_EARLY, MAX_SHIFT + 1e-9, 0.25)
+    misfits = np.stack([_window_misfits(tau, x, y, b, s) for s in grid], axis=1)
+    best = grid[np.argmin(misfits, axis=1)]
+    best_misfit = misfits.min(axis=1)
+    step = 0.125
+    for _ in range(5):  # halving around the best grid point
+        for trial in (best - step, best + step):
+            misfit = _window_misfits(tau, x, y, b, trial)
+            better = misfit < best_misfit
+            better &= trial >= -MOST_EARLY
+            best = np.where(better, trial, best)
+            best_misfit = np.where(better, misfit, best_misfit)
+        step /= 2
+    return np.column_stack([best, best_misfit])
+
+
+def _repeated(tau: np.ndarray, x: np.ndarray, y: np.ndarray, noise_px: float) -> np.ndarray:
+    """Usable frames that repeat the one before: a step under STILL_FRACTION of the steps before and after it,
+    which point the same way (not a turning point) and are over 20× the position noise; the four frames
+    consecutive."""
+    d = np.column_stack([np.diff(x), np.diff(y)])  # d[k]: from frame k to k+1
+    step = np.hypot(d[:, 0], d[:, 1])
+    repeated = np.zeros(x.size, bool)
+    if step.size < 3:
+        return repeated
+    before, after = step[:-2], step[2:]
+    around = np.minimum(before, after)
+    same_way = (d[:-2] * d[2:]).sum(axis=1) > 0.5 * before * after
+    consecutive = np.abs(np.diff(tau) - 1.0) < 0.5
+    consecutive = consecutive[:-2] & consecutive[1:-1] & consecutive[2:]
+    small = np.maximum(STILL_FRACTION * around, 4.0 * noise_px)  # a repeat's step is the noise's alone
+    still = (step[1:-1] < small) & same_way & (around > MOVING * noise_px) & consecutive
+    repeated[2:-1][still] = True
+    return repeated
+
+
+def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndarray, usable: np.ndarray) -> dict:
+    """Lost and repeated frames of one track (module docstring).
+
+    Returns ``period_s`` (Δ), ``slips`` (``[frame, periods]``: from that frame on, every frame was taken
+    that many periods later than its stamp says, on top of earlier slips; 1 a lost frame, −1 one shown
+    twice; fractions where the phone's clock slipped by part of a period), ``repeated`` (frames that
+    repeat the one before), ``shift_periods`` (m_k per frame) and ``checked_fraction`` (share of the
+    usable frame pairs where a slip of one period would have stood out)."""
+    stamp_s = np.asarray(stamp_s, float)
+    period = float(np.median(np.diff(stamp_s))) if stamp_s.size > 1 else 0.0
+    shift = np.zeros(stamp_s.size)
+    result = {"period_s": period, "slips": [], "repeated": [], "checked_fraction": 0.0, "shift_periods": shift}
+    if not period > 0 or usable.sum() < 4 * HALF_WINDOW:
+        return result
+    idx = np.flatnonzero(usable)
+    tau0 = stamp_s[idx] / period
+    b = _boundaries(tau0)
+    if b.size < 2 * HALF_WINDOW:
+        return result
+    unshifted = _window_misfits(tau0, x[idx], y[idx], b, 0.0)
+    noise_px = float(np.sqrt(np.median(unshifted) / (2 * (2 * HALF_WINDOW - DEGREE - 1))))
+    repeated_mask = _repeated(tau0, x[idx], y[idx], noise_px)
+    # a repeated frame shows the moment of the one before, and the frames after it a period later than their
+    # stamps (unless a frame is lost after it too: the search below finds that)
+    result["repeated"] = [int(frame[i]) for i in idx[repeated_mask]]
+    for i in idx[repeated_mask]:
+        shift[i:] -= 1
+    idx = idx[~repeated_mask]
+    for round_ in range(MAX_ROUNDS):
+        tau = stamp_s[idx] / period + shift[idx]
+        b = _boundaries(tau)
+        unshifted = _window_misfits(tau, x[idx], y[idx], b, 0.0)
+        moving = _moving(x[idx], y[idx], b, noise_px)
+        if not moving.any():
+            break
+        usual = max(float(np.median(unshifted[moving])), 1e-9)  # a still hang's windows are noise alone
+        if round_ == 0:  # where a slip of one period would have stood out
+            one = np.minimum(*(_window_misfits(tau, x[idx], y[idx], b, s) for s in (-1.0, 1.0)))
+            result["checked_fraction"] = float(np.mean(moving & (np.maximum(one, unshifted) >= SLIP_FACTOR * usual)))
+        suspect = np.flatnonzero(moving & (unshifted >= SLIP_FACTOR * usual))
+        if suspect.size == 0:
+            break
+        best = _best_shifts(tau, x[idx], y[idx], b[suspect])
+        slip = (
+            (best[:, 1] <= CLEAN_FACTOR * usual)
+            & (unshifted[suspect] - best[:, 1] >= SLIP_FACTOR * usual)
+            & (np.abs(best[:, 0]) >= SMALLEST_SLIP)
+        )
+        found = []
+        for k in np.flatnonzero(slip):
+            near = slip & (np.abs(b[suspect] - b[suspect[k]]) < HALF_WINDOW)
+            if unshifted[suspect[k]] >= unshifted[suspect[near]].max():
+                found.append(k)
+        if not found:
+            break
+        for k in found:
+            shift[idx[b[suspect[k]] + 1] :] += round(float(best[k, 0]), 2)
+    # a frame taken at the moment of the one before: a repeat the first look did not see (the motion slower there)
+    tau = stamp_s[idx] / period + shift[idx]
+    result["repeated"] = sorted(set(result["repeated"]) | {int(frame[i]) for i in idx[1:][np.diff(tau) < 0.15]})
+    steps = np.diff(np.concatenate([[0.0], shift]))
+    repeated = set(result["repeated"])
+    result["slips"] = []
+    for i in np.flatnonzero(np.abs(steps) > 1e-9):
+        periods = float(steps[i]) + (1.0 if int(frame[i]) in repeated else 0.0)  # a repeat's own −1 said as such
+        if abs(periods) >= SMALLEST_SLIP:
+            result["slips"].append([int(frame[i]), round(periods, 2)])
+    result["shift_periods"] = shift
+    return result
+
+
+def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
+    """``track`` with ``time_s`` put right for lost and repeated frames (:func:`find_slips` on its ``ok`` and
+    ``jump`` frames), repeated frames flagged ``duplicate``, and ``jump`` frames beside a slip that fit the
+    corrected motion made ``ok``; ``attrs["timing"]`` says what was found."""
+    if track.empty:
+        return track
+    usable = track.flag.isin(("ok", "jump")).to_numpy()
+    x = track.x_px.to_numpy(float)
+    y = track.y_px.to_numpy(float)
+    stamp = track.time_s.to_numpy(float)
+    found = find_slips(track.frame.to_numpy(), stamp, x, y, usable & np.isfinite(x) & np.isfinite(y))
+    out = track.copy()
+    out.attrs = dict(track.attrs)
+    period = found["period_s"]
+    shift = found.pop("shift_periods")
+    out["time_s"] = stamp + period * shift
+    repeated = out.frame.isin(found["repeated"]).to_numpy()
+    out.loc[repeated, "flag"] = "duplicate"
+    cleared = _clear_jumps(out, found)
+    out.attrs["timing"] = {
+        **found,
+        "jumps_cleared": cleared,
+        "checked_fraction": round(found["checked_fraction"], 4),
+        "max_shift_s": round(float(np.abs(period * shift).max()), 6) if shift.size else 0.0,
+    }
+    return out
+
+
+def _clear_jumps(out: pd.DataFrame, found: dict) -> list[int]:
+    """``jump`` frames within two frames of a slip or a repeat whose position now lies on the local polynomial
+    (fitted to the ok frames around them in corrected time; residual under 4× theirs): made ``ok``."""
+    marks = [f for f, _ in found["slips"]] + list(found["repeated"])
+    if not marks:
+        return []
+    frames = out.frame.to_numpy()
+    flags = out.flag.to_numpy()
+    t = out.time_s.to_numpy(float) / found["period_s"]
+    x = out.x_px.to_numpy(float)
+    y = out.y_px.to_numpy(float)
+    cleared = []
+    for i in np.flatnonzero(flags == "jump"):
+        if min(abs(int(frames[i]) - m) for m in marks) > 2:
+            continue
+        near = np.flatnonzero((flags == "ok") & (np.abs(np.arange(frames.size) - i) <= HALF_WINDOW + 2))
+        if near.size < 2 * HALF_WINDOW - 2:
+            continue
+        u = (t[near] - t[i]) / HALF_WINDOW
+        design = u[:, None] ** np.arange(DEGREE + 1)
+        coef, *_ = np.linalg.lstsq(design, np.stack([x[near], y[near]], axis=1), rcond=None)
+        residual = np.stack([x[near], y[near]], axis=1) - design @ coef
+        spread = float(np.sqrt((residual**2).sum() / max(1, 2 * (near.size - DEGREE - 1))))
+        miss = float(np.hypot(x[i] - coef[0, 0], y[i] - coef[0, 1]))
+        if miss <= max(4.0 * spread, 0.05):
+            flags[i] = "ok"
+            cleared.append(int(frames[i]))
+    out["flag"] = flags
+    return cleared
+
+
+def slip_sentence(timing: dict) -> str:
+    """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
+    slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
+    if not slips and not repeated:
+        return ""
+    parts = []
+    lost = [f for f, p in slips if abs(p - round(p)) < 0.1 and p > 0]
+    if lost:
+        parts.append(f"{len(lost)} frame(s) lost (at frame {', '.join(str(f) for f in lost)})")
+    if repeated:
+        parts.append(f"{len(repeated)} repeated (frame {', '.join(str(f) for f in repeated)}, flagged duplicate)")
+    other = [(f, p) for f, p in slips if not (abs(p - round(p)) < 0.1 and p > 0)]
+    if other:
+        parts.append("the clock slipped by " + ", ".join(f"{p:+.2f} of a frame period at frame {f}" for f, p in other))
+    checked = 100 * float(timing.get("checked_fraction") or 0.0)
+    return (
+        "under even time stamps the camera " + "; ".join(parts) + ": found from the motion, the frame times put "
+        f"right (by up to {1e3 * float(timing.get('max_shift_s') or 0.0):.1f} ms); a slip shows where the pendulum "
+        f"moves fast ({checked:.0f} % of this record)"
+    )
