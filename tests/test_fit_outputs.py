@@ -126,6 +126,27 @@ def test_fitted_curve_reproduces_the_fit_residuals(fitted):
     assert curve.theta_fitted_rad[200:206].notna().all()
 
 
+def test_a_record_that_starts_mid_swing_is_fitted_from_its_first_sample(fitted):
+    """No release in view (the angles stage's release_detected false): no release transient to leave out, so the
+    fit and its curve start at the first sample (docs/footage.md); a record with a release keeps the 0.25 s out."""
+    table, document, _ = fitted
+    settings = FitSettings()
+    mid_swing = table[table.time_s >= 3.0].assign(time_s=lambda t: t.time_s - 3.0).reset_index(drop=True)
+    with_release = load_record(mid_swing, "m", RIG_VALUES, settings, angle_info={"release_detected": True})
+    record = load_record(mid_swing, "m", RIG_VALUES, settings, angle_info={"release_detected": False})
+    assert with_release.time_s[0] >= 0.25 and with_release.release_skip_s == 0.25
+    assert record.time_s[0] == 0.0 and record.release_skip_s == 0.0
+    assert record.dropped["release_transient"] == 0
+    fit = fit_trials([record], document["terms"], settings)
+    doc = fit_document(
+        fit, variant="friction", rig={"name": "rig", "values": RIG_VALUES}, sources=["m"], settings=settings
+    )
+    assert doc["trials"]["m"]["release_skip_s"] == 0.0 and doc["trials"]["m"]["fit_start_s"] == 0.0
+    curve = fitted_curve(mid_swing, {"trial": "m", **doc}, RIG_VALUES, document["terms"])
+    assert "release_transient" not in set(curve.flag)
+    assert (curve.flag == "fitted").sum() == doc["n_samples"]
+
+
 def test_cycle_table_predicts_the_measured_extinction(fitted):
     table, document, truth = fitted
     curve = fitted_curve(table, document)

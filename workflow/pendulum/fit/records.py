@@ -17,7 +17,7 @@ from pendulum.model.rig import Rig
 class FitSettings:
     """Numerical choices of a fit (config ``fitting``)."""
 
-    release_skip_s: float = 0.25  # samples before this (time since release) are not fitted
+    release_skip_s: float = 0.25  # samples before this (time since release) are not fitted (none without a release)
     max_step_s: float = 0.02  # RK4 step limit of the simulation inside the fit
     outlier_sigmas: float = 6.0  # one pass: samples further than this (robust σ) are dropped, refit
     identifiable_max_relative_stderr: float = 0.5  # above: flagged not identifiable
@@ -87,6 +87,7 @@ class AngleRecord:
     arm_radius_px: float | None = None
     pivot_covariance_px2: list | None = None
     vertical_rad: float = 0.0  # image angle of the vertical: θ_image = θ + vertical
+    release_skip_s: float = 0.0  # the release transient left out (0: a record that starts mid-swing has none)
 
     @property
     def n_samples(self) -> int:
@@ -146,10 +147,13 @@ def load_record(
     if "flag" in table.columns:
         ok &= table.flag.to_numpy(object) == "ok"
     n_flagged = int((~ok).sum())
-    early = t < settings.release_skip_s
+    # a record that starts mid-swing (no release in view: the angles stage's release_detected false) has no
+    # release transient: its fit starts at the first sample
+    skip_s = settings.release_skip_s if (angle_info or {}).get("release_detected", True) else 0.0
+    early = t < skip_s
     use = ok & ~early
     if not use.any():
-        _no_sample_after_the_transient(where, t[ok], n_flagged, settings.release_skip_s)
+        _no_sample_after_the_transient(where, t[ok], n_flagged, skip_s)
     t, th = t[use], th[use]
     order = np.argsort(t, kind="stable")
     t, th = t[order], th[order]
@@ -185,4 +189,5 @@ def load_record(
         arm_radius_px=info.get("arm_radius_px"),
         pivot_covariance_px2=info.get("pivot_covariance_px2"),
         vertical_rad=math.radians(info.get("vertical_deg") or 0.0),
+        release_skip_s=skip_s,
     )

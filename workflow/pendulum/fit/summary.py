@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, fields
+from dataclasses import asdict, fields, replace
 
 import numpy as np
 import pandas as pd
@@ -164,7 +164,7 @@ def fitted_curve(
     ``fitted`` samples is the document's ``rms_rad``; other samples after the fit
     start (flagged ones) get θ from a simulation over all sample times.
 
-    ``flag``: ``fitted``; ``release_transient`` (before ``release_skip_s``);
+    ``flag``: ``fitted``; ``release_transient`` (before the fit's ``release_skip_s``);
     ``outlier`` (dropped by the fit, ``outlier_times_s``); the record's own flag
     when not ``ok`` (``occluded``, ``lost``, …); ``missing`` (no finite θ) or
     ``repeated_time`` (a repeated time stamp: the fit keeps the first).
@@ -173,7 +173,8 @@ def fitted_curve(
     rig_values = rig_values if rig_values is not None else fit_document["rig"]["values"]
     terms = list(terms if terms is not None else fit_document["terms"])
     settings = _settings(fit_document)
-    record = load_record(angle_table, trial, rig_values, settings)
+    skip_s = float(entry.get("release_skip_s", settings.release_skip_s))  # the fit's own (0: a mid-swing start)
+    record = load_record(angle_table, trial, rig_values, replace(settings, release_skip_s=skip_s))
     model = PendulumModel(Rig.from_mapping(rig_values), tuple(terms))
     params = fitted_physical(fit_document, model)
     theta0 = math.radians(entry["theta0_deg"])
@@ -211,7 +212,7 @@ def fitted_curve(
     for i in range(t.size):
         if own_flag[i] != "ok" or not (np.isfinite(t[i]) and np.isfinite(measured[i])):
             continue
-        if t[i] < settings.release_skip_s:
+        if t[i] < skip_s:
             flag[i] = RELEASE_TRANSIENT
             fitted[i] = np.nan
         elif t[i] in used and t[i] not in seen:
