@@ -130,9 +130,10 @@ def _agrees(settings: TrackerSettings, polarity: str, radius: float) -> bool:
 class MarkerAbandoned(VideoError):
     """The marker pass stopped where too many frames were already not ``ok`` for the share asked of it."""
 
-    def __init__(self, message: str, most_usable: float, settings: TrackerSettings, detection=None):
+    def __init__(self, message: str, most_usable: float, settings: TrackerSettings, detection=None, at_frame=0):
         super().__init__(message)
         self.most_usable = most_usable  # the most of the clip's frames the whole pass could have had ok
+        self.at_frame = at_frame  # where it stopped
         self.settings, self.detection = settings, detection  # as resolved: the whole pass without detecting again
 
 
@@ -245,6 +246,7 @@ def track_video(
                 most,
                 settings,
                 detection,
+                index,
             )
         n_frames = index + 1
         if image is None:  # damaged in the file

@@ -11,8 +11,6 @@ is taken. Either way the track's ``attrs["method"]`` says which, and why.
 
 from __future__ import annotations
 
-import math
-
 import pandas as pd
 
 from pendulum.camera.video import VideoError
@@ -60,10 +58,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         marker = track_video(path, settings, progress=progress, abandon_below=MARKER_USABLE_FRACTION)
     except MarkerAbandoned as error:
         stopped = error
-        tried["marker"] = (
-            f"usable in under {100 * MARKER_USABLE_FRACTION:.0f} % of the frames (its pass stopped early, where at "
-            f"most {math.floor(10_000 * stopped.most_usable) / 100:.2f} % could be)"
-        )
+        tried["marker"] = stopped_text(stopped)
     except VideoError as error:
         tried["marker"] = f"failed: {error}"
     if marker is not None:
@@ -117,6 +112,19 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         "tried": tried,
     }
     return body
+
+
+def stopped_text(stopped: MarkerAbandoned) -> str:
+    """What a marker pass stopped early gave, as ``tried`` says it: which spot it followed and where it stopped."""
+    spot = stopped.settings
+    found = "detection's" if stopped.detection is not None else "the given"
+    radius = f", radius {spot.marker_radius_px:.1f} px" if spot.marker_radius_px else ""
+    return (
+        f"usable in under {100 * MARKER_USABLE_FRACTION:.0f} % of the frames: {found} disk-like spot ({spot.polarity}"
+        f"{radius}; on a body with no marker dot, the body itself) was not measurable "
+        f"as a disk in more than {100 * (1 - MARKER_USABLE_FRACTION):.0f} % of the frames by frame "
+        f"{stopped.at_frame}, where its pass was stopped"
+    )
 
 
 def _whole_marker_pass(
