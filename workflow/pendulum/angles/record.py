@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.geometry import circular_mean_rad, image_angle_rad, wrapped_rad
-from pendulum.angles.swings import detect_release, rest_start_index, sample_noise_rad
+from pendulum.angles.swings import crossing_period, detect_release, rest_start_index, sample_noise_rad
 
 MAX_HANG_DEG = 60.0  # a swing centred further from the vertical it is measured from: the vertical is not the camera's
 
@@ -37,6 +37,11 @@ class AngleRecordInfo:
     noise_deg: float
     arm_radius_px: float | None = None  # pivot to marker, median over the tracked samples
     pivot_covariance_px2: list | None = None  # of an estimated pivot (None: given, taken as exact)
+    # the record's mean period from the crossings of its middle level (swings.crossing_period), its standard error
+    # and the whole periods it spans; None where the record holds fewer than two
+    period_s: float | None = None
+    period_stderr_s: float | None = None
+    period_cycles: int | None = None
     notes: list = field(default_factory=list)  # what was done about imperfect input (sorted, dropped rows, …)
 
     def to_dict(self):
@@ -112,6 +117,9 @@ def angle_record(
         arm_radius_px=arm_radius_px,
         pivot_covariance_px2=pivot_covariance_px2,
     )
+    period = crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
+    if period is not None:
+        info.period_s, info.period_stderr_s, info.period_cycles = period
     return table, info
 
 

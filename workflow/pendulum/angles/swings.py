@@ -194,3 +194,44 @@ def rest_start_index(theta: np.ndarray, sigmas: float = 5.0) -> int | None:
         return 0
     start = int(moving[-1]) + 1
     return start if start < th.size - 1 else None
+
+
+def crossing_period(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, float, int] | None:
+    """The record's mean period from the times it crosses its middle level: ``(period_s, stderr_s, n_cycles)``.
+
+    The middle is halfway between the median maximum and minimum of the swing extrema; the crossings
+    (linear interpolation between neighbouring usable samples) upward and downward are each numbered
+    by whole periods from the first and fitted with a line t = t₀ + P·n; P is the mean of the two
+    directions' slopes (an off-centre swing makes its half periods alternate, not its periods), its
+    standard error from the lines' residuals. None with fewer than two periods in either direction.
+    """
+    t = np.asarray(time_s, float)
+    th = np.asarray(theta, float)
+    extrema = swing_extrema(th)
+    if extrema.size < 4:
+        return None
+    high = th[extrema][th[extrema] > np.median(th[np.isfinite(th)])]
+    low = th[extrema][th[extrema] <= np.median(th[np.isfinite(th)])]
+    if high.size < 2 or low.size < 2:
+        return None
+    centred = th - 0.5 * (float(np.median(high)) + float(np.median(low)))
+    pair = np.isfinite(centred[:-1]) & np.isfinite(centred[1:])
+    slopes, variances, cycles = [], [], []
+    for sign in (1, -1):
+        i = np.flatnonzero(pair & (sign * centred[:-1] < 0) & (sign * centred[1:] >= 0))
+        if i.size < 3:
+            return None
+        when = t[i] - centred[i] * (t[i + 1] - t[i]) / (centred[i + 1] - centred[i])
+        gaps = np.diff(when)
+        one = float(np.median(gaps))
+        n = np.round((when - when[0]) / one)
+        if np.unique(n).size < 3:
+            return None
+        design = np.column_stack([np.ones_like(n), n])
+        coef, *_ = np.linalg.lstsq(design, when, rcond=None)
+        residual = when - design @ coef
+        s2 = float(residual @ residual) / max(1, n.size - 2)
+        slopes.append(float(coef[1]))
+        variances.append(s2 / float(np.sum((n - n.mean()) ** 2)))
+        cycles.append(int(n[-1]))
+    return float(np.mean(slopes)), 0.5 * math.sqrt(sum(variances)), min(cycles)

@@ -7,9 +7,11 @@ from pathlib import Path
 from pendulum.report.data import ReportData, failure_text, is_ok, problem_text, record_problems, true_value
 from pendulum.report.format import (
     COEFFICIENTS,
+    decimals_for,
     esc,
     estimate_cell,
     fmt,
+    fmt_at,
     garbage_badge,
     is_finite,
     png_data_uri,
@@ -68,6 +70,17 @@ def frame_notes(frames: dict) -> list[str]:
         if not any(k in warning for k in _NOTED):
             notes.append(warning.removeprefix(prefix))
     return notes
+
+
+def period_text(angles: dict) -> str:
+    """The angle record's mean period ± its standard error (two figures of it: "2.07824 ± 0.00025"), or "—"."""
+    period, stderr = angles.get("period_s"), angles.get("period_stderr_s")
+    if not is_finite(period):
+        return "—"
+    if not is_finite(stderr) or stderr <= 0:
+        return fmt(period, 5)
+    places = decimals_for(stderr)
+    return f"{fmt_at(period, places)} ± {fmt_at(stderr, places)}"
 
 
 def changes_text(dirty: bool | None, files: list | None, shown: int = 5) -> str:
@@ -296,9 +309,10 @@ class CheckSections(ReportData):
                     td(str(angles.get("n_samples", "—")), "num"),
                     td(str(angles.get("n_flagged", "—")), "num"),
                     td(esc(fmt(angles.get("noise_deg"), 2)), "num"),
+                    td(esc(period_text(angles)), "num"),
                 ]
             else:
-                angle_cells = [failure_cell(angles, said, span=3)]
+                angle_cells = [failure_cell(angles, said, span=4)]
             fit = self.fits.get((variant_for[trial], trial)) if variant_for[trial] else None
             fitted = td(str(fit["n_samples"]), "num") if is_ok(fit) else td("—", "na")
             notes = [esc(n) for n in frame_notes(frames)] if kind == "video" and is_ok(frames) else []
@@ -340,6 +354,7 @@ class CheckSections(ReportData):
             "angle samples",
             "flagged",
             "angle noise (°)",
+            "period (s)",
             "samples fitted",
             "notes",
         ]
@@ -350,7 +365,9 @@ class CheckSections(ReportData):
             "marker disk is usable or `method: body` says so), the tracker's flags by kind (flagged frames are never "
             "interpolated), the angle samples from "
             "release to rest and how many of them are flagged, the angle record's noise (σ from the fifth "
-            "differences of the whole record: Table 2's record noise), and the samples the "
+            "differences of the whole record: Table 2's record noise), the record's mean period (from the times it "
+            "crosses the middle of its swing, ± its standard error; larger swings have longer periods), and the "
+            "samples the "
             "recommended variant's fit used (after the release transient and outliers). fps: mean rate of the "
             "frames the decoder yields (“variable”: a variable-frame-rate file, every frame keeps its own time "
             "stamp). Notes: only what is notable — a trimmed clip's discarded packets, rotation metadata, more than "
