@@ -162,6 +162,21 @@ def test_cycle_table_predicts_the_measured_extinction(fitted):
     assert np.allclose(cycles.peak_speed_m_s, true_speed, rtol=0.01)
 
 
+def test_measured_half_cycles_are_taken_about_the_swings_own_centre(fitted):
+    """A fit that misplaces the rest angle (a model that misses the record: 0.2° here) must not make the measured
+    losses alternate half cycle to half cycle (the real apple clip's did: −0.05°, +0.56°, −0.15°, +0.63°, …)."""
+    import copy
+
+    table, document, _ = fitted
+    curve = fitted_curve(table, document)
+    right = cycle_table(curve, document)
+    shifted = copy.deepcopy(document)
+    shifted["trials"]["synthetic"]["rest_offset_deg"] += 0.2
+    wrong = cycle_table(curve, shifted)
+    assert np.allclose(wrong.amplitude_loss_rad, right.amplitude_loss_rad, atol=1e-9)
+    assert (right.amplitude_loss_rad > 0).all()
+
+
 def test_information_criteria_are_compared_only_between_fits_of_the_same_samples():
     """A variant whose outlier rejection dropped other samples gets no ΔAIC (its AIC is not comparable)."""
 

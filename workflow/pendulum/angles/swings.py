@@ -25,17 +25,28 @@ def turning_points(theta: np.ndarray, min_separation: int = 3) -> np.ndarray:
 def swing_centre_rad(theta: np.ndarray) -> tuple[float, int] | None:
     """Centre of a decaying oscillation of any amplitude, robust to sample noise: (centre, triplets used).
 
+    The median of :func:`swing_centres`; None if there is none.
+    """
+    centres = swing_centres(theta)
+    if not centres:
+        return None
+    return float(np.median([c for _, c in centres])), len(centres)
+
+
+def swing_centres(theta: np.ndarray) -> list[tuple[int, float]]:
+    """The oscillation's centre from each triplet of consecutive extrema: ``(sample of the middle one, centre)``.
+
     The extrema are the confirmed ones of :func:`swing_extrema` (hysteresis of
     10 σ, so noise makes none, at any frame rate), each refined by a parabola
     through the samples within a sixth of the way to its neighbouring extrema.
     Per triplet (p₀, q, p₁), locally geometric decay gives
-    c = (p₀ p₁ − q²) / (p₀ + p₁ − 2 q); the median over triplets whose swing is
-    above 20 σ. None if no such triplet.
+    c = (p₀ p₁ − q²) / (p₀ + p₁ − 2 q); triplets whose swing is
+    above 20 σ.
     """
     th = np.asarray(theta, float)
     idx = np.flatnonzero(np.isfinite(th))
     if idx.size < 20:
-        return None
+        return []
     v = th[idx]
     sigma = noise_level(v)
     ext = swing_extrema(v)  # positions in v (the kept samples), as idx[ext] in frames
@@ -66,10 +77,26 @@ def swing_centre_rad(theta: np.ndarray) -> tuple[float, int] | None:
             continue
         swing = abs(q - 0.5 * (p0 + p1))
         if swing > 20 * sigma and np.sign(p0 - q) == np.sign(p1 - q) and p0 + p1 - 2 * q != 0:
-            centres.append((p0 * p1 - q * q) / (p0 + p1 - 2 * q))
-    if not centres:
+            centres.append((int(idx[ext[k + 1]]), (p0 * p1 - q * q) / (p0 + p1 - 2 * q)))
+    return centres
+
+
+def swing_centre_track(time_s: np.ndarray, theta: np.ndarray, window: int = 5) -> np.ndarray | None:
+    """The record's swing centre at every sample: the centres of its extrema triplets (:func:`swing_centres`),
+    each averaged with the next (Coulomb friction moves the centre by ±τ_f/K with the swing's direction, which
+    alternates), a running median of ``window`` of those, interpolated in time (held beyond the first and last);
+    their median where there are fewer than ``window``; None where there are fewer than two triplets."""
+    centres = swing_centres(theta)
+    if len(centres) < 2:
         return None
-    return float(np.median(centres)), len(centres)
+    at = np.array([time_s[i] for i, _ in centres])
+    values = np.array([c for _, c in centres])
+    at, values = 0.5 * (at[1:] + at[:-1]), 0.5 * (values[1:] + values[:-1])
+    if values.size < window:
+        return np.full(time_s.size, float(np.median(values)))
+    half = window // 2
+    smooth = np.array([np.median(values[max(0, k - half) : k + half + 1]) for k in range(values.size)])
+    return np.interp(time_s, at, smooth)
 
 
 def noise_level(theta: np.ndarray) -> float:

@@ -14,7 +14,7 @@ import pandas as pd
 from scipy import stats
 from scipy.optimize import brentq, nnls
 
-from pendulum.angles.swings import sample_noise_rad
+from pendulum.angles.swings import sample_noise_rad, swing_centre_track
 from pendulum.fit.decay import half_cycles
 from pendulum.fit.group import GroupFit
 from pendulum.model.effects import TERMS
@@ -140,15 +140,18 @@ def _model_and_params(fit: GroupFit, k: int):
 
 
 def measured_half_cycles(fit: GroupFit) -> pd.DataFrame:
-    """Half cycles of every trial's measured record about the fit's rest offset, with the trial's name."""
+    """Half cycles of every trial's measured record about its own swing centre
+    (:func:`pendulum.angles.swings.swing_centre_track`; the fit's rest offset where it has none), with the
+    trial's name."""
     tables = []
     for k, record in enumerate(fit.problem.records):
         model, params = _model_and_params(fit, k)
         mask = fit.problem.masks[k]
+        centre = swing_centre_track(record.time_s[mask], record.theta_rad[mask])
         table = half_cycles(
             record.time_s[mask],
             record.theta_rad[mask],
-            fit.nuisance(k)[2],
+            fit.nuisance(k)[2] if centre is None else centre,
             model,
             params,
             record.characteristic_length_m,
@@ -176,7 +179,7 @@ def predicted_half_cycles(fit: GroupFit) -> pd.DataFrame:
 def extinction_screen(fit: GroupFit, candidates) -> list[dict]:
     """Fast screen: how much each candidate's extinction signature improves a fit of the measured ΔA(A).
 
-    The pooled half cycles (ΔA against Ā, each trial about its fitted rest offset) are fitted by
+    The pooled half cycles (ΔA against Ā, each trial about its own swing centre) are fitted by
     non-negative least squares with the baseline terms' powers of Ā (0: Coulomb, 1: linear or
     history, 2: quadratic), then with the candidate's power added; the score is the fraction of
     the remaining sum of squares the candidate removes, and the implied coefficient is its

@@ -8,6 +8,7 @@ from dataclasses import asdict, fields, replace
 import numpy as np
 import pandas as pd
 
+from pendulum.angles.swings import swing_centre_track
 from pendulum.fit.decay import half_cycles, loss_at_amplitude
 from pendulum.fit.records import WATER_KINEMATIC_VISCOSITY_M2_S, FitSettings, characteristic_length_m, load_record
 from pendulum.model.effects import ADDED_MASS, TERMS
@@ -240,8 +241,11 @@ def cycle_table(
     """Half cycles of the measured record (:func:`pendulum.fit.decay.half_cycles`) with the variant's prediction.
 
     Measured: the valid samples (``fitted`` and ``release_transient``; not
-    outliers or flagged ones), amplitudes about the fitted rest offset, inertia
-    from the fitted added mass. ``predicted_amplitude_loss_rad``: the same
+    outliers or flagged ones), amplitudes about the record's own swing centre
+    (:func:`swing_centre_track`; the fitted rest offset where it has none: a fit
+    that misses the record can misplace its offset by a fraction of a degree, and amplitudes about
+    it make the losses alternate half cycle to half cycle), inertia from the fitted added mass.
+    The fitted curve's half cycles are taken about the fitted rest offset. ``predicted_amplitude_loss_rad``: the same
     extremum analysis run on the fitted curve, its loss interpolated at each
     measured peak amplitude (:func:`pendulum.fit.decay.loss_at_amplitude`).
     """
@@ -254,12 +258,14 @@ def cycle_table(
     length = characteristic_length_m(rig_values)
     nu = float(rig_values.get("kinematic_viscosity_m2_s") or WATER_KINEMATIC_VISCOSITY_M2_S)
 
-    def cycles(column, use):
+    def cycles(column, use, centre):
         return half_cycles(
-            curve.time_s.to_numpy(float)[use], curve[column].to_numpy(float)[use], offset, model, params, length, nu
+            curve.time_s.to_numpy(float)[use], curve[column].to_numpy(float)[use], centre, model, params, length, nu
         )
 
-    measured = cycles("theta_measured_rad", curve.flag.isin([FITTED, RELEASE_TRANSIENT]).to_numpy())
-    predicted = cycles("theta_fitted_rad", np.isfinite(curve.theta_fitted_rad.to_numpy(float)))
+    valid = curve.flag.isin([FITTED, RELEASE_TRANSIENT]).to_numpy()
+    centre = swing_centre_track(curve.time_s.to_numpy(float), np.where(valid, curve.theta_measured_rad, np.nan))
+    measured = cycles("theta_measured_rad", valid, offset if centre is None else centre[valid])
+    predicted = cycles("theta_fitted_rad", np.isfinite(curve.theta_fitted_rad.to_numpy(float)), offset)
     measured["predicted_amplitude_loss_rad"] = loss_at_amplitude(predicted, measured.amplitude_rad.to_numpy())
     return measured

@@ -63,6 +63,17 @@ def residual_figure(document: dict, residuals: pd.DataFrame) -> bytes | None:
         return figure_png(fig)
 
 
+def _off_axes(extinction: pd.DataFrame) -> str:
+    """The caption's note of the measured half cycles a log axis cannot show (no loss within noise), or ''."""
+    if extinction.empty or "model" not in extinction:
+        return ""
+    measured = extinction[extinction.model == "measured"]
+    off = int((measured.amplitude_loss_rad <= 0).sum())
+    if not off:
+        return ""
+    return f" {off} of {len(measured)} measured half cycles lost no amplitude, within noise: off the log axes."
+
+
 def extinction_figure(document: dict, extinction: pd.DataFrame) -> bytes | None:
     """Amplitude loss per half cycle against amplitude: measured points, and each model's prediction."""
     import matplotlib
@@ -150,7 +161,7 @@ def figures_html(document: dict, residuals: pd.DataFrame, extinction: pd.DataFra
             "start: measured (open markers, one kind per trial) and as each model's fitted curve predicts it (the "
             "baseline, the baseline with each first-round candidate and the models on the path; black: the final "
             "model). On log axes Coulomb friction gives a constant loss, linear damping and the history force a "
-            "slope 1, quadratic drag a slope 2.",
+            "slope 1, quadratic drag a slope 2." + _off_axes(extinction),
             "extinction curve",
         ),
     ]

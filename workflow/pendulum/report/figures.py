@@ -280,10 +280,13 @@ class FigureSections(ReportData):
                 fig = new_figure(10, 4.2)
                 ax, bx = fig.subplots(1, 2)
                 grey = ("0.1", "0.35", "0.55", "0.7", "0.45")
+                not_drawn = shown = 0  # half cycles with no measured loss: off a log axis
                 for i, t in enumerate(trials):
                     c = self.cycles(variant, t)
                     if c.empty:
                         continue
+                    not_drawn += int((c.amplitude_loss_rad <= 0).sum())
+                    shown += len(c)
                     ax.plot(
                         c.amplitude_deg,
                         np.degrees(c.amplitude_loss_rad),
@@ -338,8 +341,15 @@ class FigureSections(ReportData):
                 png = figure_png(fig)
             caption = self.figure_caption(
                 f"Rig {esc(rig)}. Left: the extinction curve — loss of amplitude over each half cycle against the "
-                f"amplitude at its start, measured (open markers, one per trial; amplitudes about the {esc(variant)} "
-                "fit's rest angle) and as each variant's fitted curve predicts it. On these log axes Coulomb friction "
+                "amplitude at its start, measured (open markers, one per trial; amplitudes about the record's own "
+                "swing centre) and as each variant's fitted curve predicts it"
+                + (
+                    f" ({not_drawn} of {shown} measured half cycles lost no amplitude, within noise, and are off these "
+                    "log axes)"
+                    if not_drawn
+                    else ""
+                )
+                + ". On these log axes Coulomb friction "
                 "gives a constant loss, linear damping a slope 1 and quadratic drag a slope 2: a variant that lacks a "
                 "term misses one end of the curve. Right: the local drag coefficient of each half cycle, charging all "
                 "of its loss to quadratic drag, against its KC number"
