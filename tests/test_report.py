@@ -211,6 +211,18 @@ def test_the_summary_recommends_the_best_variant_and_warns_of_the_failed_trial(d
     assert "1 of 2 trial(s) failed" in failures
 
 
+def test_the_summary_does_not_recommend_a_fit_that_misses_its_records(documents):
+    """A best variant whose joint fit misses its records by far more than their noise is the best tried, not a
+    recommendation (the real apple clip's quadratic fit: 78× the noise, titled "Recommended" before)."""
+    assert "<h3>Recommended coefficients — rig rig" in documents.summary_box()
+    documents.joint[("linear", "rig")]["warnings"] = [
+        "trial t20: residual RMS 0.235° is 78× the record's noise (0.003°) and smooth (lag-1 1.00): the model misses "
+        "a systematic effect; its coefficients absorb it and their intervals do not cover that error"
+    ]
+    box = documents.summary_box()
+    assert "Recommended" not in box and "<h3>Best of the variants tried, none fits within the record's noise" in box
+
+
 def test_trial_order_puts_trials_without_a_release_angle_last(documents):
     assert documents.trial_order() == ["t20", "bad"]
     assert documents.release_deg("t20") == 20.0 and documents.release_deg("bad") is None

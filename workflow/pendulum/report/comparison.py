@@ -76,9 +76,17 @@ class ComparisonSections(ReportData):
                 if warnings
                 else "<p>No warnings.</p>"
             )
+            # a model that misses the record by far more than its noise: the best of the variants tried, not a
+            # recommendation (its coefficients absorb what it misses; their intervals do not cover that)
+            misfit = any("misses a systematic effect" in w for w in joint.get("warnings") or [])
+            title = (
+                "Best of the variants tried, none fits within the record's noise"
+                if misfit
+                else "Recommended coefficients"
+            )
             boxes.append(
                 f'<section class="summary-box" id="summary-{esc(rig)}">'
-                f"<h3>Recommended coefficients — rig {esc(rig)}: joint fit of {len(joint.get('trials', {}))} "
+                f"<h3>{title} — rig {esc(rig)}: joint fit of {len(joint.get('trials', {}))} "
                 f"trial(s), variant {esc(self.variant_label(variant))}</h3>{table}"
                 f'<p class="basis">{basis}</p>'
                 f'<p class="verdict"><b>Consistency:</b> {self._verdict_sentence(rig, variant)}</p>'
