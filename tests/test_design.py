@@ -167,3 +167,34 @@ def test_bad_requests_are_warned_about_and_the_rest_is_designed(small_group):
     assert document["targets"] == ["drag_area_m2"] and document["recommendations"]
     ranks = sorted(r["rank"] for r in rows if r["coefficient"] == "drag_area_m2")
     assert ranks == list(range(1, len(ranks) + 1))
+
+
+def test_a_coefficient_at_its_bound_gets_no_percentages():
+    """Added mass fitted to zero (its bound): a new user's build of the apple clip showed 'today 2.665×10⁻¹⁷',
+    '±0.00208 (7.8×10¹⁵ %)' and a tolerance share of '±2e+02 %'. Now: 0 at bound, no share of it, and percentages
+    never in e-notation."""
+    from pendulum.design.tolerances import measurement_advice, percent
+    from pendulum.report.design import relative_text, today_value
+
+    entry = {"value": 2.665e-17, "halfwidth95": 0.00208, "relative_halfwidth95": 7.8e13}
+    assert today_value(entry) == "0 (at bound)" and relative_text(entry) == " (not told from 0)"
+    assert (
+        today_value({**entry, "value": 1.105}) == "1.105"
+        and relative_text({**entry, "relative_halfwidth95": 0.11}) == " (11 %)"
+    )
+    advice = measurement_advice(
+        "added_mass_kg",
+        "the added mass m_a",
+        {
+            "value": 2.665e-17,
+            "stderr_statistical": 0.001,
+            "stderr_systematic": 0.0005,
+            "floor_relative_halfwidth95": 1e13,
+        },
+        {"error_budget": {"length_m": 0.0004}},
+        0.02,
+        {"rig": {"length_m": 0.002}},
+        {},
+    )
+    assert "at zero (its bound)" in advice["sentence"] and "e+" not in advice["sentence"]
+    assert [percent(v) for v in (3.94, 199.3, 2345.0)] == ["3.9", "200", "2300"]

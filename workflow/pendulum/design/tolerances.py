@@ -67,6 +67,11 @@ def _tolerance_text(key: str, tolerances: dict, stated: dict) -> str:
     return f"{_number(value, unit)}, 1σ: the default share of its value; state yours under rigs.{rig_name}.tolerances"
 
 
+def percent(value: float) -> str:
+    """A percentage in two figures, never in e-notation: 3.9, 47, 190, 2300."""
+    return f"{value:.2g}" if abs(value) < 100 else f"{float(f'{value:.2g}'):.0f}"
+
+
 def measurement_advice(
     name: str, words: str, entry: dict, parameter: dict, target: float, tolerances: dict, stated: dict
 ) -> dict:
@@ -76,6 +81,12 @@ def measurement_advice(
     entry (``error_budget``: input → shift per 1σ); ``tolerances`` / ``stated``: rig → input → 1σ (all, stated).
     """
     value = abs(entry["value"])
+    if not value > 1e-6 * Z95 * math.hypot(entry["stderr_statistical"], entry.get("stderr_systematic", 0.0)):
+        return {  # at its bound (zero): no share of it is an interval
+            "limited_by": "",
+            "measure": [],
+            "sentence": f"{words} is at zero (its bound): an interval of ±{100 * target:g} % of it cannot be reached",
+        }
     budget = {k: abs(float(v)) for k, v in (parameter.get("error_budget") or {}).items() if v}
     order = sorted(budget, key=lambda k: -budget[k])
     if not order:
@@ -85,10 +96,10 @@ def measurement_advice(
     first = order[0]
     head = (
         f"±{100 * target:g} % for {words} cannot be reached by more trials: the rig values' tolerances alone give "
-        f"±{floor:.2g} % (95 %), most of it from {input_words(first)}"
+        f"±{percent(floor)} % (95 %), most of it from {input_words(first)}"
     )
     tolerance = _tolerance_text(first, tolerances, stated)
-    head += f" ({tolerance}: ±{100 * Z95 * budget[first] / value:.2g} %)" if tolerance else ""
+    head += f" ({tolerance}: ±{percent(100 * Z95 * budget[first] / value)} %)" if tolerance else ""
     # the fewest largest inputs that, measured better by one common factor f, bring the target within reach
     total = sum(budget[k] ** 2 for k in order)
     for n in range(1, len(order) + 1):

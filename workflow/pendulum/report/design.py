@@ -12,7 +12,7 @@ from pendulum.design.next_trials import coefficient_words
 from pendulum.report.data import ReportData, failure_text, is_ok, read_json, read_table
 from pendulum.report.discovery import coefficient_label, sentence
 from pendulum.report.figures import MPL_STYLE, figure_png, new_figure
-from pendulum.report.format import PALETTE, esc, figure_html, fmt
+from pendulum.report.format import PALETTE, esc, figure_html, fmt, is_finite
 
 RIG_COLOURS = tuple(c for c in PALETTE if c != "#F0E442")
 
@@ -61,6 +61,18 @@ def design_figure(document: dict, table: pd.DataFrame) -> bytes | None:
         return figure_png(fig)
 
 
+def today_value(entry: dict) -> str:
+    """Today's estimate, "0 (at bound)" where it sits at zero, far inside its own interval's numerical noise."""
+    value = entry["value"]
+    return "0 (at bound)" if abs(value) <= 1e-9 * abs(entry["halfwidth95"]) else fmt(value, 4)
+
+
+def relative_text(entry: dict) -> str:
+    """ " (11 %)": the half-width as a share of the value; nothing where the value cannot be told from zero."""
+    relative = entry["relative_halfwidth95"]
+    return f" ({fmt(100 * relative, 2)} %)" if is_finite(relative) and relative < 10 else " (not told from 0)"
+
+
 def today_table(document: dict, caption) -> str:
     rows = []
     for name in document.get("targets", []):
@@ -69,8 +81,8 @@ def today_table(document: dict, caption) -> str:
         rows.append(
             "<tr>"
             f"<td>{coefficient_label(name) if name != 'drag_coefficient' else 'drag coefficient, C<sub>d</sub>'}</td>"
-            f'<td class="num">{fmt(e["value"], 4)}</td>'
-            f'<td class="num">±{fmt(e["halfwidth95"], 3)} ({fmt(100 * e["relative_halfwidth95"], 2)} %)</td>'
+            f'<td class="num">{today_value(e)}</td>'
+            f'<td class="num">±{fmt(e["halfwidth95"], 3)}{relative_text(e)}</td>'
             f'<td class="num">±{fmt(1.959963984540054 * e["stderr_systematic"], 3)}</td>'
             f"<td>{design_text(target.get('sentence', ''))}</td>"
             "</tr>"
