@@ -29,6 +29,11 @@ def design_figure(document: dict, table: pd.DataFrame) -> bytes | None:
         fig = new_figure(10, 0.6 + 2.4 * ((len(targets) + 1) // 2))
         axes = fig.subplots((len(targets) + 1) // 2, min(len(targets), 2), squeeze=False).ravel()
         for ax, name in zip(axes, targets, strict=False):
+            if today_value(document["today"][name]) == "0 (at bound)":  # no share of zero to plot
+                ax.set_title(coefficient_words(name), loc="left")
+                ax.text(0.5, 0.5, "at its bound (0): no relative half-width", ha="center", transform=ax.transAxes)
+                ax.set_axis_off()
+                continue
             rows = table[table.coefficient == name]
             for i, (rig, r) in enumerate(rows.groupby("rig", sort=True)):
                 r = r.sort_values("release_deg")
