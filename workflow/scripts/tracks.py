@@ -26,6 +26,7 @@ video = sm.input.video
 settings = TrackerSettings.from_config(sm.params.tracking)
 TRACK_COLUMNS = ["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"]
 started = time.perf_counter()
+measured = {}  # facts of a track that was then refused, for the failed document
 
 
 def work():
@@ -35,6 +36,7 @@ def work():
     track, path = path_departure(track)
     log.info("%s: %s", video, path["verdict"])
     if path.get("not_a_pendulum"):
+        measured.update(method=method, path=path, body=track.attrs.get("body"), marker=track.attrs.get("marker"))
         raise VideoError(f"{video}: {path['verdict']}; no angle record is made from it")
     flags = track.flag.value_counts().to_dict()
     if track.attrs.get("video", {}).get("stopped_early"):
@@ -77,7 +79,8 @@ def work():
 def write_failed(document):
     write_csv(empty_table(TRACK_COLUMNS), sm.output.track)
     write_png(failure_image(document["error"]), sm.output.sheet)
-    write_json({"video": video, **document, "settings": settings.__dict__}, sm.output.summary)
+    # what was measured before the refusal (a path that is not a pendulum's): the user can see why
+    write_json({"video": video, **document, **measured, "settings": settings.__dict__}, sm.output.summary)
 
 
 run_stage("tracks", log, work, write_failed)

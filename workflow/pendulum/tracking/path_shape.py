@@ -158,8 +158,9 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
         document["verdict"] = (
             f"the tracked object does not move on a circle about a fixed point: its path sits {unexplained:.1f} px "
             f"RMS off the best circle{' about a creeping pivot' if creep['corrected'] else ''}, "
-            f"{100 * unexplained / swing_px:.1f} % of its swing ({swing_px:.0f} px SD along the path; a rigid "
-            f"pendulum's path: well under 1 %, noise {noise_px:.2f} px)"
+            f"{100 * unexplained / swing_px:.1f} % of its swing ({swing_px:.0f} px SD along the path; noise "
+            f"{noise_px:.2f} px; a rigid pendulum's path, a creeping camera allowed for, stays under "
+            f"{100 * NOT_CIRCLE_SWING_FRACTION:.0f} %)"
             + (", and that circle's centre lies below it" if below else "")
             + ": not a rigid pendulum about a fixed pivot (an object that spins or twists on its thread, a swing "
             "far out of the image plane, or the wrong object followed)"
