@@ -14,7 +14,7 @@ import cv2
 import _setup  # noqa: F401
 from pendulum.camera.video import VideoError, track_over_sheet
 from pendulum.io import script_logger, write_csv, write_json, write_png
-from pendulum.status import empty_table, failure_image, run_stage
+from pendulum.status import empty_table, failure_image, require_ok, run_stage
 from pendulum.tracking.method import track_trial
 from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
@@ -30,6 +30,8 @@ measured = {}  # facts of a track that was then refused, for the failed document
 
 
 def work():
+    # a video the frames stage could not read is not tracked again: its failure is said once, by that stage
+    require_ok(json.loads(Path(sm.input.frames_summary).read_text()), "frames")
     track = track_trial(video, settings, progress=log.info)
     method = track.attrs.get("method", {})
     log.info("%s: tracked the %s (%s)", video, method.get("used"), method.get("reason"))
