@@ -487,3 +487,24 @@ def test_a_log_axis_spanning_less_than_a_factor_three_has_several_labels():
 
     assert len(shown(narrow)) >= 3
     assert {0.01, 0.1, 1.0, 0.2, 2.0}.issubset(shown(wide))
+
+
+def test_the_summary_says_what_the_videos_records_carry(documents):
+    """A creeping camera, a path off one circle and frames the phone lost are said where users read first (the real
+    apple clip's were only in the tracking table's notes)."""
+    assert "What the videos' records carry" not in documents.summary_box()
+    documents.docs[("t20", "tracks")] = {
+        "status": "ok",
+        "path": {
+            "corrected": True,
+            "departs": True,
+            "creep": {"motion_px": 13.1},
+            "unexplained_rms_px": 0.44,
+            "unexplained_angle_deg": 0.0455,
+        },
+        "timing": {"slips": [[276, 0.8], [463, 0.99]], "repeated": [407]},
+    }
+    box = documents.summary_box()
+    assert "<b>t20</b>: the camera crept by 13 px (corrected)" in box
+    assert "off one circle by 0.44 px RMS (0.045°), which the angles carry" in box
+    assert "2 time slip(s) and 1 repeated frame(s) under even stamps" in box

@@ -124,6 +124,28 @@ class ComparisonSections(ReportData):
         )
         return sentence[0].upper() + sentence[1:]
 
+    def _tracking_note(self, trial: str) -> str:
+        """A trial's path and timing findings in one clause ('' if none): a creeping camera (corrected), a path off
+        one circle (carried by the angles), frames lost or repeated under even stamps (times put right)."""
+        tracks = self.docs.get((trial, "tracks")) or {}
+        if not is_ok(tracks):
+            return ""
+        parts = []
+        path = tracks.get("path") or {}
+        creep = path.get("creep") or {}
+        if path.get("corrected") and is_finite(creep.get("motion_px")):
+            parts.append(f"the camera crept by {fmt(creep['motion_px'], 2)} px (corrected)")
+        if path.get("departs") and is_finite(path.get("unexplained_angle_deg")):
+            parts.append(
+                f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
+                f"({fmt(path['unexplained_angle_deg'], 2)}°), which the angles carry"
+            )
+        timing = tracks.get("timing") or {}
+        slips, repeated = len(timing.get("slips") or []), len(timing.get("repeated") or [])
+        if slips or repeated:
+            parts.append(f"{slips} time slip(s) and {repeated} repeated frame(s) under even stamps, times put right")
+        return ", ".join(parts)
+
     def _summary_warnings(self, rig: str, variant: str, joint: dict, best: dict) -> list[str]:
         out = []
         failed = self.failed_trials()
@@ -191,6 +213,9 @@ class ComparisonSections(ReportData):
             out.append(
                 f"Per-trial {esc(variant)} fits with warnings: {', '.join(esc(t) for t in per_trial)} (Table 3)."
             )
+        tracking = [f"<b>{esc(t)}</b>: {esc(n)}" for t in self.rig_trials(rig) if (n := self._tracking_note(t))]
+        if tracking:
+            out.append("What the videos' records carry (Tracking quality): " + "; ".join(tracking) + ".")
         if not self.provenance.get("commit"):
             out.append("Not built from a git commit: the code version of these results is not recorded.")
         elif self.provenance.get("dirty"):
