@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.geometry import circular_mean_rad, image_angle_rad, wrapped_rad
-from pendulum.angles.swings import crossing_period, detect_release, rest_start_index, sample_noise_rad
+from pendulum.angles.swings import crossing_period, detect_release, rest_start_index, sample_noise_rad, swing_extrema
 
 MAX_HANG_DEG = 60.0  # a swing centred further from the vertical it is measured from: the vertical is not the camera's
 
@@ -42,6 +42,7 @@ class AngleRecordInfo:
     period_s: float | None = None
     period_stderr_s: float | None = None
     period_cycles: int | None = None
+    first_extremum_deg: float | None = None  # θ at the record's first swing extremum (its amplitude where no release)
     notes: list = field(default_factory=list)  # what was done about imperfect input (sorted, dropped rows, …)
 
     def to_dict(self):
@@ -120,6 +121,9 @@ def angle_record(
     period = crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
     if period is not None:
         info.period_s, info.period_stderr_s, info.period_cycles = period
+    extrema = swing_extrema(table.theta_rad.to_numpy(float))
+    if extrema.size:
+        info.first_extremum_deg = float(table.theta_deg.iloc[int(extrema[0])])
     return table, info
 
 

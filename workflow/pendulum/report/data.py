@@ -239,9 +239,13 @@ class ReportData:
         return is_ok(angles) and is_finite(angles.get("hold_angle_deg"))
 
     def release_deg(self, trial: str) -> float | None:
-        """Release angle: the hold angle before release, else (no release in the record) the first fitted angle."""
+        """Release angle: the hold angle before release, else (no release in the record) the angle of its first
+        swing extremum (as the paper's release, the swing's amplitude there), else the first fitted angle."""
         if self.release_detected(trial):
             return float(self.docs[(trial, "angles")]["hold_angle_deg"])
+        first = (self.docs.get((trial, "angles")) or {}).get("first_extremum_deg")
+        if is_finite(first):
+            return float(first)
         for v in self.order:
             fit = self.fits.get((v, trial))
             if is_ok(fit) and fit.get("trials", {}).get(trial):
@@ -332,7 +336,7 @@ class ReportData:
         return f"{variant} ({terms})"
 
     def angle_label(self, trial: str) -> str:
-        """Release angle, e.g. "+20°"; "+6°†" when the record holds no release (the first fitted angle)."""
+        """Release angle, e.g. "+20°"; "+6°†" when the record holds no release (its first swing extremum)."""
         a = self.release_deg(trial)
         if a is None:
             return "—"
@@ -342,7 +346,10 @@ class ReportData:
         """The note for release angles marked †, when any trial has one."""
         if all(self.release_detected(t) or self.release_deg(t) is None for t in self.trials):
             return ""
-        return " † No release in the record (e.g. an angle table that starts mid-swing): the first fitted angle."
+        return (
+            " † No release in the record (a video or an angle table that starts mid-swing): the angle of its first "
+            "swing extremum."
+        )
 
     def _truth_text(self, trials: list[str], name: str) -> str:
         values = {true_value(self.truth.get(t), name) for t in trials if t in self.truth}
