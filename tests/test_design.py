@@ -197,4 +197,4 @@ def test_a_coefficient_at_its_bound_gets_no_percentages():
         {},
     )
     assert "at zero (its bound)" in advice["sentence"] and "e+" not in advice["sentence"]
-    assert [percent(v) for v in (3.94, 199.3, 2345.0)] == ["3.9", "200", "2300"]
+    assert [percent(v) for v in (3.94, 99.6, 199.3, 2345.0, 4e-5)] == ["3.9", "100", "200", "2300", "0.000040"]

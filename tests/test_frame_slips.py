@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from scipy.stats import binom
 
-from pendulum.tracking.timing import correct_slips, find_slips
+from pendulum.tracking.timing import correct_slips, find_slips, slip_sentence
 
 
 def swing_track(rng, slips=(), fps=60.0, duration_s=8.0, noise_px=0.05):
@@ -130,3 +130,41 @@ def test_a_rendered_phone_clip_with_a_slipping_clock(tmp_path, seed):
     timing = track.attrs["timing"]
     assert timing["repeated"] == [slips[1][0]]
     assert [f for f, _ in timing["slips"]] == [slips[0][0], slips[2][0]]
+
+
+def test_a_repeat_the_marker_tracker_flagged_is_said_as_a_repeat_and_its_time_put_right():
+    """The marker tracker flags a picture identical to the one before ``duplicate``: the timing still counts it
+    (a review found it reported as 'the clock slipped by −1.00 of a frame period', the repeat's own time left)."""
+    rng = np.random.default_rng(11)
+    _, _, theta = swing_track(np.random.default_rng(11))
+    repeat = fast_frame(rng, theta, 150, 300)
+    track, taken, _ = swing_track(np.random.default_rng(11), slips=[(repeat, -1.0)])
+    track.loc[repeat, ["x_px", "y_px"]] = track.loc[repeat - 1, ["x_px", "y_px"]].to_numpy()
+    track.loc[repeat, "flag"] = "duplicate"
+    out = correct_slips(track)
+    timing = out.attrs["timing"]
+    assert timing["repeated"] == [repeat] and not timing["slips"], timing
+    assert np.abs(out.time_s.to_numpy() - taken).max() * 60 <= 0.1
+    assert (out.stamp_s == track.time_s).all()  # the file's stamps kept beside
+    assert "1 repeated" in slip_sentence(timing) and "slipped" not in slip_sentence(timing)
+
+
+def test_the_sentence_counts_frames_not_slips():
+    timing = {"slips": [[120, 2.0], [300, 1.0]], "repeated": [], "checked_fraction": 0.9, "max_shift_s": 0.05}
+    assert "3 frame(s) lost (before frame 120, 300)" in slip_sentence(timing)
+
+
+def test_frames_flagged_at_the_bottom_of_every_swing_make_no_slips():
+    """Glare or a post hiding the body where it moves fastest: a window across such a gap is too wide for the
+    polynomial, and a shift would fit the curve it misses (a review found slips of +0.2–0.28 at every crossing in
+    half of the seeds, 2.8 frames of drift, before windows were held to three missing frames). None in 40 of 40."""
+    clean = 0
+    for seed in range(40):
+        fps = [30.0, 60.0][seed % 2]
+        track, taken, theta = swing_track(np.random.default_rng(500 + seed), fps=fps, duration_s=10.0)
+        half = int([5, 7, 9, 12][seed % 4] * fps / 30) // 2
+        for k in np.flatnonzero(np.diff(np.sign(theta)) != 0):
+            track.loc[max(0, k - half) : k + half, "flag"] = "glare"
+        timing = correct_slips(track).attrs["timing"]
+        clean += not timing["slips"] and not timing["repeated"]
+    assert clean == 40, clean

@@ -51,7 +51,11 @@ def work():
     write_csv(track, sm.output.track)
     # the track over the frames stage's contact sheet (no frame decoded again), in image coordinates
     frames = json.loads(Path(sm.input.frames_summary).read_text())
-    in_image = track.assign(x_px=track.get("x_image_px", track.x_px), y_px=track.get("y_image_px", track.y_px))
+    in_image = track.assign(  # in image coordinates, at the file's time stamps (the sheet's)
+        x_px=track.get("x_image_px", track.x_px),
+        y_px=track.get("y_image_px", track.y_px),
+        time_s=track.get("stamp_s", track.time_s),
+    )
     sheet = cv2.imread(sm.input.contact_sheet, cv2.IMREAD_GRAYSCALE)
     times = frames.get("contact_sheet_times_s") or []
     drawn = sheet

@@ -226,8 +226,10 @@ def rest_start_index(theta: np.ndarray, sigmas: float = 5.0) -> int | None:
 def crossing_period(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, float, int] | None:
     """The record's mean period from the times it crosses its middle level: ``(period_s, stderr_s, n_cycles)``.
 
-    The middle is halfway between the median maximum and minimum of the swing extrema; the crossings
-    (linear interpolation between neighbouring usable samples) upward and downward are each numbered
+    The middle is halfway between the median maximum and minimum of the confirmed swing extrema
+    (:func:`swing_extrema`: noise makes none, nor does the record's rest at its end); one crossing per
+    half swing between two of them (linear interpolation between neighbouring usable samples; the
+    median time where noise crosses more than once). The upward and downward crossings are each numbered
     by whole periods from the first and fitted with a line t = t₀ + P·n; P is the mean of the two
     directions' slopes (an off-centre swing makes its half periods alternate, not its periods), its
     standard error from the lines' residuals. None with fewer than two periods in either direction.
@@ -237,18 +239,27 @@ def crossing_period(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, float
     extrema = swing_extrema(th)
     if extrema.size < 4:
         return None
-    high = th[extrema][th[extrema] > np.median(th[np.isfinite(th)])]
-    low = th[extrema][th[extrema] <= np.median(th[np.isfinite(th)])]
+    high = th[extrema][th[extrema] > np.median(th[extrema])]
+    low = th[extrema][th[extrema] <= np.median(th[extrema])]
     if high.size < 2 or low.size < 2:
         return None
     centred = th - 0.5 * (float(np.median(high)) + float(np.median(low)))
     pair = np.isfinite(centred[:-1]) & np.isfinite(centred[1:])
+    crossings = {1: [], -1: []}
+    for a, b in zip(extrema[:-1], extrema[1:], strict=True):
+        direction = 1 if centred[b] > centred[a] else -1
+        if direction * centred[a] >= 0 or direction * centred[b] <= 0:
+            continue  # both on one side of the middle: no crossing to time
+        i = a + np.flatnonzero(pair[a:b] & (np.sign(centred[a:b]) != np.sign(centred[a + 1 : b + 1])))
+        i = i[centred[i] != centred[i + 1]]
+        if i.size:
+            when = t[i] - centred[i] * (t[i + 1] - t[i]) / (centred[i + 1] - centred[i])
+            crossings[direction].append(float(np.median(when)))
     slopes, variances, cycles = [], [], []
-    for sign in (1, -1):
-        i = np.flatnonzero(pair & (sign * centred[:-1] < 0) & (sign * centred[1:] >= 0))
-        if i.size < 3:
+    for direction in (1, -1):
+        when = np.array(crossings[direction])
+        if when.size < 3:
             return None
-        when = t[i] - centred[i] * (t[i + 1] - t[i]) / (centred[i + 1] - centred[i])
         gaps = np.diff(when)
         one = float(np.median(gaps))
         n = np.round((when - when[0]) / one)

@@ -69,7 +69,11 @@ def _tolerance_text(key: str, tolerances: dict, stated: dict) -> str:
 
 def percent(value: float) -> str:
     """A percentage in two figures, never in e-notation: 3.9, 47, 190, 2300."""
-    return f"{value:.2g}" if abs(value) < 100 else f"{float(f'{value:.2g}'):.0f}"
+    rounded = float(f"{value:.2g}")
+    if rounded == 0:
+        return "0"
+    decimals = max(0, 1 - math.floor(math.log10(abs(rounded))))
+    return f"{rounded:.{decimals}f}"
 
 
 def measurement_advice(

@@ -147,7 +147,9 @@ def measured_half_cycles(fit: GroupFit) -> pd.DataFrame:
     for k, record in enumerate(fit.problem.records):
         model, params = _model_and_params(fit, k)
         mask = fit.problem.masks[k]
-        centre = swing_centre_track(record.time_s[mask], record.theta_rad[mask])
+        # the samples the fit left out as gaps, not closed up (the extrema are refined over neighbouring samples)
+        centre = swing_centre_track(record.time_s, np.where(mask, record.theta_rad, np.nan))
+        centre = None if centre is None else centre[mask]
         table = half_cycles(
             record.time_s[mask],
             record.theta_rad[mask],

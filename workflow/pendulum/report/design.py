@@ -67,9 +67,10 @@ def design_figure(document: dict, table: pd.DataFrame) -> bytes | None:
 
 
 def today_value(entry: dict) -> str:
-    """Today's estimate, "0 (at bound)" where it sits at zero, far inside its own interval's numerical noise."""
+    """Today's estimate, "0 (at bound)" where it sits at zero (within 10⁻⁶ of its half-width, as the advice of
+    :func:`pendulum.design.tolerances.measurement_advice` takes it)."""
     value = entry["value"]
-    return "0 (at bound)" if abs(value) <= 1e-9 * abs(entry["halfwidth95"]) else fmt(value, 4)
+    return "0 (at bound)" if abs(value) <= 1e-6 * abs(entry["halfwidth95"]) else fmt(value, 4)
 
 
 def relative_text(entry: dict) -> str:
