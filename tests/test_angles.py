@@ -166,3 +166,17 @@ def test_crossing_period_of_a_record_that_runs_to_rest(fps):
     _, info = angle_record(t, theta, np.ones(t.size), flags, vertical_deg=0.0, length_m=1.0, source="x")
     assert abs(info.period_s - 2.0) <= max(4 * info.period_stderr_s, 1e-4), (info.period_s, info.period_stderr_s)
     assert info.period_cycles >= 15
+
+
+def test_a_record_without_a_release_is_labelled_by_its_first_turning_point():
+    """The † angle: a record that starts just past a turning point (the apple clip: −22.06°, then +22.07°) starts at
+    it, as a release would; one that starts mid-swing takes the first turning point it reaches."""
+    from pendulum.angles.record import angle_record
+
+    t = np.arange(0, 10, 1 / 60)
+    flags = np.full(t.size, "ok", dtype=object)
+    for phase, side in ((0.05, 1), (math.pi + 0.05, -1), (-math.pi / 2, 1), (math.pi / 2, -1)):
+        theta = 0.38 * np.cos(2 * math.pi * t / 2.078 + phase)
+        _, info = angle_record(t, theta, np.ones(t.size), flags, vertical_deg=0.0, length_m=1.0, source="x")
+        assert not info.release_detected
+        assert info.first_extremum_deg == pytest.approx(side * math.degrees(0.38), abs=0.1), (phase, info)

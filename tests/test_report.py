@@ -507,7 +507,7 @@ def test_the_summary_says_what_the_videos_records_carry(documents):
     box = documents.summary_box()
     assert "<b>t20</b>: the camera crept by 13 px (corrected)" in box
     assert "off one circle by 0.44 px RMS (0.045°), which the angles carry" in box
-    assert "2 time slip(s) and 1 repeated frame(s) under even stamps" in box
+    assert "1 frame(s) lost, 1 repeated, 1 slip(s) of the clock by part of a frame under even time stamps" in box
 
 
 def test_a_record_without_a_release_is_labelled_by_its_first_swing_extremum(documents):
@@ -515,4 +515,4 @@ def test_a_record_without_a_release_is_labelled_by_its_first_swing_extremum(docu
     its first sample, −11° for a 15° swing passing through, said nothing of the swing)."""
     documents.docs[("t20", "angles")] = {"status": "ok", "hold_angle_deg": None, "first_extremum_deg": 21.7}
     assert documents.angle_label("t20") == "+22°†"
-    assert "first swing extremum" in documents.dagger_note()
+    assert "first turning point" in documents.dagger_note()

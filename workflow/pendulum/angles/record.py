@@ -42,7 +42,9 @@ class AngleRecordInfo:
     period_s: float | None = None
     period_stderr_s: float | None = None
     period_cycles: int | None = None
-    first_extremum_deg: float | None = None  # θ at the record's first swing extremum (its amplitude where no release)
+    # θ at the record's first turning point (its first sample where it starts just past one): the swing's
+    # amplitude and side, as a release angle, where no release is in view
+    first_extremum_deg: float | None = None
     notes: list = field(default_factory=list)  # what was done about imperfect input (sorted, dropped rows, …)
 
     def to_dict(self):
@@ -123,7 +125,12 @@ def angle_record(
         info.period_s, info.period_stderr_s, info.period_cycles = period
     extrema = swing_extrema(table.theta_rad.to_numpy(float))
     if extrema.size:
-        info.first_extremum_deg = float(table.theta_deg.iloc[int(extrema[0])])
+        first = float(table.theta_deg.iloc[int(extrema[0])])
+        start = table.theta_deg.dropna()
+        start = float(start.iloc[0]) if len(start) else first
+        # a record that starts just past a turning point on the other side (the apple clip: −22.06°, then +22.07°)
+        # starts at that turning point, as a release would
+        info.first_extremum_deg = start if start * first < 0 and abs(start) > 0.5 * abs(first) else first
     return table, info
 
 

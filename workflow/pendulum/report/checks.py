@@ -73,14 +73,15 @@ def frame_notes(frames: dict) -> list[str]:
 
 
 def period_text(angles: dict) -> str:
-    """The angle record's mean period ± its standard error (two figures of it: "2.07824 ± 0.00025"), or "—"."""
+    """The angle record's mean period over ± its standard error (two figures of it: 2.07824, ± 0.00025) as HTML;
+    "—" where the record has none."""
     period, stderr = angles.get("period_s"), angles.get("period_stderr_s")
     if not is_finite(period):
         return "—"
     if not is_finite(stderr) or stderr <= 0:
         return fmt(period, 5)
-    places = decimals_for(stderr)
-    return f"{fmt_at(period, places)} ± {fmt_at(stderr, places)}"
+    places = decimals_for(stderr)  # two lines, as Table 3's intervals: the table keeps to the page
+    return f'<span class="v">{fmt_at(period, places)}</span><span class="q">± {fmt_at(stderr, places)}</span>'
 
 
 def changes_text(dirty: bool | None, files: list | None, shown: int = 5) -> str:
@@ -309,7 +310,7 @@ class CheckSections(ReportData):
                     td(str(angles.get("n_samples", "—")), "num"),
                     td(str(angles.get("n_flagged", "—")), "num"),
                     td(esc(fmt(angles.get("noise_deg"), 2)), "num"),
-                    td(esc(period_text(angles)), "num"),
+                    td(period_text(angles), "num"),
                 ]
             else:
                 angle_cells = [failure_cell(angles, said, span=4)]

@@ -25,6 +25,7 @@ from pendulum.report.format import (
     table_html,
     td,
 )
+from pendulum.tracking.timing import slip_counts
 
 
 class ComparisonSections(ReportData):
@@ -140,10 +141,11 @@ class ComparisonSections(ReportData):
                 f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
                 f"({fmt(path['unexplained_angle_deg'], 2)}°), which the angles carry"
             )
-        timing = tracks.get("timing") or {}
-        slips, repeated = len(timing.get("slips") or []), len(timing.get("repeated") or [])
-        if slips or repeated:
-            parts.append(f"{slips} time slip(s) and {repeated} repeated frame(s) under even stamps, times put right")
+        lost, repeated, other = slip_counts(tracks.get("timing") or {})
+        if lost or repeated or other:
+            counts = [f"{lost} frame(s) lost"] * bool(lost) + [f"{repeated} repeated"] * bool(repeated)
+            counts += [f"{other} slip(s) of the clock by part of a frame"] * bool(other)
+            parts.append(f"{', '.join(counts)} under even time stamps (times put right)")
         return ", ".join(parts)
 
     def _summary_warnings(self, rig: str, variant: str, joint: dict, best: dict) -> list[str]:

@@ -348,7 +348,7 @@ class ReportData:
             return ""
         return (
             " † No release in the record (a video or an angle table that starts mid-swing): the angle of its first "
-            "swing extremum."
+            "turning point."
         )
 
     def _truth_text(self, trials: list[str], name: str) -> str:

@@ -252,6 +252,14 @@ def _clear_jumps(out: pd.DataFrame, found: dict) -> list[int]:
     return cleared
 
 
+def slip_counts(timing: dict) -> tuple[int, int, int]:
+    """Frames lost (whole periods late), frames repeated, and other slips of the clock (parts of a period)."""
+    slips = timing.get("slips") or []
+    lost = sum(round(p) for _, p in slips if abs(p - round(p)) < 0.1 and p > 0)
+    other = sum(1 for _, p in slips if not (abs(p - round(p)) < 0.1 and p > 0))
+    return int(lost), len(timing.get("repeated") or []), other
+
+
 def slip_sentence(timing: dict) -> str:
     """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
     slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
