@@ -21,7 +21,7 @@ from pendulum.report.format import (
 )
 from pendulum.tracking.timing import slip_sentence
 
-NOTES_STYLE = "max-width:22em;min-width:14em"  # one note a line, wider than Table 3's warning column
+NOTES_STYLE = "max-width:22em;min-width:11em;overflow-wrap:anywhere"  # one note a line; the table within the page
 # Frames-stage warnings that :func:`frame_notes` says in its own words (video.probe's sentences).
 _NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
 
@@ -349,7 +349,7 @@ class CheckSections(ReportData):
             "frames",
             "fps",
             "dropped",
-            "duplicate time stamps",
+            "duplicate stamps",
             "marker",
             "tracker flags by kind",
             "angle samples",
