@@ -41,6 +41,8 @@ def work():
         measured.update(method=method, path=path, body=track.attrs.get("body"), marker=track.attrs.get("marker"))
         raise VideoError(f"{video}: {path['verdict']}; no angle record is made from it")
     flags = track.flag.value_counts().to_dict()
+    n_ok = int(flags.get("ok", 0))  # after the timing check (repeats flagged), unlike the method's share
+    log.info("%s: %d of %d frames usable (%.1f %%)", video, n_ok, len(track), 100 * n_ok / max(len(track), 1))
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
     timing = track.attrs.get("timing") or {}

@@ -107,18 +107,27 @@ def _wall_image(spec: TrialSpec, wall: Wall) -> np.ndarray:
     return img
 
 
+def _disk_coverage(gx: np.ndarray, gy: np.ndarray, cx: float, cy: float, r: float) -> np.ndarray:
+    """Each pixel's share of 4 × 4 sub-pixel samples within r of (cx, cy): 1 or 0 away from the rim, counted
+    near it (a sample lies within 0.53 px of its pixel's centre)."""
+    d = np.hypot(gx + 0.5 - cx, gy + 0.5 - cy)
+    coverage = (d < r).astype(np.float64)
+    rim = np.nonzero(np.abs(d - r) <= 1.0)
+    sub = (np.arange(4) + 0.5) / 4
+    sx, sy = np.meshgrid(sub, sub)
+    fx = gx[rim][:, None] + sx.ravel() - cx
+    fy = gy[rim][:, None] + sy.ravel() - cy
+    coverage[rim] = (fx**2 + fy**2 <= r * r).mean(axis=1)
+    return coverage
+
+
 def _body_patch(body: WallBody, cx: float, cy: float, spin_rad: float, swing_rad: float):
     """(x0, y0, grey, coverage) of the body disk at sub-pixel centre (cx, cy), its look turned by the swing."""
     r = body.radius_px
     x0, y0 = int(math.floor(cx - r - 2)), int(math.floor(cy - r - 2))
     size = int(math.ceil(2 * r + 5))
-    sub = (np.arange(4) + 0.5) / 4
     gy, gx = np.mgrid[0:size, 0:size].astype(np.float32)
-    sx, sy = np.meshgrid(sub, sub)
-    fx = (gx[..., None] + sx.ravel() - (cx - x0)).reshape(size, size, 16)
-    fy = (gy[..., None] + sy.ravel() - (cy - y0)).reshape(size, size, 16)
-    inside = fx**2 + fy**2 <= r * r
-    coverage = inside.mean(axis=2)
+    coverage = _disk_coverage(gx, gy, cx - x0, cy - y0, r)
     u = (gx + 0.5 - (cx - x0)) / r  # body frame: across and along the thread
     v = (gy + 0.5 - (cy - y0)) / r
     cs, sn = math.cos(swing_rad), math.sin(swing_rad)
@@ -143,7 +152,7 @@ def _body_patch(body: WallBody, cx: float, cy: float, spin_rad: float, swing_rad
         spot = np.exp(-0.5 * ((u - hx) ** 2 + (v - hy) ** 2) / body.gloss_sigma**2)
         grey = np.minimum(grey + body.gloss * spot, 255.0)
     if body.dot_radius_px > 0:  # the dot's exact coverage, as the body's
-        dot = (fx**2 + fy**2 <= body.dot_radius_px**2).mean(axis=2)
+        dot = _disk_coverage(gx, gy, cx - x0, cy - y0, body.dot_radius_px)
         grey = grey + dot * (body.dot_level - grey)
     return x0, y0, grey.astype(np.float32), coverage.astype(np.float32)
 
@@ -218,58 +227,108 @@ def render_wall_trial(trial: WallTrial, progress=None) -> tuple[list, pd.DataFra
     h, w = base.shape
     rng = np.random.default_rng(spec.seed + 15485863)
     noise_bank = [rng.standard_normal(base.shape).astype(np.float32) * cam.noise_sigma for _ in range(4)]
+
+    def draw(canvas, i, j, part=(slice(None), slice(None))):
+        """The body, its shadows and its thread at sub-exposure j of frame i, drawn onto ``canvas``."""
+        x, y = float(bx[i, j]), float(by[i, j])
+        for ox, oy in wall.shadows:
+            sx0, sy0, dark = _shadow_patch(body, wall, x + ox, y + oy)
+
+            def darken(view, idx, dark=dark):
+                view -= dark[idx]
+
+            _paste(canvas, sx0, sy0, dark, darken)
+        if wall.thread_depth:
+            end = _thread_end(i, j)
+            cv2.line(
+                layer,
+                (int(round(px[i, j] * 16)), int(round(py[i, j] * 16))),
+                (int(round(end[0] * 16)), int(round(end[1] * 16))),
+                1.0,
+                wall.thread_width_px,
+                cv2.LINE_AA,
+                4,
+            )
+            canvas[part] -= wall.thread_depth * layer[part]
+            layer[part] = 0.0
+        spin = math.radians(body.spin_deg_per_s) * float(sub_t[i, j] + wall.start_s)
+        x0, y0, grey, cover = _body_patch(body, x, y, spin, float(phi[i, j]))
+
+        def blend(view, idx, grey=grey, cover=cover):
+            view += cover[idx] * (grey[idx] - view)
+
+        _paste(canvas, x0, y0, grey, blend)
+
+    def _thread_end(i, j):
+        x, y = float(bx[i, j]), float(by[i, j])
+        return x - body.radius_px * math.sin(phi[i, j]), y - body.radius_px * math.cos(phi[i, j])
+
+    def _frame_box(i, w, h):
+        """(x0, x1, y0, y1) in the frame holding everything drawn over frame i's sub-exposures, or None."""
+        r = body.radius_px
+        reach = r + 3 * wall.shadow_blur_px
+        xs, ys = [], []
+        for j in range(k):
+            x, y = float(bx[i, j]), float(by[i, j])
+            x0, y0, size = math.floor(x - r - 2), math.floor(y - r - 2), math.ceil(2 * r + 5)
+            xs += [x0, x0 + size]
+            ys += [y0, y0 + size]
+            for ox, oy in wall.shadows:
+                x0, y0, size = math.floor(x + ox - reach), math.floor(y + oy - reach), math.ceil(2 * reach + 2)
+                xs += [x0, x0 + size]
+                ys += [y0, y0 + size]
+            if wall.thread_depth:
+                end = _thread_end(i, j)
+                pad = wall.thread_width_px + 2
+                xs += [math.floor(min(px[i, j], end[0])) - pad, math.ceil(max(px[i, j], end[0])) + pad + 1]
+                ys += [math.floor(min(py[i, j], end[1])) - pad, math.ceil(max(py[i, j], end[1])) + pad + 1]
+        x0, x1, y0, y1 = max(min(xs), 0), min(max(xs), w), max(min(ys), 0), min(max(ys), h)
+        return (x0, x1, y0, y1) if x0 < x1 and y0 < y1 else None
+
     frames = []
     accum = np.empty_like(base)
+    still = np.zeros_like(base)  # k unmoved walls summed as the loop below sums them (the same bytes)
+    for _ in range(k):
+        still += base
+    canvas = base.copy()
+    layer = np.zeros_like(base)
     for i in range(n):
-        accum.fill(0.0)
-        for j in range(k):
-            dx, dy = shift[i, j]
-            if dx or dy:
-                canvas = cv2.warpAffine(
-                    base,
-                    np.float32([[1, 0, dx], [0, 1, dy]]),
-                    (w, h),
-                    flags=cv2.INTER_LINEAR,
-                    borderMode=cv2.BORDER_REFLECT,
+        if np.any(shift[i]):  # the picture moves: every pixel changes
+            accum.fill(0.0)
+            for j in range(k):
+                dx, dy = shift[i, j]
+                canvas = (
+                    cv2.warpAffine(
+                        base,
+                        np.float32([[1, 0, dx], [0, 1, dy]]),
+                        (w, h),
+                        flags=cv2.INTER_LINEAR,
+                        borderMode=cv2.BORDER_REFLECT,
+                    )
+                    if dx or dy
+                    else base.copy()
                 )
-            else:
-                canvas = base.copy()
-            x, y = float(bx[i, j]), float(by[i, j])
-            for ox, oy in wall.shadows:
-                sx0, sy0, dark = _shadow_patch(body, wall, x + ox, y + oy)
-
-                def darken(view, idx, dark=dark):
-                    view -= dark[idx]
-
-                _paste(canvas, sx0, sy0, dark, darken)
-            if wall.thread_depth:
-                end = (x - body.radius_px * math.sin(phi[i, j]), y - body.radius_px * math.cos(phi[i, j]))
-                layer = np.zeros_like(canvas)
-                cv2.line(
-                    layer,
-                    (int(round(px[i, j] * 16)), int(round(py[i, j] * 16))),
-                    (int(round(end[0] * 16)), int(round(end[1] * 16))),
-                    1.0,
-                    wall.thread_width_px,
-                    cv2.LINE_AA,
-                    4,
-                )
-                canvas -= wall.thread_depth * layer
-            spin = math.radians(body.spin_deg_per_s) * float(sub_t[i, j] + wall.start_s)
-            x0, y0, grey, cover = _body_patch(body, x, y, spin, float(phi[i, j]))
-
-            def blend(view, idx, grey=grey, cover=cover):
-                view += cover[idx] * (grey[idx] - view)
-
-            _paste(canvas, x0, y0, grey, blend)
-            accum += canvas
+                draw(canvas, i, j)
+                accum += canvas
+            canvas = base.copy()
+        else:  # only what the body, its shadows and its thread cover differs from the wall: summed there alone
+            np.copyto(accum, still)
+            box = _frame_box(i, w, h)
+            if box is not None:
+                part = (slice(box[2], box[3]), slice(box[0], box[1]))
+                accum[part] = 0.0
+                for j in range(k):
+                    draw(canvas, i, j, part)
+                    accum[part] += canvas[part]
+                    canvas[part] = base[part]
         frame = accum / k
         if wall.exposure_drift:
             frame *= 1 + wall.exposure_drift * math.sin(2 * math.pi * video_t[i] / wall.exposure_drift_period_s)
         if wall.defocus_px > 0:
             frame = cv2.GaussianBlur(frame, (0, 0), wall.defocus_px)
         frame += noise_bank[i % 4] if i % 2 == 0 else np.flip(noise_bank[i % 4], axis=1)
-        frames.append(np.clip(np.rint(frame), 0, 255).astype(np.uint8))
+        np.rint(frame, out=frame)
+        frames.append(np.minimum(np.maximum(frame, 0, out=frame), 255, out=frame).astype(np.uint8))
         if progress and (i % 100 == 0 or i == n - 1):
             progress(f"{spec.name}: rendered frame {i + 1}/{n}")
     return frames, truth
