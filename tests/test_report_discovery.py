@@ -279,3 +279,21 @@ def test_the_demo_report_shows_the_verdict_and_rule_report_reads_the_discovery_f
     inputs = out.split("rule report:", 1)[1].split("input: ", 1)[1].split("\n", 1)[0].split(", ")
     for suffix in (".json", ".residuals.csv", ".extinction.csv"):
         assert f"results/discovery/paper_rig{suffix}" in inputs
+
+
+def test_the_extinction_caption_says_which_models_lines_lie_over_each_other():
+    """A reader counts fewer lines than the legend names where two models predict the same losses: the caption
+    names the pairs within 5 % in every half cycle (here 2 % apart), and no pair further apart (30 %)."""
+    from pendulum.report.discovery_figures import figures_html
+
+    models = ["quadratic_drag", "quadratic_drag+linear_damping", "quadratic_drag+coulomb_friction"]
+    table = _extinction(models)
+    scale = {"quadratic_drag": 1.0, "quadratic_drag+linear_damping": 1.02, "quadratic_drag+coulomb_friction": 1.3}
+    table["amplitude_loss_rad"] *= table.model.map(scale).fillna(1.0)
+    document = _document(steps=[], final_terms=["quadratic_drag"])
+    text = html_module.unescape(figures_html(document, _residuals(models), table, D._PLAIN))
+    note = text.split("Lines that lie over each other", 1)[1].split("<", 1)[0]
+    assert "quadratic (form) drag and baseline + linear (viscous) damping (at most 2.0 % apart)." in note, note
+    assert "Coulomb" not in note and "coulomb" not in note, note
+    table["amplitude_loss_rad"] *= table.model.map({"quadratic_drag+linear_damping": 1.1}).fillna(1.0)
+    assert "Lines that lie over each other" not in figures_html(document, _residuals(models), table, D._PLAIN)

@@ -74,6 +74,39 @@ def _off_axes(extinction: pd.DataFrame) -> str:
     return f" {off} of {len(measured)} measured half cycles lost no amplitude, within noise: off the log axes."
 
 
+OVERLAP = 0.05  # two models' predicted losses within this share of each other: their lines overlap on log axes
+
+
+def _overlapping(document: dict, extinction: pd.DataFrame) -> str:
+    """The caption's note of models whose predicted losses lie within :data:`OVERLAP` of each other in every half
+    cycle of every trial (one line hides the other), or ''."""
+    if extinction.empty or "model" not in extinction:
+        return ""
+    table = extinction[(extinction.model != "measured") & (extinction.amplitude_loss_rad > 0)]
+    curves = {
+        model: rows.sort_values(["trial", "amplitude_rad"]).reset_index(drop=True)
+        for model, rows in table.groupby("model", sort=False)
+    }
+    models = list(curves)
+    pairs = []
+    for i, a in enumerate(models):
+        for b in models[i + 1 :]:
+            ca, cb = curves[a], curves[b]
+            if len(ca) != len(cb) or not ca.trial.equals(cb.trial) or ca.empty:
+                continue
+            apart = float(np.max(np.abs(np.log(ca.amplitude_loss_rad / cb.amplitude_loss_rad))))
+            if apart <= math.log1p(OVERLAP):
+                label_a, label_b = esc(model_label(document, a)), esc(model_label(document, b))
+                pairs.append(f"{label_a} and {label_b} (at most {100 * math.expm1(apart):.1f} % apart)")
+    if not pairs:
+        return ""
+    return (
+        f" Lines that lie over each other (predictions within {100 * OVERLAP:.0f} % in every half cycle): "
+        + "; ".join(pairs)
+        + "."
+    )
+
+
 def extinction_figure(document: dict, extinction: pd.DataFrame) -> bytes | None:
     """Amplitude loss per half cycle against amplitude: measured points, and each model's prediction."""
     import matplotlib
@@ -161,7 +194,7 @@ def figures_html(document: dict, residuals: pd.DataFrame, extinction: pd.DataFra
             "start: measured (open markers, one kind per trial) and as each model's fitted curve predicts it (the "
             "baseline, the baseline with each first-round candidate and the models on the path; black: the final "
             "model). On log axes Coulomb friction gives a constant loss, linear damping and the history force a "
-            "slope 1, quadratic drag a slope 2." + _off_axes(extinction),
+            "slope 1, quadratic drag a slope 2." + _off_axes(extinction) + _overlapping(document, extinction),
             "extinction curve",
         ),
     ]
