@@ -139,25 +139,25 @@ def _apple_share(image: np.ndarray, wall: np.ndarray) -> np.ndarray:
     return share
 
 
-def _apples(frames: list, wall: np.ndarray):
-    """Per frame: the image, its share of apple (:func:`_apple_share`), the pixel grid (xs, ys) and the centroid
-    (cx, cy) of the pixels at least half apple, weighted by their share."""
+def _apples(frames: list, wall: np.ndarray, shares: list | None = None):
+    """Per frame: the image, its share of apple (:func:`_apple_share`, or ``shares``' already measured), the pixel
+    grid (xs, ys) and the centroid (cx, cy) of the pixels at least half apple, weighted by their share."""
     h, w = frames[0].shape
     ys, xs = np.mgrid[0:h, 0:w]
-    for image in frames:
-        apple = _apple_share(image, wall)
+    for k, image in enumerate(frames):
+        apple = _apple_share(image, wall) if shares is None else shares[k]
         solid = np.where(apple >= 0.5, apple, 0.0)
         yield image, apple, xs, ys, float((solid * xs).sum() / solid.sum()), float((solid * ys).sum() / solid.sum())
 
 
-def _on_the_wall(frames: list, shade) -> list:
+def _on_the_wall(frames: list, shade, shares: list | None = None) -> list:
     """``shade(index, apple) → gain`` applied to the wall only, composited as a camera would see it: a pixel
     that is a fraction ``f`` apple becomes ``image − (1 − f)·wall·(1 − gain)``, the wall being the clip's
-    median image and ``f`` the pixel's share of apple (:func:`_apple_share`)."""
+    median image and ``f`` the pixel's share of apple (:func:`_apple_share`, or ``shares``' already measured)."""
     wall = _wall(frames)
     out = []
     for k, image in enumerate(frames):
-        apple = _apple_share(image, wall)
+        apple = _apple_share(image, wall) if shares is None else shares[k]
         shaded = image - (1.0 - apple) * wall * (1.0 - shade(k, apple))
         out.append(np.clip(np.round(shaded), 0, 255).astype(np.uint8))
     return out
@@ -172,10 +172,10 @@ def _band(shape) -> np.ndarray:
     return 1 - 0.45 * np.exp(-0.5 * (distance / 30.0) ** 2)
 
 
-def _shadow_band(frames: list) -> list:
+def _shadow_band(frames: list, shares: list | None = None) -> list:
     """:func:`_band` on the wall only (the apple in front of it stays lit)."""
     gain = _band(frames[0].shape)
-    return _on_the_wall(frames, lambda k, apple: gain)
+    return _on_the_wall(frames, lambda k, apple: gain, shares)
 
 
 def _cast_shadow(frames: list) -> list:
@@ -201,17 +201,20 @@ def _glossy(frames: list) -> list:
     return out
 
 
-def _two_tone(frames: list, behind: list | None = None) -> list:
+def _two_tone(frames: list, behind: list | None = None, shares: list | None = None) -> list:
     """The apple as a two-tone ball: its upper half bright and patterned (the wall's grey +10 %, 6 px squares ±25
     grey levels), its lower half its own dark red; the halves split at its centre's height. Painted over
     ``behind`` (the same frames with the wall changed, e.g. a shadow band) when given, the ball's place and share
     of each pixel still taken from ``frames``, lit as before the change."""
     wall = _wall(frames)
+    lit = 1.1 * wall
+    h, w = wall.shape
+    columns, rows = np.arange(w)[None, :], np.arange(h)[:, None]  # the squares and the seam per row and column
     out = []
-    for k, (image, apple, xs, ys, cx, cy) in enumerate(_apples(frames, wall)):
-        squares = 25.0 * np.where(((xs - cx) // 6 + (ys - cy) // 6) % 2 == 0, 1.0, -1.0)
-        top = np.clip((ys - cy) / -2.0 + 0.5, 0.0, 1.0) * apple  # a 2 px soft seam
-        bright = np.minimum(1.1 * wall + squares, 255.0)
+    for k, (image, apple, _, _, cx, cy) in enumerate(_apples(frames, wall, shares)):
+        squares = 25.0 * np.where(((columns - cx) // 6 + (rows - cy) // 6) % 2 == 0, 1.0, -1.0)
+        top = np.clip((rows - cy) / -2.0 + 0.5, 0.0, 1.0) * apple  # a 2 px soft seam
+        bright = np.minimum(lit + squares, 255.0)
         base = image if behind is None else behind[k]
         out.append(np.clip(base * (1 - top) + bright * top, 0, 255).astype(np.uint8))
     return out
@@ -296,7 +299,9 @@ def make(name: str, workdir: Path) -> Path:
     if name == "two_tone":
         frames = _two_tone(frames)
     if name.startswith("two_tone_shadow_band"):  # the band on the wall, the ball before it lit as outside it
-        frames = _two_tone(frames, _shadow_band(frames))
+        wall = _wall(frames)
+        shares = [_apple_share(image, wall) for image in frames]  # measured once, for both
+        frames = _two_tone(frames, _shadow_band(frames, shares), shares)
     if name == "glossy":
         frames = _glossy(frames)
     if name.endswith("_1080p"):
