@@ -15,12 +15,14 @@ over the moving boundaries) and lowers it by at least 5× that level, both halve
 and it is the largest such boundary within its window. A window spans at most three frame periods more
 than its twelve frames (flagged or lost frames inside it): a polynomial through a wider one cannot
 follow the swing, and a shift would be found where only the curve is missed.
-A repeated frame (no motion from the frame before where the motion is fast) is taken out first and
-flagged ``duplicate``. Near the turning points, where the pendulum hardly moves during one frame
+A slip whose turning points moved across it (both sides, along the motion, by half the distance it implies
+and three times their usual move) is the picture moving, not the clock (a knock, a stabiliser): it is not applied
+and ``picture_steps`` says so. A repeated frame (no motion from the frame before where the motion is fast) is
+taken out first and flagged ``duplicate``. Near the turning points, where the pendulum hardly moves during one frame
 period, a slip cannot be seen: the figures say how much of the record was checked.
 
 Implemented: ``time_s`` of frame k becomes t_k + Δ·m_k (m_k: the frames lost minus the frames repeated
-before k, Δ the median stamp interval); the stamps are those of the frames summary.
+before k, Δ the stamps' regular step (:func:`frame_period`)); the stamps are those of the frames summary.
 """
 
 from __future__ import annotations
@@ -39,6 +41,8 @@ CLEAN_FACTOR = 4.0  # a shifted fit at most this × the usual misfit
 SLIP_FACTOR = 5.0  # the shift lowers the misfit by at least this × the usual (about 70 σ² of noise)
 STILL_FRACTION = 0.05  # a repeated frame: a step under this share of the steps around it
 MAX_ROUNDS = 3
+PICTURE_SHARE = 0.5  # turning points that move across a slip by this share of what it implies: the picture moved
+PICTURE_USUAL = 3.0  # ... and by this many times their usual movement from one swing to the next
 
 
 def _window_misfits(tau: np.ndarray, x: np.ndarray, y: np.ndarray, b: np.ndarray, shift) -> np.ndarray:
@@ -114,6 +118,89 @@ def _repeated(tau: np.ndarray, x: np.ndarray, y: np.ndarray, noise_px: float) ->
     return repeated
 
 
+def frame_period(stamp_s: np.ndarray) -> float:
+    """The frame period of even stamps: the mean of the steps within half a period of their median (stamps
+    rounded to milliseconds step by 16 and 17 ms at 60 fps: 16.667 ms, not their median's 17; a gap in the stamps
+    left out). 0 where fewer than two stamps are finite."""
+    steps = np.diff(stamp_s[np.isfinite(stamp_s)])
+    if steps.size == 0:
+        return 0.0
+    typical = float(np.median(steps))
+    regular = steps[np.abs(steps - typical) <= 0.5 * abs(typical)]
+    return float(regular.mean()) if regular.size else typical
+
+
+def _turning_points(tau: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The swing's turning points: per completed half swing (a run of one sign of the position along the swing's
+    main axis less its median) the time of its extreme, the side (+1, −1) and the (x, y) there, each to a fraction
+    of a frame by the parabola through the extreme sample and its neighbours."""
+    centred = np.column_stack([x - x.mean(), y - y.mean()])
+    _, vectors = np.linalg.eigh(np.cov(centred.T))
+    along = centred @ vectors[:, -1]
+    side = np.sign(along - np.median(along))
+    edges = np.flatnonzero(np.diff(side) != 0) + 1
+    times, sides, points = [], [], []
+    for a, e in zip(edges[:-1], edges[1:], strict=True):
+        if e - a < 3:
+            continue
+        k = a + int(np.argmax(along[a:e] * side[a]))
+        lo, mid, hi = along[k - 1], along[k], along[k + 1]
+        curvature = lo - 2.0 * mid + hi
+        d = float(np.clip(0.5 * (lo - hi) / curvature, -0.5, 0.5)) if curvature != 0 else 0.0
+        at = [v[k] + 0.5 * d * (v[k + 1] - v[k - 1]) + 0.5 * d * d * (v[k + 1] - 2 * v[k] + v[k - 1]) for v in (x, y)]
+        times.append(tau[k] + d * 0.5 * (tau[k + 1] - tau[k - 1]))
+        sides.append(side[a])
+        points.append(at)
+    return np.array(times), np.array(sides), np.reshape(np.array(points, float), (-1, 2))
+
+
+def _picture_step(turning, at_tau: float) -> tuple[np.ndarray | None, float]:
+    """How far the swing's turning points moved across the moment ``at_tau`` beyond their usual move from one swing
+    to the next, and the usual size of that excess. Per side of the swing: the move from its last turning point
+    before the moment to its first after, less the median of its other moves (a shrinking swing, the rise of its
+    ends, a creeping camera); the two sides' excesses averaged. None where a side has no turning point before or
+    after the moment, or fewer than three other moves in all."""
+    times, sides, points = turning
+    across, excess = [], []
+    for one in (1.0, -1.0):
+        mine = sides == one
+        t, moves = times[mine], np.diff(points[mine], axis=0)
+        spans = (t[:-1] < at_tau) & (t[1:] > at_tau)
+        if not spans.any() or not (~spans).any():
+            return None, 0.0
+        typical = np.median(moves[~spans], axis=0)
+        across.append(moves[spans][0] - typical)
+        excess.append(np.hypot(*(moves[~spans] - typical).T))
+    excess = np.concatenate(excess)
+    if excess.size < 3:  # too few swings to know how the turning points move
+        return None, 0.0
+    return np.mean(across, axis=0), float(np.median(excess))
+
+
+def _moved_picture(tau, x, y, j: int, periods: float, turning, at_tau: float) -> np.ndarray | None:
+    """The picture's step (px) where a slip of ``periods`` found after usable frame ``j`` is the picture moving
+    instead, else None. A clock slip moves no turning point (the pendulum goes where it went, only later than its
+    stamp says); a picture that moved along the motion there looks, over a few frames, like one: its turning points
+    moved across the boundary along the motion by at least :data:`PICTURE_SHARE` of the distance the slip implies
+    (the speed there × the shift), by :data:`PICTURE_USUAL` × their usual move, and more than across it."""
+    step, usual = _picture_step(turning, at_tau)
+    w = min(2, j, tau.size - j - 2)
+    if step is None or w < 1:
+        return None
+    around = [i for i in range(j - w, j + w + 1) if i != j]
+    velocity = np.mean(
+        [[x[i + 1] - x[i], y[i + 1] - y[i]] / np.float64(max(tau[i + 1] - tau[i], 1e-9)) for i in around], axis=0
+    )
+    speed = float(np.hypot(*velocity))
+    if speed <= 0:
+        return None
+    along = abs(float(step @ velocity)) / speed
+    across = abs(float(step[0] * velocity[1] - step[1] * velocity[0])) / speed
+    implied = abs(periods) * speed
+    moved = along >= PICTURE_SHARE * implied and along >= PICTURE_USUAL * usual and along > across
+    return step if moved else None
+
+
 def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndarray, usable: np.ndarray) -> dict:
     """Lost and repeated frames of one track (module docstring).
 
@@ -123,9 +210,17 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
     repeat the one before), ``shift_periods`` (m_k per frame) and ``checked_fraction`` (share of the
     usable frame pairs where a slip of one period would have stood out)."""
     stamp_s = np.asarray(stamp_s, float)
-    period = float(np.median(np.diff(stamp_s))) if stamp_s.size > 1 else 0.0
+    period = frame_period(stamp_s)
     shift = np.zeros(stamp_s.size)
-    result = {"period_s": period, "slips": [], "repeated": [], "checked_fraction": 0.0, "shift_periods": shift}
+    result = {
+        "period_s": period,
+        "slips": [],
+        "repeated": [],
+        "picture_steps": [],
+        "checked_fraction": 0.0,
+        "shift_periods": shift,
+    }
+    usable = usable & np.isfinite(stamp_s)
     if not period > 0 or usable.sum() < 4 * HALF_WINDOW:
         return result
     idx = np.flatnonzero(usable)
@@ -142,6 +237,8 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
     for i in idx[repeated_mask]:
         shift[i:] -= 1
     idx = idx[~repeated_mask]
+    turning = _turning_points(stamp_s[idx] / period, x[idx], y[idx])
+    refused: set[int] = set()  # boundaries (usable frame after them) where the picture moved, not the clock
     for round_ in range(MAX_ROUNDS):
         tau = stamp_s[idx] / period + shift[idx]
         b = _boundaries(tau)
@@ -150,10 +247,11 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
         if not moving.any():
             break
         usual = max(float(np.median(unshifted[moving])), 1e-9)  # a still hang's windows are noise alone
-        if round_ == 0:  # where a slip of one period would have stood out
+        if round_ == 0:  # where a slip of one period would have stood out, of every pair of usable frames
             one = np.minimum(*(_window_misfits(tau, x[idx], y[idx], b, s) for s in (-1.0, 1.0)))
-            result["checked_fraction"] = float(np.mean(moving & (np.maximum(one, unshifted) >= SLIP_FACTOR * usual)))
-        suspect = np.flatnonzero(moving & (unshifted >= SLIP_FACTOR * usual))
+            standing_out = moving & (np.maximum(one, unshifted) >= SLIP_FACTOR * usual)
+            result["checked_fraction"] = float(standing_out.sum() / max(idx.size - 1, 1))
+        suspect = np.flatnonzero(moving & (unshifted >= SLIP_FACTOR * usual) & ~np.isin(idx[b + 1], list(refused)))
         if suspect.size == 0:
             break
         best = _best_shifts(tau, x[idx], y[idx], b[suspect])
@@ -167,10 +265,19 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
             near = slip & (np.abs(b[suspect] - b[suspect[k]]) < HALF_WINDOW)
             if unshifted[suspect[k]] >= unshifted[suspect[near]].max():
                 found.append(k)
-        if not found:
-            break
+        applied = 0
         for k in found:
-            shift[idx[b[suspect[k]] + 1] :] += round(float(best[k, 0]), 2)
+            j = b[suspect[k]]
+            periods = round(float(best[k, 0]), 2)
+            moved = _moved_picture(tau, x[idx], y[idx], j, periods, turning, stamp_s[idx[j]] / period)
+            if moved is not None:  # the picture jumped (a knock, a stabiliser): not the clock
+                refused.add(int(idx[j + 1]))
+                result["picture_steps"].append([int(frame[idx[j + 1]]), [round(float(v), 2) for v in moved]])
+                continue
+            shift[idx[j + 1] :] += periods
+            applied += 1
+        if not applied:
+            break
     # a frame taken at the moment of the one before: a repeat the first look did not see (the motion slower there)
     tau = stamp_s[idx] / period + shift[idx]
     result["repeated"] = sorted(set(result["repeated"]) | {int(frame[i]) for i in idx[1:][np.diff(tau) < 0.15]})
@@ -207,6 +314,8 @@ def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
         shift[:] = 0.0
         corrected = stamp.copy()
         found.update(slips=[], repeated=[], note="slips found made time run backwards: none applied")
+    finite = np.isfinite(corrected)  # a repeat's moment is the frame's before it, not a rounding error earlier
+    corrected[finite] = np.maximum.accumulate(corrected[finite])
     out["stamp_s"] = stamp  # the file's time stamp (the contact sheet's times)
     out["time_s"] = corrected
     repeated = out.frame.isin(found["repeated"]).to_numpy()
@@ -263,8 +372,9 @@ def slip_counts(timing: dict) -> tuple[int, int, int]:
 def slip_sentence(timing: dict) -> str:
     """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
     slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
+    moved = _picture_sentence(timing.get("picture_steps") or [])
     if not slips and not repeated:
-        return ""
+        return moved
     parts = []
     lost = [(f, round(p)) for f, p in slips if abs(p - round(p)) < 0.1 and p > 0]
     if lost:
@@ -278,5 +388,16 @@ def slip_sentence(timing: dict) -> str:
     return (
         "under even time stamps the camera " + "; ".join(parts) + ": found from the motion, the frame times put "
         f"right (by up to {1e3 * float(timing.get('max_shift_s') or 0.0):.1f} ms); a slip shows where the pendulum "
-        f"moves fast ({checked:.0f} % of this record)"
+        f"moves fast ({checked:.0f} % of this record)" + (f"; {moved}" if moved else "")
+    )
+
+
+def _picture_sentence(steps: list) -> str:
+    """The picture's own steps (:func:`_moved_picture`) in words, or ''."""
+    if not steps:
+        return ""
+    where = ", ".join(f"{float(np.hypot(*d)):.1f} px at frame {f}" for f, d in steps)
+    return (
+        f"the picture itself moved by {where} (a knock or the camera's stabiliser, not its clock): the positions "
+        "after it are off by that much, which the angles carry"
     )
