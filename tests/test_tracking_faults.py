@@ -91,10 +91,12 @@ def rendered(tmp_path_factory):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(TRIALS))
 def test_faulty_render_is_tracked_without_hints(rendered, name):
-    """Measured: dark_r5 100 % usable, 0.0125° RMS (max 0.041°); bright_r20 100 %, 0.0066° (max 0.027°);
-    start within 0.05 px, radius within 1 %. The previous tracker with the old config defaults (bright,
-    10 px) found no marker in either; told polarity and radius, it refused dark_r5 ("two marker-like
-    spots": the line mover) and kept 85 % of bright_r20 (the window touching the frame's edge: "edge")."""
+    """Measured (2026-11-28): dark_r5 100 % usable, 0.0159° RMS (max 0.058°); bright_r20 100 %, 0.0119° (max
+    0.029°; 0.0066° on its earlier render of 193 sub-exposures per frame, a bubble's wrap then counted as a
+    streak; 8 now, 25 s less to render); start within 0.05 px, radius within 1 %. The previous tracker with the
+    old config defaults (bright, 10 px) found no marker in either; told polarity and radius, it refused dark_r5
+    ("two marker-like spots": the line mover) and kept 85 % of bright_r20 (the window touching the frame's edge:
+    "edge")."""
     spec, video, truth = rendered(name)
     cam = spec.camera
     track = track_video(video, TrackerSettings(polarity="auto", marker_radius_px=None))
