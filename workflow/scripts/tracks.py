@@ -46,7 +46,7 @@ def work():
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
     timing = track.attrs.get("timing") or {}
-    if timing.get("slips") or timing.get("repeated") or timing.get("picture_steps"):
+    if slip_sentence(timing):
         log.warning("%s: %s", video, slip_sentence(timing))
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])

@@ -41,6 +41,7 @@ CLEAN_FACTOR = 4.0  # a shifted fit at most this × the usual misfit
 SLIP_FACTOR = 5.0  # the shift lowers the misfit by at least this × the usual (about 70 σ² of noise)
 STILL_FRACTION = 0.05  # a repeated frame: a step under this share of the steps around it
 MAX_ROUNDS = 3
+UNEXPLAINED = 100.0  # a break this × the usual misfit that no shift mends: said (the apple's rough spots: 5–12×)
 PICTURE_SHARE = 0.5  # turning points that move across a slip by this share of what it implies: the picture moved
 PICTURE_USUAL = 3.0  # ... and by this many times their usual movement from one swing to the next
 
@@ -217,6 +218,7 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
         "slips": [],
         "repeated": [],
         "picture_steps": [],
+        "unexplained": [],
         "checked_fraction": 0.0,
         "shift_periods": shift,
     }
@@ -278,6 +280,20 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
             applied += 1
         if not applied:
             break
+    # breaks in the motion that no shift explains (two slips within a window, more frames lost than MAX_SHIFT):
+    # the frames after them may be off by a period or more; said, not mended
+    tau = stamp_s[idx] / period + shift[idx]
+    b = _boundaries(tau)
+    if b.size:
+        unshifted = _window_misfits(tau, x[idx], y[idx], b, 0.0)
+        moving = _moving(x[idx], y[idx], b, noise_px)
+        usual = max(float(np.median(unshifted[moving])), 1e-9) if moving.any() else 1e-9
+        broken = moving & (unshifted >= UNEXPLAINED * usual) & ~np.isin(idx[b + 1], list(refused))
+        result["unexplained"] = [
+            int(frame[idx[b[k] + 1]])
+            for k in np.flatnonzero(broken)
+            if unshifted[k] >= unshifted[broken & (np.abs(b - b[k]) < HALF_WINDOW)].max()
+        ]
     # a frame taken at the moment of the one before: a repeat the first look did not see (the motion slower there)
     tau = stamp_s[idx] / period + shift[idx]
     result["repeated"] = sorted(set(result["repeated"]) | {int(frame[i]) for i in idx[1:][np.diff(tau) < 0.15]})
@@ -373,6 +389,19 @@ def slip_sentence(timing: dict) -> str:
     """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
     slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
     moved = _picture_sentence(timing.get("picture_steps") or [])
+    breaks = timing.get("unexplained") or []
+    if breaks:
+        moved = "; ".join(
+            filter(
+                None,
+                [
+                    moved,
+                    f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock "
+                    "explains (frames lost in a row, two slips close together, or the picture moving): the frames "
+                    "after it may be off in time or place",
+                ],
+            )
+        )
     if not slips and not repeated:
         return moved
     parts = []
