@@ -46,8 +46,8 @@ def work():
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
     timing = track.attrs.get("timing") or {}
-    if slip_sentence(timing):
-        log.warning("%s: %s", video, slip_sentence(timing))
+    if said := slip_sentence(timing):
+        log.warning("%s: %s", video, said)
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)

@@ -202,6 +202,14 @@ def _moved_picture(tau, x, y, j: int, periods: float, turning, at_tau: float) ->
     return step if moved else None
 
 
+def _largest_in_window(misfit: np.ndarray, b: np.ndarray, chosen: np.ndarray) -> list[int]:
+    """The chosen boundaries whose misfit is the largest of the chosen ones within a window's half of them (one
+    event shows at every boundary whose window holds it: the middle one is taken)."""
+    return [
+        int(k) for k in np.flatnonzero(chosen) if misfit[k] >= misfit[chosen & (np.abs(b - b[k]) < HALF_WINDOW)].max()
+    ]
+
+
 def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndarray, usable: np.ndarray) -> dict:
     """Lost and repeated frames of one track (module docstring).
 
@@ -262,11 +270,7 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
             & (unshifted[suspect] - best[:, 1] >= SLIP_FACTOR * usual)
             & (np.abs(best[:, 0]) >= SMALLEST_SLIP)
         )
-        found = []
-        for k in np.flatnonzero(slip):
-            near = slip & (np.abs(b[suspect] - b[suspect[k]]) < HALF_WINDOW)
-            if unshifted[suspect[k]] >= unshifted[suspect[near]].max():
-                found.append(k)
+        found = _largest_in_window(unshifted[suspect], b[suspect], slip)
         applied = 0
         for k in found:
             j = b[suspect[k]]
@@ -289,13 +293,8 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
         moving = _moving(x[idx], y[idx], b, noise_px)
         usual = max(float(np.median(unshifted[moving])), 1e-9) if moving.any() else 1e-9
         broken = moving & (unshifted >= UNEXPLAINED * usual) & ~np.isin(idx[b + 1], list(refused))
-        result["unexplained"] = [
-            int(frame[idx[b[k] + 1]])
-            for k in np.flatnonzero(broken)
-            if unshifted[k] >= unshifted[broken & (np.abs(b - b[k]) < HALF_WINDOW)].max()
-        ]
+        result["unexplained"] = [int(frame[idx[b[k] + 1]]) for k in _largest_in_window(unshifted, b, broken)]
     # a frame taken at the moment of the one before: a repeat the first look did not see (the motion slower there)
-    tau = stamp_s[idx] / period + shift[idx]
     result["repeated"] = sorted(set(result["repeated"]) | {int(frame[i]) for i in idx[1:][np.diff(tau) < 0.15]})
     steps = np.diff(np.concatenate([[0.0], shift]))
     repeated = set(result["repeated"])
@@ -388,20 +387,15 @@ def slip_counts(timing: dict) -> tuple[int, int, int]:
 def slip_sentence(timing: dict) -> str:
     """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
     slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
-    moved = _picture_sentence(timing.get("picture_steps") or [])
     breaks = timing.get("unexplained") or []
+    others = [_picture_sentence(timing.get("picture_steps") or [])]
     if breaks:
-        moved = "; ".join(
-            filter(
-                None,
-                [
-                    moved,
-                    f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock "
-                    "explains (frames lost in a row, two slips close together, or the picture moving): the frames "
-                    "after it may be off in time or place",
-                ],
-            )
+        others.append(
+            f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock explains "
+            "(frames lost in a row, two slips close together, or the picture moving): the frames after it may be off "
+            "in time or place"
         )
+    moved = "; ".join(s for s in others if s)
     if not slips and not repeated:
         return moved
     parts = []
