@@ -176,10 +176,16 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
 # lighter parts come within 12 grey levels of the band's wall and those frames are flagged (93.3 % ok, the flagged
 # positions 1.9 px off): below the 95 % issue 23 asks of a held-out clip. The bars are what is measured, less a
 # margin, so that a change that loses frames fails here.
+# Filmed in colour (a phone's video is), the same apple before the band is measured by its colour where its
+# brightness silhouette changes with the wall (pendulum.tracking.colour): 99.85 % ok; the two-tone ball with a
+# dark blue lower half before the band (as the held-out clip) 99.9 % (its brightness silhouette 96.6 %, 21 %
+# smaller mid-swing). Both must be measured by their colour.
 SHORT_OF = {"shadow_band": 95.0}  # issue 23's share of usable frames, not yet met by these variants
+BY_COLOUR = {"shadow_band_colour", "two_tone_shadow_band_colour"}
 REAL_VARIANTS = {
     "shadow_band": (92.5, 0.0),
-    "two_tone_shadow_band": (98.5, 0.0),
+    "shadow_band_colour": (99.0, 0.0),
+    "two_tone_shadow_band_colour": (99.0, 0.0),
     "upside_down": (99.0, 180.0),
     "sideways": (99.0, -90.0),
     "15fps": (99.0, 0.0),
@@ -201,6 +207,7 @@ def test_the_apple_filmed_other_ways(variant, tmp_path):
     least_ok, vertical = REAL_VARIANTS[variant]
     row = judge(variant, tmp_path)
     assert row["ok%"] >= least_ok, row
+    assert row["view"] == ("colour" if variant in BY_COLOUR else "brightness"), row
     # a known shortfall that a change mends must raise its bar (and the docs' figure) with it
     assert row["ok%"] < SHORT_OF.get(variant, math.inf), f"{variant} now meets {SHORT_OF[variant]} %: raise its bar"
     assert abs(row["period_err_pct"]) <= 0.3, row

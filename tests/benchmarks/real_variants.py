@@ -131,7 +131,7 @@ def _apple_share(image: np.ndarray, wall: np.ndarray) -> np.ndarray:
     import cv2
 
     difference = np.abs(image - wall)
-    share = np.clip(difference / max(np.percentile(difference, 99.9), 1.0), 0.0, 1.0)
+    share = np.minimum(difference / max(np.percentile(difference, 99.9), 1.0), 1.0)  # difference ≥ 0
     outlines, _ = cv2.findContours((share >= 0.5).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     filled = np.zeros(share.shape, np.uint8)
     cv2.drawContours(filled, outlines, -1, 1, -1)
@@ -220,6 +220,61 @@ def _two_tone(frames: list, behind: list | None = None, shares: list | None = No
     return out
 
 
+def _colour_planes(last: int | None = None) -> tuple[list, list, list]:
+    """The clip's frames as they were filmed, in colour: their Y, U and V planes (4:2:0), uint8."""
+    import av
+
+    ys, us, vs = [], [], []
+    with av.open(str(APPLE)) as container:
+        for k, frame in enumerate(container.decode(video=0)):
+            if last is not None and k >= last:
+                break
+            planes = frame.to_ndarray(format="yuv420p")
+            h, w = frame.height, frame.width
+            ys.append(planes[:h])
+            us.append(planes[h : h + h // 4].reshape(h // 2, w // 2))
+            vs.append(planes[h + h // 4 :].reshape(h // 2, w // 2))
+    return ys, us, vs
+
+
+def _in_colour(name: str, last: int | None = None) -> list:
+    """A colour variant (``..._colour``), packed yuv420p for ``write_video(colour=True)``: its luma made as the
+    grey variant's, its chroma composited with the same shares of apple (at chroma resolution). A shadow
+    scales the wall's light, so its chroma's distance from grey (128) too: ``shadow_band_colour``;
+    ``two_tone_shadow_band_colour`` (as the held-out clip: a bright patterned top, a dark blue bottom) paints the
+    ball's lower half dark blue (U 165, V 117) and its top grey (U = V = 128), before the band."""
+    import cv2
+
+    ys, us, vs = _colour_planes(last)
+    wall = _wall(ys)
+    shares = [_apple_share(image, wall) for image in ys]
+    gain = _band(ys[0].shape)
+    h, w = ys[0].shape
+    small = (w // 2, h // 2)
+    gain_c = cv2.resize(gain.astype(np.float32), small, interpolation=cv2.INTER_AREA)
+    walls_c = [_wall(planes) for planes in (us, vs)]
+    if name.startswith("two_tone"):
+        luma = _two_tone(ys, _shadow_band(ys, shares), shares)
+    else:
+        luma = _shadow_band(ys, shares)
+    rows_c = np.arange(h // 2)[:, None]
+    out = []
+    for k, image in enumerate(luma):
+        apple = cv2.resize(shares[k].astype(np.float32), small, interpolation=cv2.INTER_AREA)
+        chroma = []
+        for plane, wall_c, paint in zip((us[k], vs[k]), walls_c, (165.0, 117.0), strict=True):
+            shaded = plane - (1 - apple) * (wall_c - 128) * (1 - gain_c)
+            if name.startswith("two_tone"):  # its centre's height from the luma's apple (rows halved, chroma sited)
+                solid = np.where(shares[k] >= 0.5, shares[k], 0.0)
+                cy = float((solid * np.arange(h)[:, None]).sum() / solid.sum())
+                top = np.clip((rows_c - (cy - 0.5) / 2) / -1.0 + 0.5, 0.0, 1.0) * apple
+                bottom = apple - top
+                shaded = shaded * (1 - apple) + 128.0 * top + paint * bottom
+            chroma.append(np.clip(np.round(shaded), 0, 255).astype(np.uint8))
+        out.append(np.concatenate([image.reshape(-1), chroma[0].reshape(-1), chroma[1].reshape(-1)]).reshape(-1, w))
+    return out
+
+
 def _rotate(code):
     import cv2
 
@@ -260,6 +315,8 @@ def variants():
         "two_tone": (None, 1, 0, 18),
         "two_tone_shadow_band": (None, 1, 0, 18),
         "two_tone_shadow_band_1080p": (None, 1, 0, 18),
+        "shadow_band_colour": (None, 1, 0, 18),
+        "two_tone_shadow_band_colour": (None, 1, 0, 18),
         "two_pendulums": (None, 1, 0, 18),
         "two_pendulums_start_px": (None, 1, 0, 18),
     }
@@ -281,6 +338,9 @@ def make(name: str, workdir: Path) -> Path:
     if out.is_file():
         return out
     last = 360 if name == "short_6s" else None
+    if name.endswith("_colour"):
+        write_video(_in_colour(name), out, 60.0, crf, "veryfast", colour=True)
+        return out
     frames = [
         image.copy()
         for index, _, image in iter_luma(APPLE)
@@ -343,6 +403,7 @@ def judge(name: str, workdir: Path) -> dict:
     period = zero_crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
     row.update(
         method=track.attrs["method"]["used"],
+        view=(track.attrs.get("body") or {}).get("view", "brightness"),
         **{"ok%": round(100 * float((track.flag == "ok").mean()), 2)},
         vertical_deg=round(float(geometry["vertical_deg"]), 2),
         vertical_estimated=geometry["vertical_source"].startswith("estimated"),

@@ -369,6 +369,7 @@ def iter_luma(
     damaged: bool = False,
     report: dict | None = None,
     threads: int | None = None,
+    view=None,
 ) -> Iterator[tuple[int, float, np.ndarray | None]]:
     """Decode the video once, yielding ``(frame_index, time_s, Y)`` in presentation order.
 
@@ -385,6 +386,8 @@ def iter_luma(
     in a background thread at most :data:`DECODE_AHEAD_FRAMES` frames ahead of the
     consumer, so memory stays a few frames whatever the video's length. ``Y`` is a view
     of the decoded frame, valid as long as the caller holds it (copy it to keep it).
+    ``view``: a function of the decoded frame whose image is yielded instead of ``Y`` (e.g. its colour,
+    :mod:`pendulum.tracking.colour`).
     """
     threads = _decoder_threads(threads)
     container = _open(path)
@@ -414,7 +417,10 @@ def iter_luma(
                     yield index, (frame.pts - start) * tb, None
                     index += 1
                 continue
-            y = luma(frame) if planar else frame.to_ndarray(format="gray")
+            if view is not None:
+                y = view(frame)
+            else:
+                y = luma(frame) if planar else frame.to_ndarray(format="gray")
             yield index, (frame.pts - start) * tb, y
             index += 1
         if index == 0 or index == counts["damaged_frames"]:

@@ -336,9 +336,17 @@ def x264_cpu(cpuinfo: str = "/proc/cpuinfo") -> str | None:
 
 
 def write_video(
-    frames: list, path: Path, fps: float, crf: int, preset: str, lead_frames: list = (), plain_c: bool = False
+    frames: list,
+    path: Path,
+    fps: float,
+    crf: int,
+    preset: str,
+    lead_frames: list = (),
+    plain_c: bool = False,
+    colour: bool = False,
 ) -> None:
-    """Encode grey frames as H.264 (yuv420p) in MP4 (one encoder thread).
+    """Encode grey frames as H.264 (yuv420p) in MP4 (one encoder thread); with ``colour``, frames already in
+    yuv420p (each Y over U over V: 1.5 × height rows, as ``av.VideoFrame.from_ndarray`` takes them).
 
     ``lead_frames`` (a trimmed clip): encoded before ``frames`` with negative timestamps, so the
     file holds their packets but its edit list starts at ``frames[0]`` and decoders discard them.
@@ -357,7 +365,7 @@ def write_video(
     with av.open(str(tmp), mode="w", format="mp4") as container:
         stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1001))
         stream.width = frames[0].shape[1]
-        stream.height = frames[0].shape[0]
+        stream.height = frames[0].shape[0] * 2 // 3 if colour else frames[0].shape[0]
         stream.pix_fmt = "yuv420p"
         keyint = str(max(1, int(round(2 * fps))))  # a key frame every 2 s, as cameras do
         stream.options = {"crf": str(crf), "preset": preset, "threads": "1", "g": keyint}
@@ -367,7 +375,7 @@ def write_video(
             stream.options = {**stream.options, "x264-params": f"asm={cpu}"}
         rate = Fraction(fps).limit_denominator(1001)
         for i, img in enumerate([*lead_frames, *frames]):
-            vf = av.VideoFrame.from_ndarray(img, format="gray")
+            vf = av.VideoFrame.from_ndarray(img, format="yuv420p" if colour else "gray")
             if len(lead_frames):
                 vf.pts, vf.time_base = i - len(lead_frames), 1 / rate
             for packet in stream.encode(vf):

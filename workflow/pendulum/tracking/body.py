@@ -49,10 +49,9 @@ the body's look changes with the wall behind it, a two-tone ball's light half be
 a one-sided body is measured by its side only (as in step 2, where that was not taken), and a silhouette
 still smaller or larger mid-swing is kept with a ``warning`` in the track's body facts.
 
-ECC alignment of the body's own look (``cv2.findTransformECCWithMask``, Euclidean) was measured
-against this on renders with known truth and not taken: where the look changes (a body turning on
-its thread, a print) the aligned point drifts (0.10–1.0° against 0.02–0.08° for the silhouette on
-the same scenes), though its rotation followed θ with slope −1.00 where the look stayed.
+``view`` (in :func:`find_body` and :func:`track_body`): the image taken of each frame, its luma by default
+(:func:`pendulum.tracking.colour.colour_view`: its colour's difference from the wall's). ECC alignment of
+the body's look was measured and not taken (docs/footage.md).
 """
 
 from __future__ import annotations
@@ -241,7 +240,7 @@ def _body_in(diff: np.ndarray, threshold: float, open_px: int, close_px: int, ne
 
 
 def find_body(
-    path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, radius_px=None, polarity: str = "both"
+    path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, radius_px=None, polarity="both", view=None
 ) -> BodyScene:
     """The static scene and the swinging body in the first frame (see the module docstring), the body measured by
     the difference ``polarity`` names (:func:`pendulum.tracking.body_scene.one_sided`).
@@ -252,7 +251,7 @@ def find_body(
     moves, or when two objects of similar weight move in most samples and ``start_px`` does not say
     which one is the pendulum.
     """
-    samples = sample_clip(path, n_samples)
+    samples = sample_clip(path, n_samples, view)
     images = same_exposure([s for _, s in samples])
     stack = np.stack(images)
     first_pass = np.median(stack, axis=0).astype(np.float32)
@@ -393,7 +392,7 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
 
 
 def track_body(
-    path, settings: TrackerSettings, progress=None, scene: BodyScene | None = None, rest_place_from=None
+    path, settings: TrackerSettings, progress=None, scene: BodyScene | None = None, rest_place_from=None, view=None
 ) -> pd.DataFrame:
     """Follow the body through the whole video in one decode pass (columns as :func:`.marker.track_video`).
 
@@ -402,7 +401,7 @@ def track_body(
     :class:`~pendulum.camera.video.VideoError` when fewer than ``min_usable_fraction`` of the frames are usable.
     """
     if scene is None:
-        scene = find_body(path, settings.start_px)
+        scene = find_body(path, settings.start_px, view=view)
     background = scene.background
     height, width = background.shape
     contrast = scene.contrast_grey
@@ -417,7 +416,7 @@ def track_body(
     lost_run = 0
     binary = []
     report: dict = {}
-    for index, time_s, image in iter_luma(path, report=report):
+    for index, time_s, image in iter_luma(path, report=report, view=view):
         half = reach + 2.0 * math.hypot(vx, vy) + 6 * lost_run
         px, py = x_prev + vx, y_prev + vy
         x0, x1 = max(int(px - half), 0), min(int(px + half) + 1, width)
@@ -513,18 +512,18 @@ def track_body(
         # the scene holds the body where it spends most samples (its rest place, or the ends of a narrow
         # swing): the scene there again, from the two ends of the swing as this track finds them
         start = settings.start_px or scene.start_px
-        repaired = find_body(
-            path, start, track=table, radius_px=max(scene.radius_px, scene.inner_radius_px), polarity=scene.polarity
-        )
-        return track_body(path, settings, progress, repaired, rest_place_from=[*tries, round(ratio, 4)])
+        radius = max(scene.radius_px, scene.inner_radius_px)
+        repaired = find_body(path, start, track=table, radius_px=radius, polarity=scene.polarity, view=view)
+        return track_body(path, settings, progress, repaired, [*tries, round(ratio, 4)], view)
     if held and scene.rest_place_clear and scene.polarity == "both" and scene.one_sided in ("dark", "bright"):
         # the swing's ends show the scene at the rest place as the median has it (it never held the body): the
         # silhouette changes with the wall behind it (a two-tone ball's light half before a shadow band); the
         # body measured by its own side of the scene only
         start = settings.start_px or scene.start_px
         try:
-            one = find_body(path, start, track=table, radius_px=scene.radius_px, polarity=scene.one_sided)
-            return track_body(path, settings, progress, replace(one, rest_place_clear=True), [*tries, round(ratio, 4)])
+            one = find_body(path, start, track=table, radius_px=scene.radius_px, polarity=scene.one_sided, view=view)
+            one = replace(one, rest_place_clear=True)
+            return track_body(path, settings, progress, one, [*tries, round(ratio, 4)], view)
         except VideoError as error:
             log.info(
                 "%s: measured by its %s side only, the body could not be tracked (%s)", path, scene.one_sided, error

@@ -23,10 +23,10 @@ HULL_AREA_RATIO = 4.0  # a moving object's convex hull is left out where at most
 TWO_OBJECTS_MASS_RATIO = 0.4  # a second moving object at least this heavy (Σ D) in most samples: ambiguous
 
 
-def sample_clip(path, n_samples: int) -> list[tuple[int, np.ndarray]]:
+def sample_clip(path, n_samples: int, view=None) -> list[tuple[int, np.ndarray]]:
     """Every k-th decoded frame (k doubling as needed): between n and 2n frames over the whole clip, frame 0 first
-    (read-only; :func:`pendulum.tracking.samples.spread_frames`: decoded once per clip)."""
-    return spread_frames(path, n_samples)[0]
+    (read-only; :func:`pendulum.tracking.samples.spread_frames`: decoded once per clip; ``view``: as there)."""
+    return spread_frames(path, n_samples, view=view)[0]
 
 
 def close_size(shape) -> int:

@@ -11,11 +11,14 @@ is taken. Either way the track's ``attrs["method"]`` says which, and why.
 
 from __future__ import annotations
 
+import math
+
 import pandas as pd
 
 from pendulum.camera.video import VideoError
 from pendulum.tracking import samples
 from pendulum.tracking.body import track_body
+from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.settings import TrackerSettings
 from pendulum.tracking.timing import correct_slips
@@ -48,8 +51,15 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         track.attrs["method"] = {"used": "marker", "reason": "method: marker given in the settings", "tried": {}}
         return track
     if method == "body":
+        tried = {}
         track = track_body(path, settings, progress=progress)
-        track.attrs["method"] = {"used": "body", "reason": "method: body given in the settings", "tried": {}}
+        tried["body"] = f"usable in {100 * usable_fraction(track):.1f} % of the frames"
+        track = _by_colour(path, settings, track, tried, progress)
+        track.attrs["method"] = {
+            "used": "body",
+            "reason": "method: body given in the settings" + _view(track, tried),
+            "tried": tried,
+        }
         return track
     tried: dict[str, str] = {}
     marker = None
@@ -90,8 +100,9 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
             f"{path}: neither a marker disk nor the body could be followed. Marker: {tried['marker'][8:]} "
             f"Body: {tried['body'][8:]}"
         ) from error
+    tried["body"] = f"usable in {100 * usable_fraction(body):.1f} % of the frames"
+    body = _by_colour(path, settings, body, tried, progress)
     body_fraction = usable_fraction(body)
-    tried["body"] = f"usable in {100 * body_fraction:.1f} % of the frames"
     if stopped is not None and stopped.most_usable >= body_fraction:  # the marker might do as well: its whole pass
         marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
     if marker is not None and usable_fraction(marker) >= body_fraction:
@@ -108,10 +119,45 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
     )
     body.attrs["method"] = {
         "used": "body",
-        "reason": f"{why}; the body's silhouette is {tried['body']}",
+        "reason": f"{why}; the body's silhouette is {tried['body']}{_view(body, tried)}",
         "tried": tried,
     }
     return body
+
+
+def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict, progress=None) -> pd.DataFrame:
+    """The body's track in the clip's colour view (:mod:`pendulum.tracking.colour`) where its brightness
+    silhouette changes with the wall behind it and the colour view is usable in at least as many frames, with no
+    warning or one of a smaller change between the swing's middle and its ends; else ``body``. What the colour
+    view gave goes into ``tried`` as ``body_by_colour``."""
+    if not brightness_depends_on_wall(body):
+        return body
+    colour, facts = track_by_colour(path, settings, body, progress)
+    if colour is None:
+        tried["body_by_colour"] = facts.get("colour", "not taken")
+        return body
+    tried["body_by_colour"] = f"usable in {100 * usable_fraction(colour):.1f} % of the frames"
+    milder = not colour.attrs["body"].get("warning") or _wall_change(colour) <= _wall_change(body)
+    if usable_fraction(colour) >= usable_fraction(body) and milder:
+        colour.attrs["body"]["brightness"] = {"usable": tried["body"], "warning": body.attrs["body"].get("warning")}
+        return colour
+    return body
+
+
+def _wall_change(track: pd.DataFrame) -> float:
+    """How far the silhouette's area mid-swing departs from its area at the swing's ends, |ln ratio| (0 unknown)."""
+    ratio = track.attrs.get("body", {}).get("mid_swing_area_ratio")
+    return abs(math.log(ratio)) if ratio else 0.0
+
+
+def _view(body: pd.DataFrame, tried: dict) -> str:
+    """The reason's clause for a body measured by its colour (empty for its brightness)."""
+    if body.attrs.get("body", {}).get("view") != "colour":
+        return ""
+    return (
+        "; that silhouette changes with the wall behind the body (a shadow, a darker band), its colour does not: "
+        f"measured by its colour, {tried['body_by_colour']}"
+    )
 
 
 def stopped_text(stopped: MarkerAbandoned) -> str:

@@ -40,11 +40,15 @@ def _key(path) -> tuple | None:
     return str(Path(path).resolve()), stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns
 
 
-def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tuple[int, np.ndarray]], int]:
+def spread_frames(path, n: int, max_frames: int | None = None, view=None) -> tuple[list[tuple[int, np.ndarray]], int]:
     """Every k-th decoded frame of the clip's first ``max_frames`` (all when None): ``n`` to ``2n − 1`` of them
     (all of a clip shorter than ``n`` frames) as ``(index, image)`` (read-only), and how many frames were decoded.
-    Raises :class:`~pendulum.camera.video.VideoError` when no frame decodes."""
+    ``view``: the image taken of each frame (its luma when None; see :func:`~pendulum.camera.video.iter_luma`),
+    with a ``key`` attribute that tells views apart. Raises :class:`~pendulum.camera.video.VideoError` when no
+    frame decodes."""
     key = _key(path)
+    if key is not None and view is not None:
+        key = (*key, view.key)
     held = _held.get("clip")
     if key is not None and held is not None and held["key"] == key and held["n"] >= n:  # fewer samples: a subset
         complete, decoded = held["complete"], held["decoded"]
@@ -52,7 +56,7 @@ def spread_frames(path, n: int, max_frames: int | None = None) -> tuple[list[tup
             wanted = set(spread_indices(decoded, n))
             return [(i, image) for i, image in held["frames"] if i in wanted], decoded
     kept, stride, decoded, report = [], 1, 0, {}
-    for index, _t, image in iter_luma(path, report=report):
+    for index, _t, image in iter_luma(path, report=report, view=view):
         if max_frames is not None and index >= max_frames:
             break
         decoded = index + 1

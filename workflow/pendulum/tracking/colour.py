@@ -1,0 +1,135 @@
+"""The body by its colour, where its brightness against the wall changes with the wall behind it.
+
+A shadow or a darker band on a wall changes the wall's brightness and hardly its colour; a coloured body (a
+red apple, a blue ball, a red bauble) keeps its colour before any part of the wall. Where the body's
+brightness silhouette shows that dependence (frames flagged ``occluded``, or a silhouette smaller or larger
+mid-swing: :func:`brightness_depends_on_wall`), the body is tracked again in the clip's **colour view**
+
+    P = 255 − g · (|U − U_w| + |V − V_w|)
+
+on the luma grid: U, V the frame's chroma planes (4:2:0, sited as H.264's default: with the even columns,
+between the rows), U_w, V_w the wall's (their per-pixel median over the spread samples), g putting the body's
+colour contrast C_c at :data:`COLOUR_CONTRAST` grey levels — by the same body tracker
+(:func:`pendulum.tracking.body.track_body` with ``view``), against a scene in which the wall's shading,
+shadows and the thread are all but gone. Taken only for a body whose colour stands out of the chroma noise
+(C_c ≥ :data:`MIN_COLOUR_SNR` × the mean chroma difference of the samples); a grey body, a grey video or a
+render has no colour view.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pandas as pd
+
+from pendulum.camera.video import VideoError
+from pendulum.tracking.body import SCENE_SAMPLES, track_body
+from pendulum.tracking.samples import spread_frames
+from pendulum.tracking.settings import TrackerSettings
+
+COLOUR_CONTRAST = 150.0  # the body's colour contrast in the colour view, grey levels
+MIN_COLOUR_SNR = 10.0  # the body's colour contrast over the chroma noise below which there is no colour view
+DEAD_ZONE_NOISE = 3.0  # chroma differences up to this many times the chroma noise are left out (compression's blocks)
+WALL_DEPENDENT_SHARE = 0.01  # frames flagged `occluded` beyond this share: the brightness silhouette may be biased
+# luma (x, y) → chroma (x / 2, (y − ½) / 2): 4:2:0 chroma sited with the even columns, between the rows
+_TO_CHROMA = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, -0.25]])
+
+
+def chroma_planes(frame) -> tuple[np.ndarray, np.ndarray] | None:
+    """The U and V planes of a planar 4:2:0 frame (``yuv420p``, ``yuvj420p``, their 9–16-bit forms reduced to
+    the top 8 bits), each (⌈height/2⌉, ⌈width/2⌉) uint8; None for any other format (grey, 4:2:2, RGB, …)."""
+    fmt = frame.format
+    if not fmt.name.startswith(("yuv420p", "yuvj420p")) or len(frame.planes) < 3:
+        return None
+    bits = int(fmt.components[1].bits)
+    out = []
+    for plane in frame.planes[1:3]:
+        if bits > 8:
+            dtype = ">u2" if fmt.name.endswith("be") else "<u2"
+            rows = np.frombuffer(plane, dtype).reshape(plane.height, plane.line_size // 2)
+            out.append((rows[:, : plane.width] >> (bits - 8)).astype(np.uint8))
+        else:
+            out.append(np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)[:, : plane.width])
+    return out[0], out[1]
+
+
+def _chroma(frame) -> np.ndarray:
+    """The frame's U and V planes stacked (h/2, w/2, 2) uint8; empty where the frame carries no 4:2:0 colour."""
+    planes = chroma_planes(frame)
+    return np.zeros((0, 0, 2), np.uint8) if planes is None else np.dstack(planes)
+
+
+_chroma.key = "chroma"
+
+
+class ColourView:
+    """A decoded frame → its colour view P (module docstring), uint8 (height, width)."""
+
+    def __init__(self, wall_uv: np.ndarray, gain: float, dead_zone: int):
+        self.wall_u, self.wall_v = np.ascontiguousarray(wall_uv[..., 0]), np.ascontiguousarray(wall_uv[..., 1])
+        self.gain, self.dead_zone = float(gain), int(dead_zone)
+        self.key = ("colour", round(self.gain, 6), self.dead_zone)
+
+    def __call__(self, frame) -> np.ndarray:
+        planes = chroma_planes(frame)
+        if planes is None or planes[0].shape != self.wall_u.shape:
+            raise VideoError("a frame without the clip's colour planes: no colour view")
+        u, v = planes
+        difference = cv2.subtract(cv2.add(cv2.absdiff(u, self.wall_u), cv2.absdiff(v, self.wall_v)), self.dead_zone)
+        shown = cv2.bitwise_not(cv2.convertScaleAbs(difference, alpha=self.gain))
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+        size = (int(frame.width), int(frame.height))
+        return cv2.warpAffine(shown, _TO_CHROMA, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+
+
+def colour_view(path, luma_track: pd.DataFrame) -> tuple[ColourView | None, dict]:
+    """The clip's colour view for the body the brightness track followed, and its facts (``colour_contrast``,
+    ``chroma_noise``); None where the clip has no 4:2:0 colour or the body's colour does not stand out.
+
+    C_c: the 90th percentile of |U − U_w| + |V − V_w| within the body's radius of its tracked centre, the median
+    over the samples where it was tracked ``ok``; the noise: the mean of the same difference over the samples."""
+    samples = spread_frames(path, SCENE_SAMPLES, view=_chroma)[0]
+    if not samples or samples[0][1].size == 0:
+        return None, {"colour": "the video carries no 4:2:0 colour planes"}
+    stack = np.stack([uv for _, uv in samples])
+    wall = np.round(np.median(stack, axis=0)).astype(np.uint8)
+    difference = np.abs(stack.astype(np.int16) - wall).sum(axis=-1)
+    noise = max(float(difference.mean()), 0.5)
+    radius = float(luma_track.attrs.get("body", {}).get("radius_px", 0.0)) / 2
+    rows = luma_track.set_index("frame")
+    h, w = difference.shape[1:]
+    yy, xx = np.mgrid[0:h, 0:w]
+    contrasts = []
+    for k, (index, _) in enumerate(samples):
+        if index in rows.index and rows.at[index, "flag"] == "ok" and radius > 1:
+            cx, cy = rows.at[index, "x_px"] / 2, (rows.at[index, "y_px"] - 0.5) / 2
+            inside = (xx - cx) ** 2 + (yy - cy) ** 2 <= radius**2
+            if inside.sum() >= 5:
+                contrasts.append(float(np.percentile(difference[k][inside], 90)))
+    contrast = float(np.median(contrasts)) if contrasts else 0.0
+    facts = {"colour_contrast": round(contrast, 1), "chroma_noise": round(noise, 2)}
+    if contrast < MIN_COLOUR_SNR * noise:
+        return None, {**facts, "colour": "the body's colour does not stand out from the wall's"}
+    dead_zone = max(1, int(round(DEAD_ZONE_NOISE * noise)))
+    return ColourView(wall, COLOUR_CONTRAST / (contrast - dead_zone), dead_zone), facts
+
+
+def brightness_depends_on_wall(track: pd.DataFrame) -> bool:
+    """Whether a brightness silhouette's track shows it changing with the wall behind the body: more than
+    :data:`WALL_DEPENDENT_SHARE` of its frames ``occluded``, or a warning that it is smaller or larger mid-swing."""
+    occluded = float((track.flag == "occluded").mean()) if len(track) else 0.0
+    return occluded > WALL_DEPENDENT_SHARE or bool(track.attrs.get("body", {}).get("warning"))
+
+
+def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame, progress=None):
+    """The body tracked in the clip's colour view (:func:`colour_view`): ``(track or None, what it gave)``."""
+    facts: dict = {}
+    try:
+        view, facts = colour_view(path, luma_track)
+        if view is None:
+            return None, facts
+        track = track_body(path, settings, progress=progress, view=view)
+    except VideoError as error:
+        return None, {**facts, "colour": f"failed: {error}"}
+    track.attrs["body"] = {**track.attrs["body"], "view": "colour", **facts}
+    return track, facts
