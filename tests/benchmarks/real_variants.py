@@ -238,9 +238,9 @@ def _colour_planes(last: int | None = None) -> tuple[list, list, list]:
 
 
 def _in_colour(name: str, last: int | None = None) -> list:
-    """A colour variant (``..._colour``), packed yuv420p for ``write_video(colour=True)``: its luma made as the
-    grey variant's, its chroma composited with the same shares of apple (at chroma resolution). A shadow
-    scales the wall's light, so its chroma's distance from grey (128) too: ``shadow_band_colour``;
+    """A colour variant (``..._colour``, ``..._colour_1080p``), packed yuv420p for ``write_video(colour=True)``:
+    its luma made as the grey variant's, its chroma composited with the same shares of apple (at chroma
+    resolution). A shadow scales the wall's light, so its chroma's distance from grey (128) too: ``shadow_band_colour``;
     ``two_tone_shadow_band_colour`` (as the held-out clip: a bright patterned top, a dark blue bottom) paints the
     ball's lower half dark blue (U 165, V 117) and its top grey (U = V = 128), before the band."""
     import cv2
@@ -271,7 +271,10 @@ def _in_colour(name: str, last: int | None = None) -> list:
                 bottom = apple - top
                 shaded = shaded * (1 - apple) + 128.0 * top + paint * bottom
             chroma.append(np.clip(np.round(shaded), 0, 255).astype(np.uint8))
-        out.append(np.concatenate([image.reshape(-1), chroma[0].reshape(-1), chroma[1].reshape(-1)]).reshape(-1, w))
+        if name.endswith("_1080p"):  # every plane 3× (the held-out clip's size)
+            image, *chroma = (cv2.resize(p, None, fx=3, fy=3, interpolation=cv2.INTER_CUBIC) for p in (image, *chroma))
+        width = image.shape[1]
+        out.append(np.concatenate([image.reshape(-1), chroma[0].reshape(-1), chroma[1].reshape(-1)]).reshape(-1, width))
     return out
 
 
@@ -317,6 +320,7 @@ def variants():
         "two_tone_shadow_band_1080p": (None, 1, 0, 18),
         "shadow_band_colour": (None, 1, 0, 18),
         "two_tone_shadow_band_colour": (None, 1, 0, 18),
+        "two_tone_shadow_band_colour_1080p": (None, 1, 0, 18),
         "two_pendulums": (None, 1, 0, 18),
         "two_pendulums_start_px": (None, 1, 0, 18),
     }
@@ -338,7 +342,7 @@ def make(name: str, workdir: Path) -> Path:
     if out.is_file():
         return out
     last = 360 if name == "short_6s" else None
-    if name.endswith("_colour"):
+    if "_colour" in name:
         write_video(_in_colour(name), out, 60.0, crf, "veryfast", colour=True)
         return out
     frames = [
