@@ -2,18 +2,21 @@
 
 A shadow or a darker band on a wall changes the wall's brightness and hardly its colour; a coloured body (a
 red apple, a blue ball, a red bauble) keeps its colour before any part of the wall. Where the body's
-brightness silhouette shows that dependence (frames flagged ``occluded``, or a silhouette smaller or larger
-mid-swing: :func:`brightness_depends_on_wall`), the body is tracked again in the clip's **colour view**
+brightness silhouette shows that dependence (frames flagged ``occluded`` or ``lost``, or a silhouette
+smaller or larger mid-swing: :func:`brightness_depends_on_wall`), the body is tracked again in the clip's
+**colour view**
 
-    P = 255 − g · (|U − U_w| + |V − V_w|)
+    P = 255 − g · max(|U − U_w| + |V − V_w| − z, 0)
 
 on the luma grid: U, V the frame's chroma planes (4:2:0, sited as H.264's default: with the even columns,
-between the rows), U_w, V_w the wall's (their per-pixel median over the spread samples), g putting the body's
-colour contrast C_c at :data:`COLOUR_CONTRAST` grey levels — by the same body tracker
+between the rows), U_w, V_w the wall's (their per-pixel median over the spread samples), z a dead zone of
+:data:`DEAD_ZONE_NOISE` × the chroma noise (a codec's chroma moves by whole blocks of a level or two), g
+putting the body's colour contrast C_c at :data:`COLOUR_CONTRAST` grey levels — by the same body tracker
 (:func:`pendulum.tracking.body.track_body` with ``view``), against a scene in which the wall's shading,
 shadows and the thread are all but gone. Taken only for a body whose colour stands out of the chroma noise
 (C_c ≥ :data:`MIN_COLOUR_SNR` × the mean chroma difference of the samples); a grey body, a grey video or a
-render has no colour view.
+render has no colour view. :func:`pendulum.tracking.method.track_trial` keeps the colour view's track where
+it is usable in at least as many frames, with no warning or a milder one.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from pendulum.tracking.settings import TrackerSettings
 COLOUR_CONTRAST = 150.0  # the body's colour contrast in the colour view, grey levels
 MIN_COLOUR_SNR = 10.0  # the body's colour contrast over the chroma noise below which there is no colour view
 DEAD_ZONE_NOISE = 3.0  # chroma differences up to this many times the chroma noise are left out (compression's blocks)
-WALL_DEPENDENT_SHARE = 0.01  # frames flagged `occluded` beyond this share: the brightness silhouette may be biased
+WALL_DEPENDENT_SHARE = 0.01  # frames `occluded` or `lost` beyond this share: the brightness silhouette may be biased
 # luma (x, y) → chroma (x / 2, (y − ½) / 2): 4:2:0 chroma sited with the even columns, between the rows
 _TO_CHROMA = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, -0.25]])
 
@@ -116,9 +119,10 @@ def colour_view(path, luma_track: pd.DataFrame) -> tuple[ColourView | None, dict
 
 def brightness_depends_on_wall(track: pd.DataFrame) -> bool:
     """Whether a brightness silhouette's track shows it changing with the wall behind the body: more than
-    :data:`WALL_DEPENDENT_SHARE` of its frames ``occluded``, or a warning that it is smaller or larger mid-swing."""
-    occluded = float((track.flag == "occluded").mean()) if len(track) else 0.0
-    return occluded > WALL_DEPENDENT_SHARE or bool(track.attrs.get("body", {}).get("warning"))
+    :data:`WALL_DEPENDENT_SHARE` of its frames ``occluded`` or ``lost``, or a warning that it is smaller or larger
+    mid-swing."""
+    unseen = float(track.flag.isin(["occluded", "lost"]).mean()) if len(track) else 0.0
+    return unseen > WALL_DEPENDENT_SHARE or bool(track.attrs.get("body", {}).get("warning"))
 
 
 def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame, progress=None):

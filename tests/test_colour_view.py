@@ -1,0 +1,122 @@
+"""The body by its colour (pendulum.tracking.colour) against a colour clip drawn here, with known truth.
+
+A red ball swings before a light wall with a soft dark band across the middle of its swing (the band on the
+wall only, as a shelf's shadow behind the ball): in the band the ball's brightness comes within a few grey
+levels of the wall's, so its brightness silhouette loses its edge there; its colour does not change. The
+frames are drawn here (numpy: each pixel's share of the ball from 4 × 4 samples, Y, U, V composited), not by
+the project's renderer, and encoded as a phone does (H.264, 4:2:0).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+W, H, FPS, N_FRAMES = 640, 360, 60.0, 240
+PIVOT = (320.0, -300.0)
+ARM_PX, AMPLITUDE_RAD, PERIOD_S = 520.0, 0.36, 2.0
+RADIUS_PX = 14.0
+BALL_YUV = (95.0, 112.0, 176.0)  # a red ball (Y, U, V)
+WALL_UV = (126.0, 131.0)  # a faintly warm wall
+
+
+def _truth(k: int) -> tuple[float, float]:
+    theta = AMPLITUDE_RAD * math.cos(2 * math.pi * k / FPS / PERIOD_S)
+    return PIVOT[0] + ARM_PX * math.sin(theta), PIVOT[1] + ARM_PX * math.cos(theta)
+
+
+def _share(shape, centre, radius, scale) -> np.ndarray:
+    """Each pixel's share of a disk (pixel centres at integers, 4 × 4 samples), at ``scale`` px per pixel."""
+    h, w = shape
+    share = np.zeros(shape, np.float32)
+    reach = radius / scale + 2
+    x0, x1 = max(int(centre[0] / scale - reach), 0), min(int(centre[0] / scale + reach) + 1, w)
+    y0, y1 = max(int(centre[1] / scale - reach), 0), min(int(centre[1] / scale + reach) + 1, h)
+    ys, xs = np.mgrid[y0:y1, x0:x1].astype(np.float32)
+    for dy in (np.arange(4) + 0.5) / 4 - 0.5:
+        for dx in (np.arange(4) + 0.5) / 4 - 0.5:
+            inside = ((xs + dx) * scale - centre[0]) ** 2 + ((ys + dy) * scale - centre[1]) ** 2 <= radius**2
+            share[y0:y1, x0:x1] += inside
+    return share / 16
+
+
+def _clip(path, colour: bool = True) -> list[tuple[float, float]]:
+    from pendulum.synthetic.experiment import write_video
+
+    ys, xs = np.mgrid[0:H, 0:W].astype(np.float32)
+    light = 200.0 - 0.04 * xs  # a lighting gradient
+    band = 1 - 0.5 * np.exp(-0.5 * ((xs - 320.0) / 35.0) ** 2)  # the wall at the swing's middle, half as bright
+    wall_y = light * band
+    frames, truth = [], []
+    for k in range(N_FRAMES):
+        x, y = _truth(k)
+        truth.append((x, y))
+        ball = _share((H, W), (x, y), RADIUS_PX, 1.0)
+        luma = wall_y * (1 - ball) + BALL_YUV[0] * ball
+        # chroma at half resolution, sited with the even columns and between the rows (H.264's default)
+        small = _share((H // 2, W // 2), (x, y - 0.5), RADIUS_PX, 2.0)
+        band_c = band[::2, ::2]
+        planes = [np.round(luma)]
+        for wall_c, ball_c in zip(WALL_UV, BALL_YUV[1:], strict=True):
+            wall_here = 128 + (wall_c - 128) * band_c  # the shade takes the wall's tint down with its light
+            value = wall_here * (1 - small) + (ball_c if colour else wall_here) * small
+            planes.append(np.round(value))
+        packed = np.concatenate([p.reshape(-1) for p in planes]).clip(0, 255).astype(np.uint8).reshape(-1, W)
+        frames.append(packed)
+    write_video(frames, path, FPS, 16, "veryfast", colour=True)
+    return truth
+
+
+def _errors(track, truth) -> tuple[np.ndarray, np.ndarray]:
+    """Position errors (px) of the ``ok`` frames, after the track's mean offset from the truth (any point fixed
+    to the body is a good point), and whether each lies in the band."""
+    ok = (track.flag == "ok").to_numpy()
+    true = np.asarray(truth)[ok]
+    found = track[["x_px", "y_px"]].to_numpy(float)[ok]
+    off = found - true
+    off -= off.mean(axis=0)
+    return np.hypot(off[:, 0], off[:, 1]), np.abs(true[:, 0] - 320.0) < 60
+
+
+@pytest.fixture(scope="module")
+def colour_clip(tmp_path_factory):
+    path = tmp_path_factory.mktemp("colour") / "red_ball_band.mp4"
+    return path, _clip(path)
+
+
+def test_a_coloured_ball_before_a_shadow_band_is_followed_by_its_colour(colour_clip):
+    from pendulum.tracking.body import track_body
+    from pendulum.tracking.method import track_trial
+    from pendulum.tracking.settings import TrackerSettings
+
+    path, truth = colour_clip
+    settings = TrackerSettings()
+    brightness = track_body(path, settings)
+    track = track_trial(path, settings)
+    assert track.attrs["body"]["view"] == "colour", track.attrs["method"]
+    assert "measured by its colour" in track.attrs["method"]["reason"]
+    assert (track.flag == "ok").mean() >= 0.97
+    error, in_band = _errors(track, truth)
+    before, before_in_band = _errors(brightness, truth)
+    # by its colour, the band makes no difference: within 0.3 px RMS there as elsewhere
+    assert np.sqrt(np.mean(error[in_band] ** 2)) <= 0.3
+    assert np.sqrt(np.mean(error**2)) <= 0.3
+    # by its brightness, the band costs it: frames lost there, or the ones kept off by more
+    lost = (brightness.flag != "ok").mean() > (track.flag != "ok").mean() + 0.02
+    worse = np.sqrt(np.mean(before[before_in_band] ** 2)) > 2 * np.sqrt(np.mean(error[in_band] ** 2))
+    assert lost or worse
+
+
+def test_a_grey_clip_has_no_colour_view(tmp_path):
+    from pendulum.tracking.body import track_body
+    from pendulum.tracking.colour import track_by_colour
+    from pendulum.tracking.settings import TrackerSettings
+
+    path = tmp_path / "grey_ball_band.mp4"
+    _clip(path, colour=False)
+    brightness = track_body(path, TrackerSettings())
+    track, facts = track_by_colour(path, TrackerSettings(), brightness)
+    assert track is None
+    assert facts["colour"] == "the body's colour does not stand out from the wall's", facts
