@@ -135,5 +135,8 @@ def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame, p
         track = track_body(path, settings, progress=progress, view=view)
     except VideoError as error:
         return None, {**facts, "colour": f"failed: {error}"}
-    track.attrs["body"] = {**track.attrs["body"], "view": "colour", **facts}
+    body = {**track.attrs["body"], "view": "colour", **facts}
+    if body.get("warning"):  # the colour view's silhouette, not the brightness one's
+        body["warning"] = "in its colour view, " + body["warning"]
+    track.attrs["body"] = body
     return track, facts
