@@ -119,4 +119,15 @@ def test_a_grey_clip_has_no_colour_view(tmp_path):
     brightness = track_body(path, TrackerSettings())
     track, facts = track_by_colour(path, TrackerSettings(), brightness)
     assert track is None
+    # the wall's faint tint is the only colour in view: no body colour to measure
     assert facts["colour"] == "the body's colour does not stand out from the wall's", facts
+
+
+def test_a_grey_render_is_told_from_its_first_frame():
+    """A render (grey frames, neutral chroma) is known to have no colour from its first frame alone: no second
+    pass over the clip for a colour view that cannot exist."""
+    from conftest import DEMO_RAW, demo_trials
+    from pendulum.tracking.colour import colour_view
+
+    view, facts = colour_view(DEMO_RAW / f"{demo_trials()[0]}.mp4", None)
+    assert view is None and facts == {"colour": "the video's first frame has no colour"}

@@ -176,15 +176,15 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
 # lighter parts come within 12 grey levels of the band's wall and those frames are flagged (93.3 % ok, the flagged
 # positions 1.9 px off): below the 95 % issue 23 asks of a held-out clip. The bars are what is measured, less a
 # margin, so that a change that loses frames fails here.
-# Filmed in colour (a phone's video is), the same apple before the band is measured by its colour where its
-# brightness silhouette changes with the wall (pendulum.tracking.colour): 99.85 % ok; the two-tone ball with a
-# dark blue lower half before the band (as the held-out clip) 99.9 % (its brightness silhouette 96.6 %, 21 %
-# smaller mid-swing). Both must be measured by their colour.
+# Filmed in colour (a phone's video is), the two-tone ball with a dark blue lower half before the band (as the
+# held-out clip) is measured by its colour (pendulum.tracking.colour): 99.9 % ok, where its brightness
+# silhouette gives 96.6 % and is 21 % smaller mid-swing (the apple before the band in colour: 93.5 -> 99.85 %,
+# in the study only; tests/test_colour_view.py checks the colour view against truth).
 SHORT_OF = {"shadow_band": 95.0}  # issue 23's share of usable frames, not yet met by these variants
-BY_COLOUR = {"shadow_band_colour", "two_tone_shadow_band_colour"}
+BY_COLOUR = {"two_tone_shadow_band_colour"}
 REAL_VARIANTS = {
     "shadow_band": (92.5, 0.0),
-    "shadow_band_colour": (99.0, 0.0),
+    "two_tone_shadow_band": (98.5, 0.0),
     "two_tone_shadow_band_colour": (99.0, 0.0),
     "upside_down": (99.0, 180.0),
     "sideways": (99.0, -90.0),

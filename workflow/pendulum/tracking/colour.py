@@ -21,17 +21,20 @@ it is usable in at least as many frames, with no warning or a milder one.
 
 from __future__ import annotations
 
+from contextlib import closing
+
 import cv2
 import numpy as np
 import pandas as pd
 
-from pendulum.camera.video import VideoError
+from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.body import SCENE_SAMPLES, track_body
 from pendulum.tracking.samples import spread_frames
 from pendulum.tracking.settings import TrackerSettings
 
 COLOUR_CONTRAST = 150.0  # the body's colour contrast in the colour view, grey levels
 MIN_COLOUR_SNR = 10.0  # the body's colour contrast over the chroma noise below which there is no colour view
+GREY_SPREAD = 4  # a first frame whose chroma spans no more than this many levels has no colour (a grey video)
 DEAD_ZONE_NOISE = 3.0  # chroma differences up to this many times the chroma noise are left out (compression's blocks)
 WALL_DEPENDENT_SHARE = 0.01  # frames `occluded` or `lost` beyond this share: the brightness silhouette may be biased
 # luma (x, y) → chroma (x / 2, (y − ½) / 2): 4:2:0 chroma sited with the even columns, between the rows
@@ -91,9 +94,13 @@ def colour_view(path, luma_track: pd.DataFrame) -> tuple[ColourView | None, dict
 
     C_c: the 90th percentile of |U − U_w| + |V − V_w| within the body's radius of its tracked centre, the median
     over the samples where it was tracked ``ok``; the noise: the mean of the same difference over the samples."""
-    samples = spread_frames(path, SCENE_SAMPLES, view=_chroma)[0]
-    if not samples or samples[0][1].size == 0:
+    with closing(iter_luma(path, view=_chroma)) as frames:  # the first frame first: a grey video ends here
+        first = next(frames, (0, 0.0, np.zeros((0, 0, 2), np.uint8)))[2]
+    if first.size == 0:
         return None, {"colour": "the video carries no 4:2:0 colour planes"}
+    if int(first.max()) - int(first.min()) <= GREY_SPREAD:
+        return None, {"colour": "the video's first frame has no colour"}
+    samples = spread_frames(path, SCENE_SAMPLES, view=_chroma)[0]
     stack = np.stack([uv for _, uv in samples])
     wall = np.round(np.median(stack, axis=0)).astype(np.uint8)
     difference = np.abs(stack.astype(np.int16) - wall).sum(axis=-1)
