@@ -131,3 +131,23 @@ def test_a_grey_render_is_told_from_its_first_frame():
 
     view, facts = colour_view(DEMO_RAW / f"{demo_trials()[0]}.mp4", None)
     assert view is None and facts == {"colour": "the video's first frame has no colour"}
+
+
+def test_where_the_brightness_silhouette_fails_the_colour_view_is_tried_without_it(colour_clip, monkeypatch):
+    """No brightness track to say where the body is: the colour view's scale from the most coloured patch that
+    moves, and the body followed by its colour all the same."""
+    from pendulum.camera.video import VideoError
+    from pendulum.tracking import method
+    from pendulum.tracking.settings import TrackerSettings
+
+    def fails(path, settings, progress=None):
+        raise VideoError(f"{path}: two moving objects of similar size")
+
+    monkeypatch.setattr(method, "track_body", fails)
+    path, truth = colour_clip
+    track = method.track_trial(path, TrackerSettings())
+    assert track.attrs["body"]["view"] == "colour"
+    assert "could not be followed (" in track.attrs["method"]["reason"], track.attrs["method"]
+    assert (track.flag == "ok").mean() >= 0.97
+    error, in_band = _errors(track, truth)
+    assert np.sqrt(np.mean(error**2)) <= 0.3

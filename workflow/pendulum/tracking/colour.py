@@ -88,12 +88,14 @@ class ColourView:
         return cv2.warpAffine(shown, _TO_CHROMA, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
 
 
-def colour_view(path, luma_track: pd.DataFrame) -> tuple[ColourView | None, dict]:
+def colour_view(path, luma_track: pd.DataFrame | None) -> tuple[ColourView | None, dict]:
     """The clip's colour view for the body the brightness track followed, and its facts (``colour_contrast``,
     ``chroma_noise``); None where the clip has no 4:2:0 colour or the body's colour does not stand out.
 
     C_c: the 90th percentile of |U − U_w| + |V − V_w| within the body's radius of its tracked centre, the median
-    over the samples where it was tracked ``ok``; the noise: the mean of the same difference over the samples."""
+    over the samples where it was tracked ``ok`` (without a track: each sample's most coloured 3 × 3 patch, the
+    body where it is the only coloured thing that moves); the noise: the mean of the same difference over the
+    samples."""
     with closing(iter_luma(path, view=_chroma)) as frames:  # the first frame first: a grey video ends here
         first = next(frames, (0, 0.0, np.zeros((0, 0, 2), np.uint8)))[2]
     if first.size == 0:
@@ -105,6 +107,20 @@ def colour_view(path, luma_track: pd.DataFrame) -> tuple[ColourView | None, dict
     wall = np.round(np.median(stack, axis=0)).astype(np.uint8)
     difference = np.abs(stack.astype(np.int16) - wall).sum(axis=-1)
     noise = max(float(difference.mean()), 0.5)
+    contrasts = [] if luma_track is None else _body_contrasts(samples, difference, luma_track)
+    if not contrasts:  # no brightness track to say where the body is: each sample's most coloured 3 × 3 patch
+        contrasts = [float(cv2.blur(d.astype(np.float32), (3, 3)).max()) for d in difference]
+    contrast = float(np.median(contrasts)) if contrasts else 0.0
+    facts = {"colour_contrast": round(contrast, 1), "chroma_noise": round(noise, 2)}
+    if contrast < MIN_COLOUR_SNR * noise:
+        return None, {**facts, "colour": "the body's colour does not stand out from the wall's"}
+    dead_zone = max(1, int(round(DEAD_ZONE_NOISE * noise)))
+    return ColourView(wall, COLOUR_CONTRAST / (contrast - dead_zone), dead_zone), facts
+
+
+def _body_contrasts(samples, difference: np.ndarray, luma_track: pd.DataFrame) -> list[float]:
+    """Per sample where the brightness track is ``ok``: the 90th percentile of the chroma difference within the
+    body's radius of its tracked centre (on the chroma grid)."""
     radius = float(luma_track.attrs.get("body", {}).get("radius_px", 0.0)) / 2
     rows = luma_track.set_index("frame")
     h, w = difference.shape[1:]
@@ -116,12 +132,7 @@ def colour_view(path, luma_track: pd.DataFrame) -> tuple[ColourView | None, dict
             inside = (xx - cx) ** 2 + (yy - cy) ** 2 <= radius**2
             if inside.sum() >= 5:
                 contrasts.append(float(np.percentile(difference[k][inside], 90)))
-    contrast = float(np.median(contrasts)) if contrasts else 0.0
-    facts = {"colour_contrast": round(contrast, 1), "chroma_noise": round(noise, 2)}
-    if contrast < MIN_COLOUR_SNR * noise:
-        return None, {**facts, "colour": "the body's colour does not stand out from the wall's"}
-    dead_zone = max(1, int(round(DEAD_ZONE_NOISE * noise)))
-    return ColourView(wall, COLOUR_CONTRAST / (contrast - dead_zone), dead_zone), facts
+    return contrasts
 
 
 def brightness_depends_on_wall(track: pd.DataFrame) -> bool:
@@ -132,7 +143,7 @@ def brightness_depends_on_wall(track: pd.DataFrame) -> bool:
     return unseen > WALL_DEPENDENT_SHARE or bool(track.attrs.get("body", {}).get("warning"))
 
 
-def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame, progress=None):
+def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame | None, progress=None):
     """The body tracked in the clip's colour view (:func:`colour_view`): ``(track or None, what it gave)``."""
     facts: dict = {}
     try:

@@ -85,8 +85,13 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         progress(f"{path}: marker {tried['marker']}; tracking the swinging body itself")
     try:
         body = track_body(path, settings, progress=progress)
+        tried["body"] = f"usable in {100 * usable_fraction(body):.1f} % of the frames"
+        body = _by_colour(path, settings, body, tried, progress)
     except VideoError as error:
         tried["body"] = f"failed: {error}"
+        body, facts = track_by_colour(path, settings, None, progress)  # its colour, where its brightness fails
+        tried["body_by_colour"] = facts.get("colour", "") if body is None else _usable(body)
+    if body is None:
         if stopped is not None:  # the whole marker pass after all: its record, or why there is none
             marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
         if marker is not None:
@@ -99,9 +104,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         raise VideoError(
             f"{path}: neither a marker disk nor the body could be followed. Marker: {tried['marker'][8:]} "
             f"Body: {tried['body'][8:]}"
-        ) from error
-    tried["body"] = f"usable in {100 * usable_fraction(body):.1f} % of the frames"
-    body = _by_colour(path, settings, body, tried, progress)
+        )
     body_fraction = usable_fraction(body)
     if stopped is not None and stopped.most_usable >= body_fraction:  # the marker might do as well: its whole pass
         marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
@@ -119,7 +122,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
     )
     body.attrs["method"] = {
         "used": "body",
-        "reason": f"{why}; the body's silhouette is {tried['body']}{_view(body, tried)}",
+        "reason": f"{why}; the body's silhouette {_silhouette(tried)}{_view(body, tried)}",
         "tried": tried,
     }
     return body
@@ -136,7 +139,7 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
     if colour is None:
         tried["body_by_colour"] = facts.get("colour", "not taken")
         return body
-    tried["body_by_colour"] = f"usable in {100 * usable_fraction(colour):.1f} % of the frames"
+    tried["body_by_colour"] = _usable(colour)
     milder = not colour.attrs["body"].get("warning") or _wall_change(colour) <= _wall_change(body)
     if usable_fraction(colour) >= usable_fraction(body) and milder:
         colour.attrs["body"]["brightness"] = {"usable": tried["body"], "warning": body.attrs["body"].get("warning")}
@@ -150,10 +153,21 @@ def _wall_change(track: pd.DataFrame) -> float:
     return abs(math.log(ratio)) if ratio else 0.0
 
 
+def _silhouette(tried: dict) -> str:
+    body = tried["body"]
+    return f"could not be followed ({body[8:]})" if body.startswith("failed") else f"is {body}"
+
+
+def _usable(track: pd.DataFrame) -> str:
+    return f"usable in {100 * usable_fraction(track):.1f} % of the frames"
+
+
 def _view(body: pd.DataFrame, tried: dict) -> str:
     """The reason's clause for a body measured by its colour (empty for its brightness)."""
     if body.attrs.get("body", {}).get("view") != "colour":
         return ""
+    if tried["body"].startswith("failed"):
+        return f"; measured by its colour, {tried['body_by_colour']}"
     return (
         "; that silhouette changes with the wall behind the body (a shadow, a darker band), its colour does not: "
         f"measured by its colour, {tried['body_by_colour']}"
