@@ -10,14 +10,16 @@ dark backdrop, a letterbox, a burnt-in timestamp, a post in front of the swing, 
 lens, a phone held upright (the swing out of view most of the time: a refusal that says so), a soft dark
 band across the wall (on the wall only, or on the apple too), the apple's own soft shadow beside it, a
 glossy apple, the apple made a two-tone ball (alone, before the band, and that at 1080p: as one of the
-held-out clips), and two pendulums side by side (with and without ``start_px``) — and each is tracked
+held-out clips), the apple and the two-tone ball (its lower half dark blue) before the band in colour, as a
+phone films (``..._colour``, the ball also at 1080p; every other variant is the clip's luma), and two pendulums
+side by side (with and without ``start_px``) — and each is tracked
 with config.yaml's defaults (no hints), as a new user would. Per variant: the method used, the share of
 frames ``ok`` (and ``edge``), the vertical found, the angle record's period from its zero crossings
 against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
 The variants are real footage transformed, not renders: what they change is known exactly, and the rest
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
-Measured 2026-11-27 (session 11): 29 of 31 pass (not the post in front, nor the apple before a shadow band: 93.3 %
-of frames ok, below 95 %; docs/footage.md).
+Measured 2026-11-28: 32 of 34 pass (not the post in front, nor the apple before a shadow band in grey: 93.2 %
+of frames ok, below 95 %; in colour it is measured by its colour, 99.85 %; docs/footage.md).
 """
 
 from __future__ import annotations
