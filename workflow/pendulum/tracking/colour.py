@@ -59,6 +59,12 @@ def chroma_planes(frame) -> tuple[np.ndarray, np.ndarray] | None:
     return out[0], out[1]
 
 
+def _distance(uv: np.ndarray, wall_uv: np.ndarray) -> np.ndarray:
+    """|U − U_w| + |V − V_w| (uint8, saturating at 255) of (h, w, 2) chroma planes."""
+    ad = cv2.absdiff(uv, wall_uv)
+    return cv2.add(ad[..., 0], ad[..., 1])
+
+
 def _chroma(frame) -> np.ndarray:
     """The frame's U and V planes stacked (h/2, w/2, 2) uint8; empty where the frame carries no 4:2:0 colour."""
     planes = chroma_planes(frame)
@@ -72,16 +78,15 @@ class ColourView:
     """A decoded frame → its colour view P (module docstring), uint8 (height, width)."""
 
     def __init__(self, wall_uv: np.ndarray, gain: float, dead_zone: int):
-        self.wall_u, self.wall_v = np.ascontiguousarray(wall_uv[..., 0]), np.ascontiguousarray(wall_uv[..., 1])
+        self.wall = wall_uv
         self.gain, self.dead_zone = float(gain), int(dead_zone)
         self.key = ("colour", round(self.gain, 6), self.dead_zone)
 
     def __call__(self, frame) -> np.ndarray:
         planes = chroma_planes(frame)
-        if planes is None or planes[0].shape != self.wall_u.shape:
+        if planes is None or planes[0].shape != self.wall.shape[:2]:
             raise VideoError("a frame without the clip's colour planes: no colour view")
-        u, v = planes
-        difference = cv2.subtract(cv2.add(cv2.absdiff(u, self.wall_u), cv2.absdiff(v, self.wall_v)), self.dead_zone)
+        difference = cv2.subtract(_distance(np.dstack(planes), self.wall), self.dead_zone)
         shown = cv2.bitwise_not(cv2.convertScaleAbs(difference, alpha=self.gain))
         flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
         size = (int(frame.width), int(frame.height))
@@ -103,9 +108,8 @@ def colour_view(path, luma_track: pd.DataFrame | None) -> tuple[ColourView | Non
     if int(first.max()) - int(first.min()) <= GREY_SPREAD:
         return None, {"colour": "the video's first frame has no colour"}
     samples = spread_frames(path, SCENE_SAMPLES, view=_chroma)[0]
-    stack = np.stack([uv for _, uv in samples])
-    wall = np.round(np.median(stack, axis=0)).astype(np.uint8)
-    difference = np.abs(stack.astype(np.int16) - wall).sum(axis=-1)
+    wall = np.round(np.median(np.stack([uv for _, uv in samples]), axis=0)).astype(np.uint8)
+    difference = np.stack([_distance(uv, wall) for _, uv in samples])  # uint8, saturating
     noise = max(float(difference.mean()), 0.5)
     contrasts = [] if luma_track is None else _body_contrasts(samples, difference, luma_track)
     if not contrasts:  # no brightness track to say where the body is: each sample's most coloured 3 × 3 patch
