@@ -245,14 +245,18 @@ def test_the_tracking_table_keeps_a_clean_trial_quiet_and_notes_a_phone_file(gar
     html = garbage.tracking_section()
     clean = re.search(r'<tr data-trial="t20">(.*?)</tr>', html).group(1)
     assert '<td class="num">30.00</td>' in clean and clean.endswith(
-        '<td class="warncell notes" style="max-width:22em;min-width:11em;overflow-wrap:anywhere"></td>'
+        '<td class="warncell notes" style="max-width:26em;min-width:14em;overflow-wrap:anywhere"></td>'
     )
     phone = _row(html, trial="t10")
     assert 'data-trial="t10" data-notes="6"' in html  # garbage in + five frame notes
     assert '<td class="num">29.97 <span class="warn">variable</span></td>' in phone
     assert '<td class="num">1844</td>' in phone and "trimmed clip: 213 packet(s)" in phone
-    assert "</span> fitted rest angle −12.0° from the vertical (more than 2°)<br>trimmed clip: 213 packet(s)" in phone
-    assert phone.count("<br>") == 5  # one note a line, the fit's verdict first
+    note = '</div><div style="margin:0 0 0.5em">'
+    assert (
+        "</span> fitted rest angle −12.0° from the vertical (more than 2°)" + note + "trimmed clip: 213 packet(s)"
+        in phone
+    )
+    assert phone.count(note) == 5  # six notes, each its own, the fit's verdict first
 
 
 @pytest.mark.slow
@@ -263,6 +267,32 @@ def test_the_consistency_figure_leaves_out_fits_on_unreliable_records_and_says_w
     assert "Not plotted" not in _report(tmp_path / "clean", garbage=False).consistency_figure()
 
 
+def test_the_tracking_table_says_briefly_how_a_body_was_tracked():
+    """The note says how and in how many frames, and what the marker gave; the full reason is its tooltip."""
+    from pendulum.report.checks import method_note
+
+    reason = "the marker disk is usable in 53.3 % of the frames; the body's silhouette is usable in 93.5 % ..."
+    tried = {
+        "marker": "usable in under 95 % of the frames: detection's disk-like spot (dark, radius 9.9 px) was not ...",
+        "body": "usable in 93.5 % of the frames",
+        "body_by_colour": "usable in 99.7 % of the frames",
+    }
+    method = {"used": "body", "reason": reason, "tried": tried}
+    assert method_note(method, {"view": "colour"}) == (
+        "tracked the body itself by its colour, usable in 99.7 % of the frames; its brightness silhouette usable in "
+        "93.5 % of the frames, changing with the wall; a marker disk usable in under 95 % of the frames"
+    )
+    assert method_note(method, {}) == (
+        "tracked the body itself by its silhouette, usable in 93.5 % of the frames; a marker disk usable in under "
+        "95 % of the frames"
+    )
+    failed = {**method, "tried": {**tried, "marker": "failed: no marker found", "body": "failed: two objects"}}
+    assert method_note(failed, {"view": "colour"}) == (
+        "tracked the body itself by its colour, usable in 99.7 % of the frames; its brightness silhouette could not "
+        "be followed; a marker disk could not be found"
+    )
+
+
 def test_the_tracking_table_says_whether_the_marker_was_detected_or_given():
     from pendulum.report.checks import marker_text
 
@@ -271,11 +301,13 @@ def test_the_tracking_table_says_whether_the_marker_was_detected_or_given():
     assert marker_text(given) == "bright, r 12.0 px, given"
     assert marker_text(found) == "dark, r 6.0 px, detected"
     assert marker_text({"status": "ok", "flags": {"ok": 660}}) == "—"  # a track from before the field existed
+    colour = {"method": {"used": "body", "reason": "..."}, "body": {"radius_px": 14.5, "view": "colour"}}
+    assert marker_text(colour) == "body by colour, r 14.5 px, auto"
 
 
 def test_the_tracking_table_says_a_body_was_tracked_and_its_warning(tmp_path):
     """A trial whose body was tracked: the reason, and the body's warning (a silhouette that changes with the wall
-    behind it), each on its own line of the notes."""
+    behind it), each a note of its own."""
     report = _report(tmp_path, garbage=False)
     warning = (
         "the body's silhouette is 20 % smaller mid-swing than at the ends of its swing, with the scene there clear"
@@ -289,5 +321,6 @@ def test_the_tracking_table_says_a_body_was_tracked_and_its_warning(tmp_path):
     Path(report.files["trials"]["t10"]["tracks"]).write_text(json.dumps(body))
     report.__post_init__()  # the documents read again
     row = _row(report.tracking_section(), trial="t10")
-    assert "tracked the body: no marker disk in the video<br>" + warning.replace("'", "&#x27;") in row
+    assert ">tracked the body: no marker disk in the video</span></div><div" in row
+    assert ">" + warning.replace("'", "&#x27;") + "</div>" in row
     assert "body, r 14.1 px, auto" in row

@@ -21,9 +21,14 @@ from pendulum.report.format import (
 )
 from pendulum.tracking.timing import slip_sentence
 
-NOTES_STYLE = "max-width:22em;min-width:11em;overflow-wrap:anywhere"  # one note a line; the table within the page
+NOTES_STYLE = "max-width:26em;min-width:14em;overflow-wrap:anywhere"  # one note a line; the table within the page
 # Frames-stage warnings that :func:`frame_notes` says in its own words (video.probe's sentences).
 _NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
+
+
+def _note(html: str) -> str:
+    """One note of the tracking table, set apart from the next."""
+    return f'<div style="margin:0 0 0.5em">{html}</div>'
 
 
 def marker_text(tracks: dict) -> str:
@@ -31,9 +36,10 @@ def marker_text(tracks: dict) -> str:
     them (``detection`` present: config and sidecar left polarity or radius to it) or they were given."""
     method = tracks.get("method") or {}
     if method.get("used") == "body":
-        radius = (tracks.get("body") or {}).get("radius_px")
+        body = tracks.get("body") or {}
+        radius = body.get("radius_px")
         size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
-        return f"body{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto")
+        return f"body{' by colour' if body.get('view') == 'colour' else ''}{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto")
     marker = tracks.get("marker") or {}
     if not marker:
         return "—"
@@ -70,6 +76,26 @@ def frame_notes(frames: dict) -> list[str]:
         if not any(k in warning for k in _NOTED):
             notes.append(warning.removeprefix(prefix))
     return notes
+
+
+def method_note(method: dict, body: dict) -> str:
+    """The tracking table's note for a body tracked without a marker: how, in how many frames, and what the
+    marker gave (the method's full reason is the note's tooltip and in the tracks JSON)."""
+    tried = method.get("tried") or {}
+    if not tried:  # forced, or a track from before ``tried`` existed
+        return f"tracked the body: {method.get('reason', '')}"
+    colour = body.get("view") == "colour"
+    usable = tried.get("body_by_colour" if colour else "body", "")
+    note = f"tracked the body itself by its {'colour' if colour else 'silhouette'}, {usable}"
+    if colour:
+        brightness = tried.get("body", "")
+        note += "; its brightness silhouette " + (
+            "could not be followed" if brightness.startswith("failed") else f"{brightness}, changing with the wall"
+        )
+    marker = tried.get("marker", "")
+    if marker:
+        note += "; a marker disk " + ("could not be found" if marker.startswith("failed") else marker.split(":")[0])
+    return note
 
 
 def period_text(angles: dict) -> str:
@@ -319,7 +345,8 @@ class CheckSections(ReportData):
             notes = [esc(n) for n in frame_notes(frames)] if kind == "video" and is_ok(frames) else []
             method = (tracks or {}).get("method") or {}
             if kind == "video" and is_ok(tracks) and method.get("used") == "body":
-                notes.append(esc(f"tracked the body: {method.get('reason', '')}"))
+                short = method_note(method, (tracks or {}).get("body") or {})
+                notes.append(f'<span title="{esc(method.get("reason", ""))}">{esc(short)}</span>')
                 if ((tracks or {}).get("body") or {}).get("warning"):
                     notes.append(esc(tracks["body"]["warning"]))
             if kind == "video" and is_ok(tracks) and slip_sentence((tracks or {}).get("timing") or {}):
@@ -334,7 +361,7 @@ class CheckSections(ReportData):
                 + frame_cells
                 + [marker_cell, flag_cell]
                 + angle_cells
-                + [fitted, f'<td class="warncell notes" style="{NOTES_STYLE}">' + "<br>".join(notes) + "</td>"]
+                + [fitted, f'<td class="warncell notes" style="{NOTES_STYLE}">' + "".join(map(_note, notes)) + "</td>"]
             )
             attrs.append({"data-trial": trial, **({"data-notes": str(len(notes))} if notes else {})})
             files = self.files.get("trials", {}).get(trial, {})
