@@ -39,7 +39,8 @@ def marker_text(tracks: dict) -> str:
         body = tracks.get("body") or {}
         radius = body.get("radius_px")
         size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
-        return f"body{' by colour' if body.get('view') == 'colour' else ''}{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto")
+        how = " by colour" if body.get("view") == "colour" else ""
+        return f"body{how}{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto")
     marker = tracks.get("marker") or {}
     if not marker:
         return "—"
