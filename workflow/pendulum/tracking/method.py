@@ -17,7 +17,7 @@ import pandas as pd
 
 from pendulum.camera.video import VideoError
 from pendulum.tracking import samples
-from pendulum.tracking.body import track_body
+from pendulum.tracking.body import BodyError, track_body
 from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.settings import TrackerSettings
@@ -89,8 +89,10 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         body = _by_colour(path, settings, body, tried, progress)
     except VideoError as error:
         tried["body"] = f"failed: {error}"
-        body, facts = track_by_colour(path, settings, None, progress)  # its colour, where its brightness fails
-        tried["body_by_colour"] = facts.get("colour", "") if body is None else _usable(body)
+        body = None
+        if not isinstance(error, BodyError):  # too few frames usable, not a refusal (two bodies, not a pendulum)
+            body, facts = track_by_colour(path, settings, None, progress)  # its colour, where its brightness fails
+            tried["body_by_colour"] = facts.get("colour", "") if body is None else _usable(body)
     if body is None:
         if stopped is not None:  # the whole marker pass after all: its record, or why there is none
             marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
@@ -104,6 +106,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         raise VideoError(
             f"{path}: neither a marker disk nor the body could be followed. Marker: {tried['marker'][8:]} "
             f"Body: {tried['body'][8:]}"
+            + (f" By its colour: {tried['body_by_colour']}" if "body_by_colour" in tried else "")
         )
     body_fraction = usable_fraction(body)
     if stopped is not None and stopped.most_usable >= body_fraction:  # the marker might do as well: its whole pass
@@ -130,7 +133,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
 
 def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict, progress=None) -> pd.DataFrame:
     """The body's track in the clip's colour view (:mod:`pendulum.tracking.colour`) where its brightness
-    silhouette changes with the wall behind it and the colour view is usable in at least as many frames, with no
+    silhouette changes with the wall behind it and the colour view is usable in more frames, with no
     warning or one of a smaller change between the swing's middle and its ends; else ``body``. What the colour
     view gave goes into ``tried`` as ``body_by_colour``."""
     if not brightness_depends_on_wall(body):
@@ -140,17 +143,17 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
         tried["body_by_colour"] = facts.get("colour", "not taken")
         return body
     tried["body_by_colour"] = _usable(colour)
-    milder = not colour.attrs["body"].get("warning") or _wall_change(colour) <= _wall_change(body)
-    if usable_fraction(colour) >= usable_fraction(body) and milder:
+    milder = not colour.attrs["body"].get("warning") or _wall_change(colour, math.inf) <= _wall_change(body)
+    if usable_fraction(colour) > usable_fraction(body) and milder:
         colour.attrs["body"]["brightness"] = {"usable": tried["body"], "warning": body.attrs["body"].get("warning")}
         return colour
     return body
 
 
-def _wall_change(track: pd.DataFrame) -> float:
-    """How far the silhouette's area mid-swing departs from its area at the swing's ends, |ln ratio| (0 unknown)."""
+def _wall_change(track: pd.DataFrame, unknown: float = 0.0) -> float:
+    """How far the silhouette's area mid-swing departs from its area at the swing's ends, |ln ratio|."""
     ratio = track.attrs.get("body", {}).get("mid_swing_area_ratio")
-    return abs(math.log(ratio)) if ratio else 0.0
+    return abs(math.log(ratio)) if ratio else unknown
 
 
 def _silhouette(tried: dict) -> str:
