@@ -273,14 +273,20 @@ def luma(frame) -> np.ndarray:
 
     A 9–16-bit plane (10-bit HEVC, ``yuv420p10le``: 16-bit words) is reduced to its top 8 bits (a copy).
     """
-    plane = frame.planes[0]
-    bits = int(frame.format.components[0].bits)
+    return plane_8bit(frame, 0)
+
+
+def plane_8bit(frame, index: int) -> np.ndarray:
+    """Plane ``index`` of a planar frame as a (plane height, plane width) uint8 view; a 9–16-bit plane reduced to
+    its top 8 bits (a copy)."""
+    plane = frame.planes[index]
+    bits = int(frame.format.components[index].bits)
     if bits > 8:
         dtype = ">u2" if frame.format.name.endswith("be") else "<u2"
-        rows = np.frombuffer(plane, dtype).reshape(frame.height, plane.line_size // 2)
-        return (rows[:, : frame.width] >> (bits - 8)).astype(np.uint8)
-    rows = np.frombuffer(plane, np.uint8).reshape(frame.height, plane.line_size)
-    return rows[:, : frame.width]
+        rows = np.frombuffer(plane, dtype).reshape(plane.height, plane.line_size // 2)
+        return (rows[:, : plane.width] >> (bits - 8)).astype(np.uint8)
+    rows = np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)
+    return rows[:, : plane.width]
 
 
 def _decoder_threads(threads: int | None) -> int | None:

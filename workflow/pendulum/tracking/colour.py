@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 import pandas as pd
 
-from pendulum.camera.video import VideoError, iter_luma
+from pendulum.camera.video import VideoError, iter_luma, plane_8bit
 from pendulum.tracking.body import SCENE_SAMPLES, track_body
 from pendulum.tracking.samples import spread_frames
 from pendulum.tracking.settings import TrackerSettings
@@ -45,19 +45,9 @@ _TO_CHROMA = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, -0.25]])
 def chroma_planes(frame) -> tuple[np.ndarray, np.ndarray] | None:
     """The U and V planes of a planar 4:2:0 frame (``yuv420p``, ``yuvj420p``, their 9–16-bit forms reduced to
     the top 8 bits), each (⌈height/2⌉, ⌈width/2⌉) uint8; None for any other format (grey, 4:2:2, RGB, …)."""
-    fmt = frame.format
-    if not fmt.name.startswith(("yuv420p", "yuvj420p")) or len(frame.planes) < 3:
+    if not frame.format.name.startswith(("yuv420p", "yuvj420p")) or len(frame.planes) < 3:
         return None
-    bits = int(fmt.components[1].bits)
-    out = []
-    for plane in frame.planes[1:3]:
-        if bits > 8:
-            dtype = ">u2" if fmt.name.endswith("be") else "<u2"
-            rows = np.frombuffer(plane, dtype).reshape(plane.height, plane.line_size // 2)
-            out.append((rows[:, : plane.width] >> (bits - 8)).astype(np.uint8))
-        else:
-            out.append(np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)[:, : plane.width])
-    return out[0], out[1]
+    return plane_8bit(frame, 1), plane_8bit(frame, 2)
 
 
 def _distance(uv: np.ndarray, wall_uv: np.ndarray) -> np.ndarray:

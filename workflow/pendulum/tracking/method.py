@@ -53,7 +53,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
     if method == "body":
         tried = {}
         track = track_body(path, settings, progress=progress)
-        tried["body"] = f"usable in {100 * usable_fraction(track):.1f} % of the frames"
+        tried["body"] = _usable(track)
         track = _by_colour(path, settings, track, tried, progress)
         track.attrs["method"] = {
             "used": "body",
@@ -85,7 +85,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         progress(f"{path}: marker {tried['marker']}; tracking the swinging body itself")
     try:
         body = track_body(path, settings, progress=progress)
-        tried["body"] = f"usable in {100 * usable_fraction(body):.1f} % of the frames"
+        tried["body"] = _usable(body)
         body = _by_colour(path, settings, body, tried, progress)
     except VideoError as error:
         tried["body"] = f"failed: {error}"
@@ -202,4 +202,4 @@ def _whole_marker_pass(
             marker = track_video(path, settings, progress=progress)
     except VideoError as error:
         return None, f"failed: {error}"
-    return marker, f"usable in {100 * usable_fraction(marker):.1f} % of the frames"
+    return marker, _usable(marker)
