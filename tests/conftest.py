@@ -157,10 +157,12 @@ def demo_project(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def small_build(tmp_path_factory):
-    """One demo video, one variant, built (``workflow_run.small_project``): every rule in few jobs, the bytes the
-    cluster-profile and interrupted-run tests must reproduce from their own copies of the project. Never changed."""
-    from workflow_run import run, small_project
+    """One demo video, one variant and two unreadable videos, built (``workflow_run.small_project``): every rule
+    in few jobs, the bytes the cluster-profile and interrupted-run tests must reproduce from their own copies of
+    the project, and the two failures the bad-input test looks at. Its results are never changed."""
+    from workflow_run import Build, digest, run, small_project
 
     work = small_project(tmp_path_factory.mktemp("small_build"))
-    run(["-c2"], work)
-    return work
+    raw_before = digest(work / "data" / "raw", ("*",))
+    proc = run(["-c2"], work, check=False)
+    return Build(work, proc.returncode, proc.stdout + proc.stderr, raw_before)

@@ -8,11 +8,13 @@ from workflow_run import digest, run, small_project
 
 
 def test_local_cluster_profile_gives_the_local_runs_bytes(tmp_path, small_build):
+    """Also where trials fail: the same failed documents, the others built, the end non-zero."""
     cluster = small_project(tmp_path / "cluster")
-    proc = run(["--profile", "profiles/local-cluster"], cluster)
+    proc = run(["--profile", "profiles/local-cluster"], cluster, check=False)
     assert "Submitted job" in proc.stdout + proc.stderr, "jobs did not go through the cluster executor"
+    assert proc.returncode != 0 and small_build.returncode != 0, "the two failed trials must end the build non-zero"
     produced = digest(cluster / "results")
-    assert len(produced) > 10 and produced == digest(small_build / "results")
+    assert len(produced) > 10 and produced == digest(small_build.work / "results")
     shutil.rmtree(cluster / ".snakemake", ignore_errors=True)
 
 

@@ -5,6 +5,7 @@ import re
 import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 from conftest import DEMO_RAW, DEMO_TRUTH, ROOT
@@ -49,9 +50,29 @@ def one_variant(work: Path, variant: str = "quadratic", terms=("quadratic_drag",
     return work
 
 
+@dataclass(frozen=True)
+class Build:
+    """A project built once for several tests: its folder, Snakemake's exit code and output, and the digest of
+    its data/raw before the build."""
+
+    work: Path
+    returncode: int
+    output: str
+    raw_before: dict
+
+
+BAD_VIDEOS = {"truncated": "truncated MP4", "fake": "not a video"}  # trial → what its failure must say
+
+
 def small_project(work: Path) -> Path:
-    """One demo video (demo_p20), one variant: every rule of the workflow in few jobs."""
-    return one_variant(copy_project(work, raw_files=[DEMO_RAW / "demo_p20.mp4"]))
+    """One demo video (demo_p20), one variant, and two videos that cannot be read (``truncated.mp4``, the demo
+    video's first 300 kB; ``fake.mp4``, a text file): every rule of the workflow in few jobs, and two trials that
+    fail (the build ends non-zero, at its last step)."""
+    work = one_variant(copy_project(work, raw_files=[DEMO_RAW / "demo_p20.mp4"]))
+    raw = work / "data" / "raw"
+    (raw / "truncated.mp4").write_bytes((DEMO_RAW / "demo_p20.mp4").read_bytes()[:300_000])
+    (raw / "fake.mp4").write_text("this is a text file, not a video\n")
+    return work
 
 
 def planned_wildcards(dry_run_output: str) -> list[tuple[str, dict]]:

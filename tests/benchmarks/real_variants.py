@@ -222,6 +222,21 @@ def _two_tone(frames: list, behind: list | None = None, shares: list | None = No
     return out
 
 
+_MEMO: dict = {}  # what variants share within one process (tests that share it run on one worker)
+
+
+def _two_tone_before_band(frames: list, shares: list | None, last: int | None) -> list:
+    """The two-tone ball before the band (its luma, as the grey variants and the colour ones have it): made once
+    per process from the clip's luma ``frames`` (its first ``last``), with ``shares`` of apple if measured."""
+    key = ("two_tone_before_band", last)
+    if key not in _MEMO:
+        if shares is None:
+            wall = _wall(frames)
+            shares = [_apple_share(image, wall) for image in frames]  # measured once, for both
+        _MEMO[key] = _two_tone(frames, _shadow_band(frames, shares), shares)
+    return _MEMO[key]
+
+
 def _colour_planes(last: int | None = None) -> tuple[list, list, list]:
     """The clip's frames as they were filmed, in colour: their Y, U and V planes (4:2:0), uint8."""
     import av
@@ -256,7 +271,7 @@ def _in_colour(name: str, last: int | None = None) -> list:
     gain_c = cv2.resize(gain.astype(np.float32), small, interpolation=cv2.INTER_AREA)
     walls_c = [_wall(planes) for planes in (us, vs)]
     if name.startswith("two_tone"):
-        luma = _two_tone(ys, _shadow_band(ys, shares), shares)
+        luma = _two_tone_before_band(ys, shares, last)
     else:
         luma = _shadow_band(ys, shares)
     rows_c = np.arange(h // 2)[:, None]
@@ -365,9 +380,7 @@ def make(name: str, workdir: Path) -> Path:
     if name == "two_tone":
         frames = _two_tone(frames)
     if name.startswith("two_tone_shadow_band"):  # the band on the wall, the ball before it lit as outside it
-        wall = _wall(frames)
-        shares = [_apple_share(image, wall) for image in frames]  # measured once, for both
-        frames = _two_tone(frames, _shadow_band(frames, shares), shares)
+        frames = _two_tone_before_band(frames, None, last)
     if name == "glossy":
         frames = _glossy(frames)
     if name.endswith("_1080p"):
