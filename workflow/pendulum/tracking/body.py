@@ -99,8 +99,8 @@ SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the prev
 NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
 CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft shadow stays below)
 FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
-AREA_SIGMAS = 6.0
-MIN_AREA_CHANGE = 0.10  # the covered area must also change by this fraction to be a fault
+AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
+MAX_AREA_RATIO = 1.5  # above this times its median the silhouette holds more than the body (a hand holding it)
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px
 CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
@@ -476,7 +476,8 @@ def track_body(
         CENTROID_SIGMAS,
         max(0.3, MIN_CENTROID_DISAGREEMENT * scene.radius_px),
     )
-    flags[area_fault | centroid_fault] = "occluded"
+    merged = usable & (mass / reference > MAX_AREA_RATIO)  # for seconds, as a hand before the release: no outlier
+    flags[area_fault | centroid_fault | merged] = "occluded"
     usable = flags == "ok"
     jumps = flag_jumps(x, y, usable, settings)
     flags[jumps & usable] = "jump"
