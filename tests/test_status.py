@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot
+from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot, trial_geometry
 from pendulum.fit.uncertainty import jacobian_rank_warnings
 from pendulum.status import (
     UpstreamFailed,
@@ -108,6 +108,32 @@ def test_a_track_from_a_moved_camera_is_left_out_of_the_pooled_pivot(seed):
     # a later trial filmed from the moved camera cannot use the rig's pivot either; a good one can
     assert "off the rig's pivot circle" in off_rig_circle(tracks["moved"], geometry)
     assert off_rig_circle(arc_track(PIVOT, 520, 40, seed=99), geometry) is None
+    # its angles use its own pivot instead (not a refusal), and say so; the others the rig's
+    assert geometry["shared"]
+    own, why = trial_geometry(tracks["moved"], geometry, vertical_deg=0.0)
+    assert "off the rig's pivot circle" in why and "its own track" in why
+    assert np.hypot(own["pivot_px"][0] - PIVOT[0] - 6, own["pivot_px"][1] - PIVOT[1] + 4) < 3.0
+    rig, why = trial_geometry(tracks["good1"], geometry, vertical_deg=0.0)
+    assert why is None and rig["pivot_px"] == geometry["pivot_px"]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_clips_filmed_from_different_places_do_not_share_a_pivot(seed):
+    """Clips of one rig from different camera placements (pivots apart, arms at other scales): none lies
+    farther off the pooled circle than the rest, so no vote leaves one out, and before 2026-11-28 every
+    trial used that circle's centre, no pivot at all. Now the rig says its trials share none and each
+    trial's angles use its own pivot, found within a few px."""
+    pivots = [(640.0, 80.0), (300.0, -200.0), (900.0, 40.0)]
+    tracks = {
+        f"clip{k}": arc_track(p, r, a, seed=10 * seed + k)
+        for k, (p, r, a) in enumerate(zip(pivots, (520, 300, 700), (20, 30, 15), strict=True))
+    }
+    geometry = estimate_rig_geometry(tracks, vertical_deg=0.0)
+    assert not geometry["shared"] and "do not share one pivot" in geometry["warnings"][0], geometry["warnings"]
+    for (name, track), pivot in zip(tracks.items(), pivots, strict=True):
+        own, why = trial_geometry(track, geometry, vertical_deg=0.0)
+        assert "do not share one pivot" in why
+        assert np.hypot(own["pivot_px"][0] - pivot[0], own["pivot_px"][1] - pivot[1]) < 3.0, (name, own)
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -116,6 +142,7 @@ def test_good_tracks_are_never_left_out(seed):
     circle, rejected = pooled_pivot(tracks)
     assert rejected == {}
     assert np.hypot(circle.pivot_x_px - PIVOT[0], circle.pivot_y_px - PIVOT[1]) < 0.5
+    assert estimate_rig_geometry(tracks, vertical_deg=0.0)["shared"]
 
 
 def test_two_tracks_are_pooled_without_a_vote():

@@ -6,7 +6,7 @@ from pathlib import Path
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle
+from pendulum.angles.geometry import estimate_rig_geometry, trial_geometry
 from pendulum.angles.record import angles_from_track, angles_from_tracker_csv, read_tracker_csv
 from pendulum.camera.view import ImageToPlane, map_point, map_track
 from pendulum.io import script_logger, write_csv, write_json
@@ -50,10 +50,12 @@ def work():
             geometry = require_ok(read_json(sm.input.geometry), "geometry")
             warnings += [f"rig geometry: {w}" for w in geometry.get("warnings", [])]
             if pivot is None:
-                problem = off_rig_circle(track, geometry)
-                if problem:
-                    raise ValueError(f"{sm.input.track}: {problem}")
-                pivot, pivot_cov = geometry["pivot_px"], geometry.get("pivot_covariance_px2")
+                used, own = trial_geometry(track, geometry, vertical)
+                pivot, pivot_cov, vertical = used["pivot_px"], used["pivot_covariance_px2"], used["vertical_deg"]
+                for warning in [own, *used["warnings"]] if own else []:
+                    log.warning("trial %s: %s", trial, warning)
+                    notes.append(warning)
+                    warnings.append(warning)
             vertical = vertical if vertical is not None else geometry["vertical_deg"]
         if vertical is None:  # the trial's own pivot (sidecar), no vertical: from its own swings
             own = estimate_rig_geometry({trial: track}, pivot_px=pivot)

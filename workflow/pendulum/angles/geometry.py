@@ -182,25 +182,69 @@ def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, 
             break
         rejected[worst] = (
             f"its marker path is {off:.2f} px RMS off the circle through the other {len(others)} trials' paths "
-            f"(limit {limit:.2f} px): camera moved or wrong object tracked? Give its pivot_px in a sidecar"
+            f"(limit {limit:.2f} px): {ELSEWHERE}"
         )
         kept, circle = others, reference
     return circle, rejected
 
 
+ELSEWHERE = "the camera moved between trials, or they were filmed from different places (one rig per camera placement)"
+
+
+def unshared_pivot(tracks: dict[str, pd.DataFrame], circle: CircleFit) -> str | None:
+    """Why the tracks do not share one pivot, or None: their pooled circle's RMS is more than
+    OUTLIER_TRACK_FACTOR × the median of each track's RMS off its own circle (and > OUTLIER_TRACK_FLOOR_PX).
+
+    Two tracks leave no majority to tell which one moved (:func:`pooled_pivot`), and tracks from unrelated
+    clips all lie far off any one circle, none farther than the rest: their pooled circle is no pivot at all
+    (four copies of one real track, scaled, rotated and at 3×, as four clips of one rig: 97 px RMS, no track
+    left out, before 2026-11-28 the pivot every one of them used).
+    """
+    if len(tracks) < 2:
+        return None
+    own = [_radial_rms_px(t, _pooled_circle({n: t})) for n, t in sorted(tracks.items())]
+    own_px = float(np.median([v for v in own if math.isfinite(v)] or [math.inf]))
+    limit = max(OUTLIER_TRACK_FACTOR * own_px, OUTLIER_TRACK_FLOOR_PX)
+    if not circle.rms_px > limit:
+        return None
+    return (
+        f"the paths of its {len(tracks)} trials do not share one pivot: {circle.rms_px:.2f} px RMS off their pooled "
+        f"circle, each {own_px:.2f} px RMS (median) off its own (limit {limit:.2f} px): {ELSEWHERE}"
+    )
+
+
 def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
-    """Why a track cannot use its rig's pooled pivot (its path is off the rig's circle), or None."""
+    """Why a track cannot use its rig's pooled pivot (its path is off the rig's circle, or the rig's trials
+    share none), or None."""
+    if geometry.get("shared") is False:
+        return "its rig's trials do not share one pivot"
     circle = geometry.get("circle")
     if not circle:
         return None
     off = _radial_rms_px(track, CircleFit(**circle))
     limit = max(OUTLIER_TRACK_FACTOR * circle["rms_px"], OUTLIER_TRACK_FLOOR_PX)
     if off > limit:
-        return (
-            f"the marker path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): "
-            "camera moved or wrong object tracked? Give this trial's pivot_px in a sidecar"
-        )
+        return f"the marker path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): {ELSEWHERE}"
     return None
+
+
+def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None) -> tuple[dict, str | None]:
+    """The pivot and vertical one trial's angles use: its rig's pooled ones (``geometry``), or, where its path is
+    off the rig's circle (:func:`off_rig_circle`), its own (:func:`estimate_rig_geometry` of this track alone;
+    ``vertical_deg`` given is kept). Returns ``{pivot_px, pivot_covariance_px2, vertical_deg, warnings}`` and
+    why its own was used (None when the rig's)."""
+    problem = off_rig_circle(track, geometry)
+    if problem is None:
+        vertical = vertical_deg if vertical_deg is not None else geometry["vertical_deg"]
+        return {
+            "pivot_px": geometry["pivot_px"],
+            "pivot_covariance_px2": geometry.get("pivot_covariance_px2"),
+            "vertical_deg": vertical,
+            "warnings": [],
+        }, None
+    own = estimate_rig_geometry({"trial": track}, vertical_deg=vertical_deg)
+    what = "pivot" if vertical_deg is not None else "pivot and vertical"
+    return own, f"{problem}: its {what} estimated from its own track instead"
 
 
 def pivot_uncertainty(pivot_covariance_px2, radius_px: float, vertical_deg: float) -> dict:
@@ -238,6 +282,10 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         tracks = {k: v for k, v in tracks.items() if k not in rejected}
         pivot_px = [circle.pivot_x_px, circle.pivot_y_px]
         result["rejected_trials"] = rejected
+        unshared = unshared_pivot(tracks, circle)
+        result["shared"] = unshared is None
+        if unshared:
+            result["warnings"].append(f"{unshared}; each trial's pivot is estimated from its own track")
         result["pivot_source"] = f"estimated: circle fitted to the pooled marker paths of {len(tracks)} trial(s)"
         result["circle"] = asdict(circle)
         result["pivot_covariance_px2"] = circle.pivot_covariance_px2

@@ -158,6 +158,11 @@ class TableSections(ReportData):
 
     def estimated_geometry_text(self, rig: str, key: str) -> str:
         """The pivot (± standard errors) or vertical a rig's angle records used when config gave none."""
+        used = {
+            str(self.docs[(t, "angles")].get(key)) for t in self.rig_trials(rig) if is_ok(self.docs.get((t, "angles")))
+        }
+        if len(used - {"None"}) > 1:  # its trials do not share one pivot: each its own (their angles' notes say why)
+            return "not one for all trials: a trial whose path is off the rig's circle has its own (its notes say so)"
         for trial in self.rig_trials(rig):
             angles = self.docs.get((trial, "angles"))
             if not is_ok(angles) or angles.get(key) is None:
