@@ -16,6 +16,7 @@ from types import SimpleNamespace
 import av
 import cv2
 import numpy as np
+import pandas as pd
 import pytest
 
 from conftest import ROOT
@@ -150,6 +151,24 @@ def test_rotation_metadata_is_reported_and_frames_used_as_stored(tmp_path):
     assert any("used as stored (128×96)" in w and "pivot_px" in w for w in info.warnings)
     _, _, first = next(iter(iter_luma(tmp_path / "portrait.mp4")))
     assert first.shape == (96, 128) and np.abs(first[20:40, 12:28] - limited_range(200)).max() < 3
+
+
+def test_a_picture_stored_on_its_side_turns_the_vertical_given_with_it():
+    """A phone held upright stores its picture on its side and says by how much players must turn it: where the
+    swing hangs ±90° from the vertical given (0°, config's), the vertical is taken turned with the picture,
+    whichever sign the file's rotation has; never where the given one fits the swing, or no turn does. Checked
+    on the real apple clip turned on its side with a display rotation of 90° (docs/footage.md): before
+    2026-11-28 its angles stage refused it (the swing hangs −90°), now its record's period is 2.0779 s."""
+    from pendulum.angles.record import vertical_turned_with_the_picture
+
+    angle = np.radians(-90 + 20 * np.sin(np.linspace(0, 20, 400)))  # hangs at −90° in the image
+    track = pd.DataFrame({"x_px": 300 + 500 * np.sin(angle), "y_px": 50 + 500 * np.cos(angle), "flag": "ok"})
+    pivot = (300.0, 50.0)
+    assert vertical_turned_with_the_picture(track, pivot, 0.0, 90.0) == pytest.approx(-90.0)
+    assert vertical_turned_with_the_picture(track, pivot, 0.0, -90.0) == pytest.approx(-90.0)
+    assert vertical_turned_with_the_picture(track, pivot, 0.0, 0.0) is None  # no rotation stated: refused later
+    assert vertical_turned_with_the_picture(track, pivot, -88.0, 90.0) is None  # the vertical given fits
+    assert vertical_turned_with_the_picture(track, pivot, 0.0, 180.0) is None  # no turn brings it near the swing
 
 
 def test_ten_bit_hevc_gives_eight_bit_luma(tmp_path):

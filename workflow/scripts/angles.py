@@ -7,7 +7,12 @@ import pandas as pd
 
 import _setup  # noqa: F401
 from pendulum.angles.geometry import estimate_rig_geometry, trial_geometry
-from pendulum.angles.record import angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.angles.record import (
+    angles_from_track,
+    angles_from_tracker_csv,
+    read_tracker_csv,
+    vertical_turned_with_the_picture,
+)
 from pendulum.camera.view import ImageToPlane, map_point, map_track
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
@@ -65,6 +70,17 @@ def work():
                 log.warning("trial %s: %s", trial, warning)
                 notes.append(warning)
                 warnings.append(warning)
+        turned = vertical_turned_with_the_picture(track, pivot, vertical, track_summary.get("rotation_deg") or 0.0)
+        if turned is not None:  # a phone held upright: its picture stored turned, and the file says so
+            warning = (
+                f"the swing hangs near {turned:+.0f}° in the stored frames, not at the vertical given "
+                f"({vertical:g}°): the file asks players to turn its picture by {track_summary['rotation_deg']:g}°, "
+                f"so the vertical given is taken as turned with it, {turned:g}° in the stored frames"
+            )
+            log.warning("trial %s: %s", trial, warning)
+            notes.append(warning)
+            warnings.append(warning)
+            vertical = turned
         table, info = angles_from_track(
             track,
             pivot_px=pivot,

@@ -134,6 +134,28 @@ def angle_record(
     return table, info
 
 
+def vertical_turned_with_the_picture(track: pd.DataFrame, pivot_px, vertical_deg: float, rotation_deg: float):
+    """The vertical given, turned by the file's display rotation (a phone held upright stores its picture on its
+    side and asks players to turn it): ``vertical_deg ± rotation_deg`` whichever the swing hangs within
+    MAX_HANG_DEG of, where it hangs further than that from the vertical given; else None (the vertical given
+    fits the swing, or neither turn does: :func:`angles_from_track` then says where it hangs)."""
+    if not rotation_deg or len(pivot_px) != 2:
+        return None
+    ok = (track.flag == "ok").to_numpy()
+    x, y = (pd.to_numeric(track[c], errors="coerce").to_numpy(float)[ok] for c in ("x_px", "y_px"))
+    theta = image_angle_rad(x, y, pivot_px)
+    theta = theta[np.isfinite(theta)]
+    if theta.size == 0:
+        return None
+    hang = circular_mean_rad(theta)
+    if abs(math.degrees(wrapped_rad(hang - math.radians(vertical_deg)))) <= MAX_HANG_DEG:
+        return None
+    for turned in (vertical_deg + rotation_deg, vertical_deg - rotation_deg):
+        if abs(math.degrees(wrapped_rad(hang - math.radians(turned)))) <= MAX_HANG_DEG:
+            return math.degrees(wrapped_rad(math.radians(turned)))
+    return None
+
+
 def angles_from_track(
     track: pd.DataFrame, *, pivot_px, vertical_deg: float, length_m: float, source: str, pivot_covariance_px2=None
 ):
