@@ -4,7 +4,7 @@ import shutil
 
 import pytest
 
-from workflow_run import digest, run, small_project
+from workflow_run import digest, only_the_bad_videos_failed, run, small_project
 
 
 def test_local_cluster_profile_gives_the_local_runs_bytes(tmp_path, small_build):
@@ -13,6 +13,7 @@ def test_local_cluster_profile_gives_the_local_runs_bytes(tmp_path, small_build)
     proc = run(["--profile", "profiles/local-cluster"], cluster, check=False)
     assert "Submitted job" in proc.stdout + proc.stderr, "jobs did not go through the cluster executor"
     assert proc.returncode != 0 and small_build.returncode != 0, "the two failed trials must end the build non-zero"
+    assert only_the_bad_videos_failed(cluster) and only_the_bad_videos_failed(small_build.work)
     produced = digest(cluster / "results")
     assert len(produced) > 10 and produced == digest(small_build.work / "results")
     shutil.rmtree(cluster / ".snakemake", ignore_errors=True)

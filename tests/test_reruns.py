@@ -25,6 +25,7 @@ from workflow_run import (
     BAD_VIDEOS,
     SNAKEMAKE,
     digest,
+    only_the_bad_videos_failed,
     planned_wildcards,
     run,
     small_project,
@@ -209,5 +210,6 @@ def test_an_interrupted_then_killed_run_resumes_to_the_same_bytes(tmp_path, smal
     assert not (work / "results/report/report.html").exists()  # both interruptions came before the end
     run(["--unlock"], work)  # a killed Snakemake cannot remove its lock
     assert run(["-c2", "--rerun-incomplete"], work, check=False).returncode != 0  # its two bad videos
+    assert only_the_bad_videos_failed(work) and only_the_bad_videos_failed(small_build.work)
     assert digest(work / "results") == digest(small_build.work / "results")
     assert not list((work / "results").rglob(".*.tmp*"))

@@ -137,6 +137,22 @@ def test_clips_filmed_from_different_places_do_not_share_a_pivot(seed):
 
 
 @pytest.mark.parametrize("seed", range(5))
+def test_two_narrow_swings_side_by_side_do_not_share_a_pivot(seed):
+    """Two clock pendulums 400 px apart, each swinging ±4° (two trials of one video, each with its start_px):
+    a circle of radius ~234,000 px passes within 0.34 px RMS of both arcs, so the paths' RMS does not tell;
+    each arc's own pivot lies across its swing within a pixel of its true one, and the pooled one 200 px
+    aside of both."""
+    pivots = [(300.0, 50.0), (700.0, 50.0)]
+    tracks = {f"bob{k}": arc_track(p, 500, 4, seed=10 * seed + k) for k, p in enumerate(pivots)}
+    geometry = estimate_rig_geometry(tracks, vertical_deg=0.0)
+    assert not geometry["shared"] and "own pivot is" in geometry["warnings"][0], geometry["warnings"]
+    for (name, track), pivot in zip(tracks.items(), pivots, strict=True):
+        own, why = trial_geometry(track, geometry, vertical_deg=0.0)
+        assert "do not share one pivot" in why
+        assert abs(own["pivot_px"][0] - pivot[0]) < 1.0, (name, own)
+
+
+@pytest.mark.parametrize("seed", range(5))
 def test_good_tracks_are_never_left_out(seed):
     tracks = {f"t{k}": arc_track(PIVOT, 520, a, seed=seed * 7 + k) for k, a in enumerate((3, 5, 20, 75))}
     circle, rejected = pooled_pivot(tracks)

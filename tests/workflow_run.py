@@ -64,6 +64,14 @@ class Build:
 BAD_VIDEOS = {"truncated": "truncated MP4", "fake": "not a video"}  # trial → what its failure must say
 
 
+def only_the_bad_videos_failed(work: Path) -> bool:
+    """In a build of :func:`small_project`: its good trial built, its two bad videos failed, nothing else."""
+    import pandas as pd
+
+    status = pd.read_csv(work / "results/status/trials.csv", keep_default_na=False).set_index("trial").status
+    return status.to_dict() == {"demo_p20": "ok", **dict.fromkeys(BAD_VIDEOS, "failed")}
+
+
 def small_project(work: Path) -> Path:
     """One demo video (demo_p20), one variant, and two videos that cannot be read (``truncated.mp4``, the demo
     video's first 300 kB; ``fake.mp4``, a text file): every rule of the workflow in few jobs, and two trials that

@@ -191,26 +191,45 @@ def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, 
 ELSEWHERE = "the camera moved between trials, or they were filmed from different places (one rig per camera placement)"
 
 
+SHARED_PIVOT_CHI2 = 30.0  # a track's own pivot this far (Mahalanobis², its own covariance) from the pooled one
+
+
 def unshared_pivot(tracks: dict[str, pd.DataFrame], circle: CircleFit) -> str | None:
     """Why the tracks do not share one pivot, or None: their pooled circle's RMS is more than
-    OUTLIER_TRACK_FACTOR × the median of each track's RMS off its own circle (and > OUTLIER_TRACK_FLOOR_PX).
+    OUTLIER_TRACK_FACTOR × the median of each track's RMS off its own circle, or a track's own pivot lies
+    farther from the pooled one than SHARED_PIVOT_CHI2 allows under its own covariance (and > 1 px).
 
     Two tracks leave no majority to tell which one moved (:func:`pooled_pivot`), and tracks from unrelated
     clips all lie far off any one circle, none farther than the rest: their pooled circle is no pivot at all
-    (four copies of one real track, scaled, rotated and at 3×, as four clips of one rig: 97 px RMS, no track
-    left out, before 2026-11-28 the pivot every one of them used).
+    (four copies of one real track, scaled, rotated and at 3×, as four clips of one rig: 97 px RMS; two
+    pendulums side by side swinging ±4°: 0.34 px RMS, its centre 234,000 px away; before 2026-11-28 the pivot
+    every one of them used). Measured Mahalanobis² on rigs that share a pivot: the demo's five trials ≤ 2.7,
+    the apple clip beside itself 0.0, beside the two-tone ball measured at its lower half 5.1; two pendulums
+    side by side 2.5·10⁴ and more.
     """
     if len(tracks) < 2:
         return None
-    own = [_radial_rms_px(t, _pooled_circle({n: t})) for n, t in sorted(tracks.items())]
-    own_px = float(np.median([v for v in own if math.isfinite(v)] or [math.inf]))
+    pooled = np.array([circle.pivot_x_px, circle.pivot_y_px])
+    own_rms, apart = [], []
+    for name, track in sorted(tracks.items()):
+        own = _pooled_circle({name: track})
+        own_rms.append(_radial_rms_px(track, own))
+        offset = pooled - [own.pivot_x_px, own.pivot_y_px]
+        if own.pivot_covariance_px2 is not None and math.hypot(*offset) > OUTLIER_TRACK_FLOOR_PX:
+            chi2 = float(offset @ np.linalg.pinv(np.asarray(own.pivot_covariance_px2, float)) @ offset)
+            if chi2 > SHARED_PIVOT_CHI2:
+                apart.append(f"{name}'s own pivot is {math.hypot(*offset):.0f} px from it ({math.sqrt(chi2):.0f} σ)")
+    own_px = float(np.median([v for v in own_rms if math.isfinite(v)] or [math.inf]))
     limit = max(OUTLIER_TRACK_FACTOR * own_px, OUTLIER_TRACK_FLOOR_PX)
-    if not circle.rms_px > limit:
+    if not (circle.rms_px > limit or apart):
         return None
-    return (
-        f"the paths of its {len(tracks)} trials do not share one pivot: {circle.rms_px:.2f} px RMS off their pooled "
-        f"circle, each {own_px:.2f} px RMS (median) off its own (limit {limit:.2f} px): {ELSEWHERE}"
+    why = (
+        f"{circle.rms_px:.2f} px RMS off their pooled circle, each {own_px:.2f} px RMS (median) off its own "
+        f"(limit {limit:.2f} px)"
+        if circle.rms_px > limit
+        else "; ".join(apart)
     )
+    return f"the paths of its {len(tracks)} trials do not share one pivot: {why}: {ELSEWHERE}"
 
 
 def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:

@@ -32,11 +32,10 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    pivot is θ up to a constant (the vertical).
 
 Flags from the measurement's own evidence (never thresholds fitted to renders):
-``edge`` (the body itself, within 1.2 inner radii of its thickest point, not a rod or thread leaving
-the frame, touches the frame's border: part of it is not seen), ``occluded`` (its
-covered area departs from its own running median by more than 6 robust σ of that series
-and 10 %, or the soft and the plain silhouette's centroids disagree by more than 6 robust
-σ of their own difference and 1.5 % of its radius (≥ 0.3 px): something joined or hid part of it), ``jump``
+``edge`` (the body itself, within 1.2 inner radii of its thickest point, not a rod or thread leaving the
+frame, touches the frame's border), ``occluded`` (its covered area departs from its running median by 6 robust σ
+and 10 %, or lies beyond 1.5× or ½ of its median where it moves (a hand holding it before the release), or the
+soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its radius (≥ 0.3 px)), ``jump``
 (leave-one-out cubic, as for the marker) and ``lost`` (no body near the prediction).
 
 A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most
@@ -100,7 +99,7 @@ NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the f
 CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft shadow stays below)
 FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
-MAX_AREA_RATIO = 1.5  # above this times its median the silhouette holds more than the body (a hand holding it)
+MAX_AREA_RATIO, MIN_AREA_RATIO, MOVING_PX = 1.5, 0.5, 0.3  # the body's area where it moves (px per frame)
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px
 CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
@@ -476,7 +475,9 @@ def track_body(
         CENTROID_SIGMAS,
         max(0.3, MIN_CENTROID_DISAGREEMENT * scene.radius_px),
     )
-    merged = usable & (mass / reference > MAX_AREA_RATIO)  # for seconds, as a hand before the release: no outlier
+    moving = usable & (np.hypot(np.diff(x, prepend=np.nan), np.diff(y, prepend=np.nan)) > MOVING_PX)
+    own = np.median(mass[moving]) if moving.sum() >= 0.2 * usable.sum() else reference  # a hold: no outlier
+    merged = usable & ((mass > MAX_AREA_RATIO * own) | (mass < MIN_AREA_RATIO * own))
     flags[area_fault | centroid_fault | merged] = "occluded"
     usable = flags == "ok"
     jumps = flag_jumps(x, y, usable, settings)
