@@ -18,9 +18,13 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    out wherever the wall behind it is darker or lighter; a wall darker than a dark body hides it), above
    T = max(5σ, ¼ C), C the body's contrast, closed by a disk of about half the body's inner radius (a print's
    dark patches are one object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
-   soft shadow is below T); the connected component nearest the prediction, with every component
-   within two closing widths of it. The first frame's body is the heaviest moving object above a
-   quarter of its own contrast (its part at its thickest point), or the one at ``start_px``. Where the body's
+   soft shadow is below T); the connected component nearest the prediction (where that is over
+   :data:`MAX_AREA_RATIO` of the body's area and another is the body's size: that one, a hand drawn back
+   after the release), with every component within two closing widths of it. The first frame's body is the
+   heaviest moving object above a quarter of its own contrast (its part at its thickest point), or the one at
+   ``start_px``; its size, contrast and silhouette split are the first frame's, or, where that differs from the
+   median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by more than
+   :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the body's
    contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
    again above ¼ of its own contrast there.
 3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
@@ -66,12 +70,13 @@ import pandas as pd
 
 from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.body_scene import (
-    MIN_BODY_AREA_PX,
+    MAX_AREA_RATIO,
+    MIN_AREA_RATIO,
     STRONG_FRACTION,
+    body_component,
     body_core,
     body_polarity,
     close_size,
-    components,
     filled_warning,
     masked_median,
     moving_objects,
@@ -99,7 +104,8 @@ NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the f
 CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft shadow stays below)
 FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
-MAX_AREA_RATIO, MIN_AREA_RATIO, MOVING_PX = 1.5, 0.5, 0.3  # the body's area where it moves (px per frame)
+MOVING_PX = 0.3  # the body moves (px per frame): its area there is its own (MAX_AREA_RATIO, MIN_AREA_RATIO)
+TYPICAL_SAMPLES, TYPICAL_AREA_RATIO = 9, 1.2  # samples spread over the clip for the body's usual size; its range
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px
 CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
@@ -198,46 +204,6 @@ def _soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = ST
     return float(ww @ xx / total), float(ww @ yy / total), total, float(xs.mean()), float(ys.mean())
 
 
-def _body_in(diff: np.ndarray, threshold: float, open_px: int, close_px: int, near=None):
-    """The moving pixels to take for the body: the component nearest ``near`` (else the heaviest) with every
-    component whose box lies within 2 closing widths of it (a print's patches, a body cut by a wall-coloured
-    band): ``(mask, (x, y, w, h))``, or ``(None, None)``."""
-    labels, stats, masses = components(diff, threshold, open_px, close_px)
-    ids = [i for i in range(1, len(masses)) if stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
-    if not ids:
-        return None, None
-    if near is None:
-        first = max(ids, key=lambda i: masses[i])
-    else:
-        nx, ny = near
-
-        def distance(i):
-            x0, y0, w, h = stats[i, :4]
-            dx = max(x0 - nx, 0, nx - (x0 + w - 1))
-            dy = max(y0 - ny, 0, ny - (y0 + h - 1))
-            return math.hypot(dx, dy), -masses[i]
-
-        first = min(ids, key=distance)
-    box = [int(v) for v in stats[first, :4]]
-    group, gap = {first}, 2 * close_px
-    grown = True
-    while grown:
-        grown = False
-        for i in ids:
-            x0, y0, w, h = stats[i, :4]
-            if i in group or x0 > box[0] + box[2] + gap or x0 + w < box[0] - gap:
-                continue
-            if y0 > box[1] + box[3] + gap or y0 + h < box[1] - gap:
-                continue
-            group.add(i)
-            right, bottom = max(box[0] + box[2], x0 + w), max(box[1] + box[3], y0 + h)
-            box[0], box[1] = min(box[0], x0), min(box[1], y0)
-            box[2], box[3] = right - box[0], bottom - box[1]
-            grown = True
-    mask = labels == first if len(group) == 1 else np.isin(labels, list(group))
-    return mask, tuple(box)
-
-
 def find_body(
     path, start_px=None, n_samples: int = SCENE_SAMPLES, track=None, radius_px=None, polarity="both", view=None
 ) -> BodyScene:
@@ -301,14 +267,22 @@ def find_body(
     close_px = close_size(background.shape)
 
     def measured(polarity: str) -> tuple[_Seen | None, _Seen | None]:
+        """The body in the first frame, and as most of the clip shows it: of samples spread over the clip, the
+        body in full view of median area, where the first frame's is out of view in part or not of its size
+        (within :data:`TYPICAL_AREA_RATIO`: a hand holding it before the release)."""
         first = _body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near)
-        whole = first
-        if first is not None and first.component is not None and touches_border(first.component) and near is None:
-            for image in images[1:]:
-                seen = _body_measure(one_sided(image - background, polarity), threshold, close_px, None)
-                if seen is not None and seen.component is not None and not touches_border(seen.component):
-                    return first, seen
-        return first, whole
+        if first is None or first.component is None or near is not None:
+            return first, first
+        spread = images[1 :: max(1, (len(images) - 1) // TYPICAL_SAMPLES)]
+        seen = [_body_measure(one_sided(image - background, polarity), threshold, close_px, None) for image in spread]
+        seen = [s for s in seen if s is not None and s.component is not None and not touches_border(s.component)]
+        if not seen:
+            return first, first
+        typical = sorted(seen, key=lambda s: int(s.component.sum()))[len(seen) // 2]
+        ratio = first.component.sum() / typical.component.sum()
+        if touches_border(first.component) or not 1 / TYPICAL_AREA_RATIO <= ratio <= TYPICAL_AREA_RATIO:
+            return first, typical
+        return first, first
 
     first, whole = measured(polarity)
     if first is None:
@@ -370,18 +344,18 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
 
     The heaviest moving object (or the one at ``near``), again above a quarter of its own contrast (a soft
     shadow beside it falls away), then opened to cut its thread (the part at its thickest point kept)."""
-    component, _ = _body_in(diff, threshold, 3, close_px, near=near)
+    component, _ = body_component(diff, threshold, 3, close_px, near=near)
     if component is None:
         return None
     contrast = float(np.percentile(diff[component], 90))
     threshold = max(threshold, CONTRAST_FRACTION * contrast)
-    strong, _ = _body_in(diff, threshold, 3, close_px, near=near)
+    strong, _ = body_component(diff, threshold, 3, close_px, near=near)
     component = component if strong is None else strong
     depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
     inner, (ty, tx) = float(depth.max()), np.unravel_index(int(np.argmax(depth)), depth.shape)
     close_px = max(close_px, _body_close_size(inner))
     # of its parts after the opening, the one at ``near``, else at its thickest point (its centre may be on a rod)
-    opened, _ = _body_in(diff, threshold, _open_size(inner), close_px, near=near or (float(tx), float(ty)))
+    opened, _ = body_component(diff, threshold, _open_size(inner), close_px, near=near or (float(tx), float(ty)))
     if opened is None:
         return _Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
@@ -409,6 +383,7 @@ def track_body(
     close_px = max(close_size(background.shape), _body_close_size(scene.inner_radius_px))
     edge_px = EDGE_REACH * scene.inner_radius_px + 2
     reach = 2.5 * scene.radius_px + 12
+    body_area = math.pi * scene.radius_px**2
     rows = []
     x_prev, y_prev = scene.start_px
     vx = vy = 0.0
@@ -425,12 +400,12 @@ def track_body(
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             border = np.concatenate([signed[0], signed[-1], signed[:, 0], signed[:, -1]])
             diff = one_sided(signed - np.median(border), scene.polarity)
-            component, box = _body_in(diff, threshold, open_px, close_px, near=(px - x0, py - y0))
+            component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area)
             if component is not None:
                 here = float(np.percentile(diff[component], 90))
                 if here < FAINT_CONTRAST * contrast:  # before a darker (or lighter) patch of wall: its own contrast
                     low = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * here)
-                    component, box = _body_in(diff, low, open_px, close_px, near=(px - x0, py - y0))
+                    component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area)
             if component is not None:
                 _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
                 sx, sy, mass, bx, by = _soft_centroid(diff, component, scene.silhouette_fraction)

@@ -328,6 +328,7 @@ def one_sided(signed: np.ndarray, polarity: str) -> np.ndarray:
     return np.abs(signed)
 
 
+MAX_AREA_RATIO, MIN_AREA_RATIO = 1.5, 0.5  # the body with something else, or a part of it: its area's range
 STRONG_FRACTION = 0.25  # the silhouette: pixels differing by more than this fraction of the body's contrast, filled
 
 
@@ -353,6 +354,51 @@ def silhouette_fraction(values: np.ndarray) -> float:
     if between < 0.75 * values.var() or low.mean() > 0.45 * high.mean():
         return STRONG_FRACTION
     return max(STRONG_FRACTION, cut / top)
+
+
+def body_component(diff: np.ndarray, threshold: float, open_px: int, close_px: int, near=None, area_px=None):
+    """The moving pixels to take for the body: the component nearest ``near`` (else the heaviest) with every
+    component whose box lies within 2 closing widths of it (a print's patches, a body cut by a wall-coloured
+    band): ``(mask, (x, y, w, h))``, or ``(None, None)``. With the body's ``area_px``: where the nearest is over
+    :data:`MAX_AREA_RATIO` of it (the body with what held it) and another is the body's size, that one (the body
+    let go, the hand drawn back)."""
+    labels, stats, masses = components(diff, threshold, open_px, close_px)
+    ids = [i for i in range(1, len(masses)) if stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
+    if not ids:
+        return None, None
+    if near is None:
+        first = max(ids, key=lambda i: masses[i])
+    else:
+        nx, ny = near
+
+        def distance(i):
+            x0, y0, w, h = stats[i, :4]
+            dx = max(x0 - nx, 0, nx - (x0 + w - 1))
+            dy = max(y0 - ny, 0, ny - (y0 + h - 1))
+            return math.hypot(dx, dy), -masses[i]
+
+        first = min(ids, key=distance)
+        if area_px and stats[first, cv2.CC_STAT_AREA] > MAX_AREA_RATIO * area_px:
+            sized = [i for i in ids if MIN_AREA_RATIO <= stats[i, cv2.CC_STAT_AREA] / area_px <= MAX_AREA_RATIO]
+            first = min(sized, key=distance, default=first)
+    box = [int(v) for v in stats[first, :4]]
+    group, gap = {first}, 2 * close_px
+    grown = True
+    while grown:
+        grown = False
+        for i in ids:
+            x0, y0, w, h = stats[i, :4]
+            if i in group or x0 > box[0] + box[2] + gap or x0 + w < box[0] - gap:
+                continue
+            if y0 > box[1] + box[3] + gap or y0 + h < box[1] - gap:
+                continue
+            group.add(i)
+            right, bottom = max(box[0] + box[2], x0 + w), max(box[1] + box[3], y0 + h)
+            box[0], box[1] = min(box[0], x0), min(box[1], y0)
+            box[2], box[3] = right - box[0], bottom - box[1]
+            grown = True
+    mask = labels == first if len(group) == 1 else np.isin(labels, list(group))
+    return mask, tuple(box)
 
 
 def touches_border(component: np.ndarray) -> bool:
