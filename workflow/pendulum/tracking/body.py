@@ -38,9 +38,10 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
 Flags from the measurement's own evidence (never thresholds fitted to renders):
 ``edge`` (the body itself, within 1.2 inner radii of its thickest point, not a rod or thread leaving the
 frame, touches the frame's border), ``occluded`` (its covered area departs from its running median by 6 robust σ
-and 10 %, or lies beyond 1.5× or ½ of its median where it moves (a hand holding it before the release), or the
+and 10 %, or lies beyond 1.5× or ½ of its median where it moves, or the
 soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its radius (≥ 0.3 px)), ``jump``
-(leave-one-out cubic, as for the marker) and ``lost`` (no body near the prediction).
+(leave-one-out cubic, as for the marker), ``held`` (over 1.5× that median before the body's first free frame or
+after its last: a hand before the release, or one that catches it) and ``lost`` (no body near the prediction).
 
 A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most
 samples) shows as a silhouette smaller or larger mid-swing than at the ends
@@ -455,6 +456,12 @@ def track_body(
     merged = usable & ((mass > MAX_AREA_RATIO * own) | (mass < MIN_AREA_RATIO * own))
     flags[area_fault | centroid_fault | merged] = "occluded"
     usable = flags == "ok"
+    # the body with what holds it before the first free frame or after the last (a hand before the release, one
+    # that catches it): ``held``, also where that touches the border
+    order = np.arange(len(flags))
+    free = order[usable]
+    with_more = np.isin(flags, ("occluded", "edge")) & (mass > MAX_AREA_RATIO * own)
+    flags[with_more & ((order < free[0]) | (order > free[-1]) if free.size else with_more)] = "held"
     jumps = flag_jumps(x, y, usable, settings)
     flags[jumps & usable] = "jump"
     table["flag"] = flags

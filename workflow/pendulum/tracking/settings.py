@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-FLAGS = ("ok", "occluded", "glare", "jump", "duplicate", "edge", "lost")
+FLAGS = ("ok", "occluded", "glare", "jump", "duplicate", "edge", "held", "lost")
 
 
 @dataclass(frozen=True)
