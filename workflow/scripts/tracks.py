@@ -42,7 +42,15 @@ def work():
         raise VideoError(f"{video}: {path['verdict']}; no angle record is made from it")
     flags = track.flag.value_counts().to_dict()
     n_ok = int(flags.get("ok", 0))  # after the timing check (repeats flagged), unlike the method's share
-    log.info("%s: %d of %d frames usable (%.1f %%)", video, n_ok, len(track), 100 * n_ok / max(len(track), 1))
+    held = int(flags.get("held", 0))  # a hand holds the body before the release (or after a catch)
+    log.info(
+        "%s: %d of %d frames usable (%.1f %%)%s",
+        video,
+        n_ok,
+        len(track) - held,
+        100 * n_ok / max(len(track) - held, 1),
+        f"; {held} more held by hand before the release or after a catch" if held else "",
+    )
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
     timing = track.attrs.get("timing") or {}

@@ -16,7 +16,14 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.geometry import circular_mean_rad, image_angle_rad, wrapped_rad
-from pendulum.angles.swings import crossing_period, detect_release, rest_start_index, sample_noise_rad, swing_extrema
+from pendulum.angles.swings import (
+    crossing_period,
+    detect_release,
+    release_by_hand,
+    rest_start_index,
+    sample_noise_rad,
+    swing_extrema,
+)
 
 MAX_HANG_DEG = 60.0  # a swing centred further from the vertical it is measured from: the vertical is not the camera's
 
@@ -35,6 +42,9 @@ class AngleRecordInfo:
     n_flagged: int
     rest_from_s: float | None
     noise_deg: float
+    # frames the tracker found held (the body with a hand) before the first free one: a release by hand in view,
+    # its instant and hold angle from the free swing's start (swings.release_by_hand)
+    held_frames: int = 0
     arm_radius_px: float | None = None  # pivot to marker, median over the tracked samples
     pivot_covariance_px2: list | None = None  # of an estimated pivot (None: given, taken as exact)
     # the record's mean period from the crossings of its middle level (swings.crossing_period), its standard error
@@ -80,11 +90,15 @@ def angle_record(
     if not np.isfinite(t).all() or np.any(np.diff(t) < 0):
         raise InputError(f"{source}: times are missing or not in order; cannot make an angle record")
     usable = (flag == "ok") & np.isfinite(theta)
+    held = flag == "held"  # the body with the hand that holds it (the tracker's flag)
     theta = np.where(usable, theta, np.nan)
     try:
         release = detect_release(t, theta)
     except ValueError as exc:
         raise InputError(f"{source}: {exc}") from exc
+    first_free = release.first_sample
+    by_hand = None if release.detected else release_by_hand(t, theta, held, first_free)
+    release = by_hand or release
     end = t.size
     rest = rest_start_index(theta)
     rest_from = None
@@ -116,10 +130,17 @@ def angle_record(
         n_samples=int(len(table)),
         n_flagged=int((table.flag != "ok").sum()),
         rest_from_s=rest_from,
+        held_frames=int(held[:first_free].sum()) if by_hand else 0,
         noise_deg=math.degrees(sample_noise_rad(theta)),
         arm_radius_px=arm_radius_px,
         pivot_covariance_px2=pivot_covariance_px2,
     )
+    if by_hand:
+        where = "" if release.hold_angle_rad is None else f" at {math.degrees(release.hold_angle_rad):+.2f}°"
+        info.notes.append(
+            f"released by hand in view: {info.held_frames} frame(s) held (the body with the hand) before the first "
+            f"free one; let go{where} at {release.time_s:.3f} s (video time), from the free swing's start"
+        )
     period = crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
     if period is not None:
         info.period_s, info.period_stderr_s, info.period_cycles = period

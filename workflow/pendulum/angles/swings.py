@@ -127,6 +127,10 @@ def sample_noise_rad(theta: np.ndarray) -> float:
     return _difference_sigma(theta, 5)
 
 
+MIN_HELD_FRAMES = 3  # held frames before the first free one: a release by hand in view
+HAND_RELEASE_FIT_S = 0.25  # of the free swing's start, fitted to find where a hand let it go
+
+
 @dataclass
 class Release:
     detected: bool
@@ -177,6 +181,41 @@ def detect_release(
                 t_release = float(candidate)
     first = int(np.searchsorted(t, t_release, side="right"))
     return Release(True, t_release, hold, first)
+
+
+def release_by_hand(time_s, theta: np.ndarray, held: np.ndarray, first_free: int) -> Release | None:
+    """A release in view whose hold a hand hides: the tracker's ``held`` frames (the body with the hand) before
+    the record's first free sample ``first_free``. The free swing's start tells where and when it was let go:
+
+        θ(t) = c + A cos(ω (t − t_r))
+
+    (ω from the record's own period, c the middle of its swing) fitted to its first
+    :data:`HAND_RELEASE_FIT_S` of usable samples; the release t_r is the turning point at or before the first
+    free sample, the hold angle θ(t_r). Where that cannot be measured (no period, too few samples, a turning
+    point before the held frames or after the first free one), the release is the last held frame and the
+    hold angle unknown (None). None when fewer than :data:`MIN_HELD_FRAMES` frames are held there."""
+    t = np.asarray(time_s, float)
+    th = np.asarray(theta, float)
+    run = np.flatnonzero(np.asarray(held, bool)[:first_free])
+    if run.size < MIN_HELD_FRAMES:
+        return None
+    fallback = Release(True, float(t[run[-1]]), None, int(run[-1]) + 1)
+    period = crossing_period(t, th)
+    window = np.flatnonzero(np.isfinite(th) & (t >= t[first_free]) & (t <= t[first_free] + HAND_RELEASE_FIT_S))
+    extrema = swing_extrema(th)
+    if period is None or window.size < 6 or extrema.size < 2:
+        return fallback
+    omega = 2 * math.pi / period[0]
+    middle = 0.5 * (float(np.median(th[extrema[0::2]])) + float(np.median(th[extrema[1::2]])))
+    design = np.column_stack([np.cos(omega * t[window]), np.sin(omega * t[window])])
+    (p, q), *_ = np.linalg.lstsq(design, th[window] - middle, rcond=None)
+    phase = math.atan2(q, p)  # turning points where ω t = phase + k π
+    k = math.floor((omega * t[first_free] - phase) / math.pi)
+    t_release = (phase + k * math.pi) / omega
+    if not t[run[0]] <= t_release <= t[first_free]:
+        return fallback
+    hold = middle + p * math.cos(omega * t_release) + q * math.sin(omega * t_release)
+    return Release(True, t_release, hold, int(np.searchsorted(t, t_release, side="right")))
 
 
 def swing_extrema(theta: np.ndarray) -> np.ndarray:

@@ -353,6 +353,12 @@ class CheckSections(ReportData):
             if kind == "video" and is_ok(tracks) and slip_sentence((tracks or {}).get("timing") or {}):
                 notes.append(esc(slip_sentence(tracks["timing"])))
             notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
+            if is_ok(angles) and angles.get("held_frames") and is_finite(angles.get("hold_angle_deg")):
+                notes.append(
+                    f"released by hand in view at {angles['release_time_s']:.2f} s from "
+                    f"{with_minus_sign(format(angles['hold_angle_deg'], '+.1f'))}° (found from the free swing's "
+                    f"start; {angles['held_frames']} frames held before it)"
+                )
             problems = record_problems(fit) or self.trial_problems(trial)
             if problems:
                 found = problem_text(trial, problems[0], first_clause=True)
@@ -392,7 +398,8 @@ class CheckSections(ReportData):
             "stamps), the marker followed (polarity and radius; “detected” when config and sidecar left them to the "
             "marker detection, “given” otherwise; “body”: the swinging object's silhouette was tracked, where no "
             "marker disk is usable or `method: body` says so), the tracker's flags by kind (flagged frames are never "
-            "interpolated), the angle samples from "
+            "interpolated; “held”: the body with a hand before its release or after a catch, the release then found "
+            "from the free swing's start), the angle samples from "
             "release to rest and how many of them are flagged, the angle record's noise (σ from the fifth "
             "differences of the whole record: Table 2's record noise), the record's mean period (from the times it "
             "crosses the middle of its swing, ± its standard error: the mean over the record, which amplitude, damping "

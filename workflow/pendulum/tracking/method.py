@@ -27,7 +27,10 @@ MARKER_USABLE_FRACTION = 0.95  # issue 23: a record ≥ 95 % usable; below it th
 
 
 def usable_fraction(track: pd.DataFrame) -> float:
-    return float((track.flag == "ok").mean()) if len(track) else 0.0
+    """The share of the frames ``ok``, of those not ``held`` (a hand holds the body before the release or after a
+    catch: no free swing to measure there)."""
+    free = int((track.flag != "held").sum())
+    return float((track.flag == "ok").sum()) / free if free else 0.0
 
 
 def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
@@ -162,7 +165,9 @@ def _silhouette(tried: dict) -> str:
 
 
 def _usable(track: pd.DataFrame) -> str:
-    return f"usable in {100 * usable_fraction(track):.1f} % of the frames"
+    held = int((track.flag == "held").sum())
+    where = f" not held by hand ({held} held)" if held else ""
+    return f"usable in {100 * usable_fraction(track):.1f} % of the frames{where}"
 
 
 def _view(body: pd.DataFrame, tried: dict) -> str:
