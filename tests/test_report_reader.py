@@ -184,3 +184,24 @@ def test_a_baseline_that_is_not_white_is_not_called_free_of_structure():
     html = residual_check_table(doc)
     assert "not white, but within 5.0× the noise" in html
     assert html.count("no structure left") == 1  # the final model's (p = 0.63, 1.0× the noise)
+
+
+def test_rig_values_every_trial_overrides_are_shown_as_used(tmp_path):
+    """Table 1 says the values the fits used: where every trial of a rig gives its own value in its sidecar (a new
+    user's apple trials left in the default rig), that value and what follows from it, not the rig's (a review
+    read 3.530 kg and a buoyancy of 24.53 N for a 0.18 kg apple in air); trials that differ: per trial."""
+    (tmp_path / "summary.csv").write_text("variant,fit\n")
+    files = {"summary": str(tmp_path / "summary.csv"), "trials": {}}
+    air = {"mass_kg": 0.18, "length_m": 1.053, "fluid_density_kg_m3": 1.2}
+    trials = {
+        t: {"rig": "rig", "kind": "video", "source": f"data/raw/{t}.mp4", "overrides": {**air, "length_m": length}}
+        for t, length in (("a", 1.053), ("b", 1.053), ("c", 1.06))
+    }
+    report = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": {}}}, variants=VARIANTS)
+    table = report.rig_table()
+    assert "0.1800 (the sidecars of all its trials)" in table and "3.530" not in table
+    assert "per trial (sidecars): 1.053, 1.060" in table  # the arm differs between the trials
+    trials["c"]["overrides"]["length_m"] = 1.053
+    table = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": {}}}, variants=VARIANTS)
+    table = table.rig_table()
+    assert "1.766" in table  # the weight m g of the apple (0.18 kg × 9.81), not the rig's 34.63 N

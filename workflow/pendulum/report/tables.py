@@ -75,8 +75,14 @@ class TableSections(ReportData):
             for rig in rigs:
                 values = with_rig_defaults(self.rigs[rig]["values"])  # as the fits take them
                 stated = self.rigs[rig].get("tolerances") or {}
+                used = self.overridden_by_every_trial(rig, key)
+                if used is not None:  # no trial uses the rig's own value: what they use, not the rig's
+                    if len(used) > 1:
+                        cells += [td(esc("per trial (sidecars): " + ", ".join(fmt(v, 4) for v in used))), td("", "na")]
+                        continue
+                    values = {**values, key: used[0]}
                 value = values.get(key)
-                if self.rigs[rig]["values"].get(key) is None and key in UNSTATED_RIG_DEFAULTS:
+                if self.rigs[rig]["values"].get(key) is None and key in UNSTATED_RIG_DEFAULTS and used is None:
                     default = UNSTATED_RIG_DEFAULTS[key]  # not stated: what the model uses
                     tol = rig_tolerances(values, stated).get(key) if key in RIG_DEFAULTS else None
                     tol_text = (
@@ -103,7 +109,8 @@ class TableSections(ReportData):
                 else:
                     default = ", default" if key not in stated else ""
                     tol_text = f"± {fmt(tol, 2)} ({fmt(100 * tol / abs(value), 2)} %{default})"
-                cells += [td(esc(fmt(value, 4)), "num"), td(esc(tol_text), "num")]
+                text = fmt(value, 4) + (" (the sidecars of all its trials)" if used is not None else "")
+                cells += [td(esc(text), "num"), td(esc(tol_text), "num")]
             rows.append([td(esc(label)), td(esc(unit))] + cells)
         for key, label, unit in (
             ("pivot_px", "pivot in the image", "px"),
@@ -129,11 +136,13 @@ class TableSections(ReportData):
         ):
             cells = []
             for rig in rigs:
+                used = {k: self.overridden_by_every_trial(rig, k) for k in RIG_LABELS}
+                if any(v is not None and len(v) > 1 for v in used.values()):
+                    cells += [td("per trial", "na"), td("derived", "na")]
+                    continue
+                values = {**self.rigs[rig]["values"], **{k: v[0] for k, v in used.items() if v is not None}}
                 try:
-                    cells += [
-                        td(esc(fmt(f(Rig.from_mapping(self.rigs[rig]["values"])), 4)), "num"),
-                        td("derived", "na"),
-                    ]
+                    cells += [td(esc(fmt(f(Rig.from_mapping(values)), 4)), "num"), td("derived", "na")]
                 except (TypeError, ValueError):
                     cells += [td("—", "na"), td("", "na")]
             rows.append([td(esc(label)), td(esc(unit))] + cells)
@@ -155,6 +164,15 @@ class TableSections(ReportData):
             "configuration takes the default fraction. They enter the fits' systematic error budget."
         )
         return table_html(header, rows, caption=caption, table_id="table1", note=note)
+
+    def overridden_by_every_trial(self, rig: str, key: str) -> list | None:
+        """The distinct values of ``key`` the rig's trials use where every one of them overrides the rig's in its
+        sidecar (Table 1 then shows those), else None."""
+        trials = self.rig_trials(rig)
+        values = [(self.trials[t].get("overrides") or {}).get(key) for t in trials]
+        if not trials or any(v is None for v in values):
+            return None
+        return sorted(set(values))
 
     def estimated_geometry_text(self, rig: str, key: str) -> str:
         """The pivot (± standard errors) or vertical a rig's angle records used when config gave none."""
