@@ -224,3 +224,30 @@ def test_the_ar_recursion_and_the_normal_and_chi2_constants_match_scipy_signal_a
     assert Z95 == stats.norm.ppf(0.975) and Z95_ONE_SIDED == stats.norm.ppf(0.95)
     for chi2, dof in ((0.5, 1), (3.2, 4), (50.0, 4), (120.0, 80)):  # the consistency test's p-value
         assert special.chdtrc(dof, chi2) == stats.chi2.sf(chi2, dof)
+
+
+def test_a_consistent_verdict_says_which_coefficients_it_speaks_for():
+    """Three trials, two of whose added masses are not identifiable (a light body in air): "consistent" is about the
+    drag area alone, and says so, with the added mass named as not tested and why (a review read "the 3 trials are
+    consistent" while the apple's added mass lay outside both others' intervals)."""
+    from pendulum.fit.uncertainty import consistency_test
+
+    def fit(added, drag, identifiable=True):
+        return {
+            "parameters": {
+                "added_mass_kg": {"value": added, "stderr": 1e-4, "identifiable": identifiable},
+                "drag_area_m2": {"value": drag, "stderr": 3e-4},
+            }
+        }
+
+    per_trial = {
+        "apple": fit(3.8e-4, 0.0055),
+        "hand_a": fit(2.5e-5, 0.0055, False),
+        "hand_b": fit(2.4e-5, 0.0054, False),
+    }
+    joint = {"parameters": {"added_mass_kg": {"value": 1.4e-4}, "drag_area_m2": {"value": 0.0055}}}
+    result = consistency_test(per_trial, joint)
+    assert result["verdict"] == "consistent"
+    assert result["explanation"].startswith("per-trial estimates of drag_area_m2 agree")
+    assert result["explanation"].endswith("not tested: added_mass_kg (2 of 3 trials not identifiable)")
+    assert result["parameters"]["added_mass_kg"]["trials_used"] == ["apple"]

@@ -201,7 +201,17 @@ def consistency_test(per_trial: dict[str, dict], joint: dict, alpha: float = 0.0
         )
     else:
         verdict = "consistent"
-        explanation = "per-trial estimates agree with each other within their statistical uncertainties"
+        explanation = (
+            f"per-trial estimates of {', '.join(tested)} agree with each other within their statistical uncertainties"
+        )
+    untested = [
+        f"{name} ({len(result[name]['trials_excluded'])} of {len(per_trial)} trials "
+        f"{' or '.join(sorted(set(result[name]['trials_excluded'].values())))})"
+        for name in names
+        if name not in tested and result[name]["trials_excluded"]
+    ]
+    if tested and untested:  # what the verdict does not speak for
+        explanation += "; not tested: " + ", ".join(untested)
     return {
         "verdict": verdict,
         "alpha": alpha,
