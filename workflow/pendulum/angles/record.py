@@ -96,8 +96,9 @@ def angle_record(
         release = detect_release(t, theta)
     except ValueError as exc:
         raise InputError(f"{source}: {exc}") from exc
-    first_free = release.first_sample
-    by_hand = None if release.detected else release_by_hand(t, theta, held, first_free)
+    # held by hand before the first usable sample: its first frames, slow near the turning point, are no hold
+    first_free = int(np.flatnonzero(np.isfinite(theta))[0])
+    by_hand = release_by_hand(t, theta, held, first_free)
     release = by_hand or release
     end = t.size
     rest = rest_start_index(theta)

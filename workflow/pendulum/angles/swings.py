@@ -190,7 +190,8 @@ def release_by_hand(time_s, theta: np.ndarray, held: np.ndarray, first_free: int
         θ(t) = c + A cos(ω (t − t_r))
 
     (ω from the record's own period, c the middle of its swing) fitted to its first
-    :data:`HAND_RELEASE_FIT_S` of usable samples; the release t_r is the turning point at or before the first
+    :data:`HAND_RELEASE_FIT_S` of usable samples (at least six, within a quarter period); the release t_r is the
+    turning point at or before the first
     free sample, the hold angle θ(t_r). Where that cannot be measured (no period, too few samples, a turning
     point before the held frames or after the first free one), the release is the last held frame and the
     hold angle unknown (None). None when fewer than :data:`MIN_HELD_FRAMES` frames are held there."""
@@ -201,9 +202,12 @@ def release_by_hand(time_s, theta: np.ndarray, held: np.ndarray, first_free: int
         return None
     fallback = Release(True, float(t[run[-1]]), None, int(run[-1]) + 1)
     period = crossing_period(t, th)
-    window = np.flatnonzero(np.isfinite(th) & (t >= t[first_free]) & (t <= t[first_free] + HAND_RELEASE_FIT_S))
     extrema = swing_extrema(th)
-    if period is None or window.size < 6 or extrema.size < 2:
+    if period is None or extrema.size < 2:
+        return fallback
+    after = np.flatnonzero(np.isfinite(th) & (t >= t[first_free]) & (t <= t[first_free] + period[0] / 4))
+    window = after[(t[after] <= t[first_free] + HAND_RELEASE_FIT_S) | (np.arange(after.size) < 6)]  # ≥ 6 samples
+    if window.size < 6:
         return fallback
     omega = 2 * math.pi / period[0]
     middle = 0.5 * (float(np.median(th[extrema[0::2]])) + float(np.median(th[extrema[1::2]])))
