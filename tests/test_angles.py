@@ -182,32 +182,34 @@ def test_a_record_without_a_release_is_labelled_by_its_first_turning_point():
         assert info.first_extremum_deg == pytest.approx(side * math.degrees(0.38), abs=0.1), (phase, info)
 
 
-@pytest.mark.parametrize("seed", range(8))
-def test_a_release_by_hand_is_found_from_the_free_swings_start(seed):
+@pytest.mark.parametrize("fps, seed", [(fps, seed) for fps in (15.0, 30.0, 60.0, 120.0) for seed in range(3)])
+def test_a_release_by_hand_is_found_from_the_free_swings_start(fps, seed):
     """A hand holds the body (the tracker's ``held`` frames: the body with the hand, their angle that of both) and
     lets go between two frames; the hand is drawn back for a few more ``held`` frames. The free swing (the
-    independent equation of motion, tests/independent_eom.py, the paper's rig in water, released from 15–30°
-    between frames, 60 fps, 0.004° noise) tells the release: within a third of a frame and its hold angle within
-    0.02° in every seed, the record starting there (release_detected, the fit's release transient left out)."""
+    independent equation of motion, tests/independent_eom.py, the paper's rig in water, released from 5–40° between
+    frames, 15–120 fps, 0.004° noise) tells the release: within half a frame and its hold angle within 0.04° (80
+    such records: 0.36 frame, 0.03° at most), the record starting there (release_detected, the fit's release
+    transient left out). Its first free frames, slow near the turning point, are no hold (they were: 6–8 frames
+    off)."""
     from independent_eom import Pendulum, integrate
     from pendulum.angles.record import angle_record
 
     rng = np.random.default_rng(seed)
-    fps, hold_s = 60.0, rng.uniform(1.0, 6.0)
+    hold_s = rng.uniform(1.0, 6.0)
     t_release = hold_s + rng.uniform(0, 1 / fps)
-    release_deg = rng.choice([-1, 1]) * rng.uniform(15, 30)
+    release_deg = rng.choice([-1, 1]) * rng.uniform(5, 40)
     t = np.arange(0, hold_s + 20.0, 1 / fps)
     free = t >= t_release
     theta = np.full(t.size, math.radians(release_deg))
     theta[free] = integrate(Pendulum(), math.radians(release_deg), 0.0, np.r_[t_release, t[free]])[0][1:]
     theta += rng.normal(0, math.radians(0.004), t.size)
     flags = np.full(t.size, "ok", dtype=object)
-    hand_gone = np.searchsorted(t, t_release) + int(rng.integers(3, 12))  # the hand drawn back after the release
+    hand_gone = np.searchsorted(t, t_release) + int(rng.integers(1, max(2, int(0.2 * fps))))  # the hand drawn back
     flags[:hand_gone] = "held"
     biased = np.where(flags == "held", theta + math.radians(rng.uniform(-3, 3)), theta)  # the hand pulls the centroid
     table, info = angle_record(t, biased, np.ones(t.size), flags, vertical_deg=0.0, length_m=0.76, source="hand")
     assert info.release_detected and info.held_frames == hand_gone
-    assert abs(info.release_time_s - t_release) < 1 / (3 * fps), (info.release_time_s, t_release)
-    assert info.hold_angle_deg == pytest.approx(release_deg, abs=0.02)
+    assert abs(info.release_time_s - t_release) < 0.5 / fps, (info.release_time_s, t_release)
+    assert info.hold_angle_deg == pytest.approx(release_deg, abs=0.04)
     assert table.video_time_s.iloc[0] > info.release_time_s and table.time_s.iloc[0] < 1 / fps
     assert any("released by hand" in note for note in info.notes)
