@@ -274,9 +274,24 @@ def find_body(
         first = _body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near)
         if first is None or first.component is None or near is not None:
             return first, first
-        spread = images[1 :: max(1, (len(images) - 1) // TYPICAL_SAMPLES)]
-        seen = [_body_measure(one_sided(image - background, polarity), threshold, close_px, None) for image in spread]
-        seen = [s for s in seen if s is not None and s.component is not None and not touches_border(s.component)]
+        seen = []
+        for k in range(1, len(images), max(1, (len(images) - 1) // TYPICAL_SAMPLES)):
+            rows, cols = np.flatnonzero(excluded[k].any(axis=1)), np.flatnonzero(excluded[k].any(axis=0))
+            if not rows.size:  # nothing moving in this sample
+                continue
+            margin = 2 * close_px + 8  # the sample's moving objects, cut out with a margin (a 1080p frame is large)
+            y0, y1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, background.shape[0])
+            x0, x1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, background.shape[1])
+            diff = one_sided(images[k][y0:y1, x0:x1] - background[y0:y1, x0:x1], polarity)
+            body = _body_measure(diff, threshold, close_px, None)
+            if body is None or body.component is None:
+                continue
+            c = body.component  # out of view in part: it touches a side of the cut-out that is the frame's
+            if (c[0].any() and y0 == 0) or (c[-1].any() and y1 == background.shape[0]):
+                continue
+            if (c[:, 0].any() and x0 == 0) or (c[:, -1].any() and x1 == background.shape[1]):
+                continue
+            seen.append(body)
         if not seen:
             return first, first
         typical = sorted(seen, key=lambda s: int(s.component.sum()))[len(seen) // 2]
