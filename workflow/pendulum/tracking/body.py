@@ -497,11 +497,12 @@ def track_body(
     if rest_place_from:  # earlier scenes held the body (their tracks' mid-swing area ratios)
         table.attrs["body"]["scene_from_swing_ends"] = {"earlier_mid_swing_area_ratios": list(rest_place_from)}
     table.attrs["marker"] = None
-    if n_ok < settings.min_usable_fraction * len(table):
-        faults = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()) if k != "ok")
+    free = len(table) - int(counts.get("held", 0))  # a hand holding it: no swing there to measure
+    if n_ok < settings.min_usable_fraction * free:
+        faults = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()) if k not in ("ok", "held"))
         raise VideoError(
-            f"{path}: the body is usable in only {n_ok} of {len(table)} frames "
-            f"({100 * n_ok / len(table):.0f} %; {faults}): the video cannot give an angle record"
+            f"{path}: the body is usable in only {n_ok} of {free} frames{' not held' if free < len(table) else ''} "
+            f"({100 * n_ok / max(free, 1):.0f} %; {faults}): the video cannot give an angle record"
         )
     ratio = rest_place_area_ratio(table)
     table.attrs["body"]["mid_swing_area_ratio"] = None if ratio is None else round(ratio, 4)
