@@ -39,6 +39,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 APPLE = ROOT.parent / "shared" / "data" / "real-video" / "redapple_480p.mov"
 APPLE_PERIOD_S = 2.078
+APPLE_FPS = 60000 / 1001  # the clip's frame rate (59.94 fps): variants are stamped at it
 APPLE_START_PX = (73.0, 172.1)  # the apple's centre in the clip's first frame (find_body)
 SECOND_SPEED = 1.25  # the second pendulum: the clip mirrored and played 1.25× faster (period 1.662 s)
 
@@ -404,7 +405,7 @@ def make(name: str, workdir: Path) -> Path:
         return out
     last = 360 if name == "short_6s" else None
     if "_colour" in name:
-        write_video(_in_colour(name), out, 60.0, crf, "veryfast", colour=True)
+        write_video(_in_colour(name), out, APPLE_FPS, crf, "veryfast", colour=True)
         return out
     frames = [
         image.copy()
@@ -431,7 +432,7 @@ def make(name: str, workdir: Path) -> Path:
         frames = _hand_release(frames, *HANDS[name])
     if name.endswith("_1080p"):
         frames = [_resize(3.0)(image, k, len(frames)) for k, image in enumerate(frames)]
-    write_video(frames, out, 60.0 / every, crf, "veryfast")
+    write_video(frames, out, APPLE_FPS / every, crf, "veryfast")
     return out
 
 
