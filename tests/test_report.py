@@ -516,3 +516,13 @@ def test_a_record_without_a_release_is_labelled_by_its_first_swing_extremum(docu
     documents.docs[("t20", "angles")] = {"status": "ok", "hold_angle_deg": None, "first_extremum_deg": 21.7}
     assert documents.angle_label("t20") == "+22°†"
     assert "first turning point" in documents.dagger_note()
+    # released by hand in view, the hand hiding the hold where the free swing could not tell it: ‡, not "no release"
+    documents.docs[("t20", "angles")] = {
+        "status": "ok",
+        "release_detected": True,
+        "held_frames": 90,
+        "hold_angle_deg": None,
+        "first_extremum_deg": 21.7,
+    }
+    assert documents.angle_label("t20") == "+22°‡"
+    assert "Released by hand in view" in documents.dagger_note() and "No release" not in documents.dagger_note()

@@ -335,21 +335,35 @@ class ReportData:
         terms = " + ".join(TERM_LABELS.get(t, t) for t in self.variants[variant]) or "added mass only"
         return f"{variant} ({terms})"
 
+    def hidden_release(self, trial: str) -> bool:
+        """A release by hand in view whose instant and angle the free swing could not tell (the hand hid the hold)."""
+        angles = self.docs.get((trial, "angles"), {})
+        return is_ok(angles) and bool(angles.get("release_detected")) and not self.release_detected(trial)
+
     def angle_label(self, trial: str) -> str:
-        """Release angle, e.g. "+20°"; "+6°†" when the record holds no release (its first swing extremum)."""
+        """Release angle, e.g. "+20°"; "+6°†" when the record holds no release (its first swing extremum); "+6°‡"
+        when a hand hid its hold."""
         a = self.release_deg(trial)
         if a is None:
             return "—"
-        return with_minus_sign(f"{a:+.0f}°") + ("" if self.release_detected(trial) else "†")
+        mark = "" if self.release_detected(trial) else "‡" if self.hidden_release(trial) else "†"
+        return with_minus_sign(f"{a:+.0f}°") + mark
 
     def dagger_note(self) -> str:
-        """The note for release angles marked †, when any trial has one."""
-        if all(self.release_detected(t) or self.release_deg(t) is None for t in self.trials):
-            return ""
-        return (
-            " † No release in the record (a video or an angle table that starts mid-swing): the angle of its first "
-            "turning point."
-        )
+        """The notes for release angles marked † or ‡, when any trial has one."""
+        marked = [t for t in self.trials if not self.release_detected(t) and self.release_deg(t) is not None]
+        note = ""
+        if any(not self.hidden_release(t) for t in marked):
+            note += (
+                " † No release in the record (a video or an angle table that starts mid-swing): the angle of its first "
+                "turning point."
+            )
+        if any(self.hidden_release(t) for t in marked):
+            note += (
+                " ‡ Released by hand in view, the hand hiding the angle it held: the angle of the record's first "
+                "turning point."
+            )
+        return note
 
     def _truth_text(self, trials: list[str], name: str) -> str:
         values = {true_value(self.truth.get(t), name) for t in trials if t in self.truth}
