@@ -201,6 +201,7 @@ def test_rig_values_every_trial_overrides_are_shown_as_used(tmp_path):
     table = report.rig_table()
     assert "0.1800 (the sidecars of all its trials)" in table and "3.530" not in table
     assert "per trial (sidecars): 1.053, 1.060" in table  # the arm differs between the trials
+    assert "1.500×10⁻⁵ (default)" in table  # ν: air's for their fluid of 1.2 kg/m³, not water's 10⁻⁶
     trials["c"]["overrides"]["length_m"] = 1.053
     table = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": {}}}, variants=VARIANTS)
     table = table.rig_table()

@@ -38,6 +38,21 @@ DEFAULT_RELATIVE_TOLERANCES = {
     "gravity_m_s2": 0.0,
 }
 WATER_KINEMATIC_VISCOSITY_M2_S = 1.0e-6  # 20 °C
+AIR_KINEMATIC_VISCOSITY_M2_S = 1.5e-5  # 20 °C, 1 atm
+GAS_DENSITY_KG_M3 = 100.0  # a fluid lighter than this is a gas: air's viscosity where none is stated
+
+
+def kinematic_viscosity_m2_s(rig_values: dict) -> float:
+    """The rig's stated ν, else water's at 20 °C, or air's where its fluid is a gas (ρ < 100 kg/m³): the Reynolds
+    number Re = U D / ν of the half-cycle tables (a rig in air given water's ν read Re 15× too high)."""
+    stated = rig_values.get("kinematic_viscosity_m2_s")
+    if stated:
+        return float(stated)
+    density = rig_values.get("fluid_density_kg_m3")
+    gas = density is not None and float(density) < GAS_DENSITY_KG_M3
+    return AIR_KINEMATIC_VISCOSITY_M2_S if gas else WATER_KINEMATIC_VISCOSITY_M2_S
+
+
 # Rig values the model takes when a rig does not state them (Rig's defaults): filled in before a fit, so
 # that their default tolerances (fluid density 0.2 %) enter the error budget as for a stated value.
 RIG_DEFAULTS = {

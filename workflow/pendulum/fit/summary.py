@@ -10,7 +10,7 @@ import pandas as pd
 
 from pendulum.angles.swings import swing_centre_track
 from pendulum.fit.decay import half_cycles, loss_at_amplitude
-from pendulum.fit.records import WATER_KINEMATIC_VISCOSITY_M2_S, FitSettings, characteristic_length_m, load_record
+from pendulum.fit.records import FitSettings, characteristic_length_m, kinematic_viscosity_m2_s, load_record
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import PendulumModel, simulate
 from pendulum.model.rig import Rig
@@ -256,7 +256,7 @@ def cycle_table(
     params = fitted_physical(fit_document, model)
     offset = math.radians(entry["rest_offset_deg"])
     length = characteristic_length_m(rig_values)
-    nu = float(rig_values.get("kinematic_viscosity_m2_s") or WATER_KINEMATIC_VISCOSITY_M2_S)
+    nu = kinematic_viscosity_m2_s(rig_values)
 
     def cycles(column, use, centre):
         return half_cycles(

@@ -8,7 +8,13 @@ from __future__ import annotations
 
 import math
 
-from pendulum.fit.records import RIG_DEFAULTS, WATER_KINEMATIC_VISCOSITY_M2_S, rig_tolerances, with_rig_defaults
+from pendulum.fit.records import (
+    RIG_DEFAULTS,
+    WATER_KINEMATIC_VISCOSITY_M2_S,
+    kinematic_viscosity_m2_s,
+    rig_tolerances,
+    with_rig_defaults,
+)
 from pendulum.model.rig import Rig
 from pendulum.report.data import (
     ReportData,
@@ -84,6 +90,10 @@ class TableSections(ReportData):
                 value = values.get(key)
                 if self.rigs[rig]["values"].get(key) is None and key in UNSTATED_RIG_DEFAULTS and used is None:
                     default = UNSTATED_RIG_DEFAULTS[key]  # not stated: what the model uses
+                    if key == "kinematic_viscosity_m2_s":  # water's, or air's for a gas (as the half cycles take it)
+                        density = self.overridden_by_every_trial(rig, "fluid_density_kg_m3")
+                        fluid = {"fluid_density_kg_m3": density[0] if density and len(density) == 1 else None}
+                        default = kinematic_viscosity_m2_s({**values, **{k: v for k, v in fluid.items() if v}})
                     tol = rig_tolerances(values, stated).get(key) if key in RIG_DEFAULTS else None
                     tol_text = (
                         "not in the error budget"
