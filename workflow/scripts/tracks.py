@@ -15,7 +15,7 @@ import _setup  # noqa: F401
 from pendulum.camera.video import VideoError, track_over_sheet
 from pendulum.io import script_logger, write_csv, write_json, write_png
 from pendulum.status import empty_table, failure_image, require_ok, run_stage
-from pendulum.tracking.method import track_trial
+from pendulum.tracking.method import track_trial, usable_fraction
 from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
 from pendulum.tracking.timing import slip_sentence
@@ -48,7 +48,7 @@ def work():
         video,
         n_ok,
         len(track) - held,
-        100 * n_ok / max(len(track) - held, 1),
+        100 * usable_fraction(track),
         f"; {held} more held by hand before the release or after a catch" if held else "",
     )
     if track.attrs.get("video", {}).get("stopped_early"):

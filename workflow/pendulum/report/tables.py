@@ -79,21 +79,21 @@ class TableSections(ReportData):
         for key, (label, unit) in RIG_LABELS.items():
             cells = []
             for rig in rigs:
-                values = with_rig_defaults(self.rigs[rig]["values"])  # as the fits take them
+                used, per_trial = self.rig_values_used(rig)
+                if key in per_trial:
+                    cells += [
+                        td(esc("per trial (sidecars): " + ", ".join(fmt(v, 4) for v in per_trial[key]))),
+                        td("", "na"),
+                    ]
+                    continue
+                values = with_rig_defaults(used)  # as the fits take them
                 stated = self.rigs[rig].get("tolerances") or {}
-                used = self.overridden_by_every_trial(rig, key)
-                if used is not None:  # no trial uses the rig's own value: what they use, not the rig's
-                    if len(used) > 1:
-                        cells += [td(esc("per trial (sidecars): " + ", ".join(fmt(v, 4) for v in used))), td("", "na")]
-                        continue
-                    values = {**values, key: used[0]}
+                by_trials = used.get(key) != self.rigs[rig]["values"].get(key)  # every trial's sidecar gives it
                 value = values.get(key)
-                if self.rigs[rig]["values"].get(key) is None and key in UNSTATED_RIG_DEFAULTS and used is None:
+                if used.get(key) is None and key in UNSTATED_RIG_DEFAULTS:
                     default = UNSTATED_RIG_DEFAULTS[key]  # not stated: what the model uses
                     if key == "kinematic_viscosity_m2_s":  # water's, or air's for a gas (as the half cycles take it)
-                        density = self.overridden_by_every_trial(rig, "fluid_density_kg_m3")
-                        fluid = {"fluid_density_kg_m3": density[0] if density and len(density) == 1 else None}
-                        default = kinematic_viscosity_m2_s({**values, **{k: v for k, v in fluid.items() if v}})
+                        default = kinematic_viscosity_m2_s(values)
                     tol = rig_tolerances(values, stated).get(key) if key in RIG_DEFAULTS else None
                     tol_text = (
                         "not in the error budget"
@@ -119,7 +119,7 @@ class TableSections(ReportData):
                 else:
                     default = ", default" if key not in stated else ""
                     tol_text = f"± {fmt(tol, 2)} ({fmt(100 * tol / abs(value), 2)} %{default})"
-                text = fmt(value, 4) + (" (the sidecars of all its trials)" if used is not None else "")
+                text = fmt(value, 4) + (" (the sidecars of all its trials)" if by_trials else "")
                 cells += [td(esc(text), "num"), td(esc(tol_text), "num")]
             rows.append([td(esc(label)), td(esc(unit))] + cells)
         for key, label, unit in (
@@ -146,13 +146,12 @@ class TableSections(ReportData):
         ):
             cells = []
             for rig in rigs:
-                used = {k: self.overridden_by_every_trial(rig, k) for k in RIG_LABELS}
-                if any(v is not None and len(v) > 1 for v in used.values()):
+                used, per_trial = self.rig_values_used(rig)
+                if per_trial:
                     cells += [td("per trial", "na"), td("derived", "na")]
                     continue
-                values = {**self.rigs[rig]["values"], **{k: v[0] for k, v in used.items() if v is not None}}
                 try:
-                    cells += [td(esc(fmt(f(Rig.from_mapping(values)), 4)), "num"), td("derived", "na")]
+                    cells += [td(esc(fmt(f(Rig.from_mapping(used)), 4)), "num"), td("derived", "na")]
                 except (TypeError, ValueError):
                     cells += [td("—", "na"), td("", "na")]
             rows.append([td(esc(label)), td(esc(unit))] + cells)
@@ -175,14 +174,20 @@ class TableSections(ReportData):
         )
         return table_html(header, rows, caption=caption, table_id="table1", note=note)
 
-    def overridden_by_every_trial(self, rig: str, key: str) -> list | None:
-        """The distinct values of ``key`` the rig's trials use where every one of them overrides the rig's in its
-        sidecar (Table 1 then shows those), else None."""
+    def rig_values_used(self, rig: str) -> tuple[dict, dict]:
+        """The rig's values as its trials use them: a value every trial overrides in its sidecar with one number
+        is that number (Table 1 shows what the fits used, not the rig's); values the trials differ in, per trial
+        (``key → sorted values``, the second dict)."""
+        used, per_trial = dict(self.rigs[rig]["values"]), {}
         trials = self.rig_trials(rig)
-        values = [(self.trials[t].get("overrides") or {}).get(key) for t in trials]
-        if not trials or any(v is None for v in values):
-            return None
-        return sorted(set(values))
+        for key in RIG_LABELS:
+            values = [(self.trials[t].get("overrides") or {}).get(key) for t in trials]
+            if trials and all(v is not None for v in values):
+                if len(set(values)) == 1:
+                    used[key] = values[0]
+                else:
+                    per_trial[key] = sorted(set(values))
+        return used, per_trial
 
     def estimated_geometry_text(self, rig: str, key: str) -> str:
         """The pivot (± standard errors) or vertical a rig's angle records used when config gave none."""

@@ -286,12 +286,8 @@ def find_body(
             body = _body_measure(diff, threshold, close_px, None)
             if body is None or body.component is None:
                 continue
-            c = body.component  # out of view in part: it touches a side of the cut-out that is the frame's
-            if (c[0].any() and y0 == 0) or (c[-1].any() and y1 == background.shape[0]):
-                continue
-            if (c[:, 0].any() and x0 == 0) or (c[:, -1].any() and x1 == background.shape[1]):
-                continue
-            seen.append(body)
+            if not touches_border(body.component, (y0, y1, x0, x1), background.shape):  # in full view
+                seen.append(body)
         if not seen:
             return first, first
         typical = sorted(seen, key=lambda s: int(s.component.sum()))[len(seen) // 2]

@@ -401,9 +401,18 @@ def body_component(diff: np.ndarray, threshold: float, open_px: int, close_px: i
     return mask, tuple(box)
 
 
-def touches_border(component: np.ndarray) -> bool:
-    """Whether a body's pixels reach the frame's outermost rows or columns (part of it out of view)."""
-    return bool(component[0].any() or component[-1].any() or component[:, 0].any() or component[:, -1].any())
+def touches_border(component: np.ndarray, cut=None, frame_shape=None) -> bool:
+    """Whether a body's pixels reach the frame's outermost rows or columns (part of it out of view); for a
+    component of a cut-out ``cut = (y0, y1, x0, x1)`` of a frame of ``frame_shape``, only its sides that are the
+    frame's."""
+    y0, y1, x0, x1 = cut if cut is not None else (0, component.shape[0], 0, component.shape[1])
+    h, w = frame_shape if frame_shape is not None else component.shape
+    return bool(
+        (y0 == 0 and component[0].any())
+        or (y1 == h and component[-1].any())
+        or (x0 == 0 and component[:, 0].any())
+        or (x1 == w and component[:, -1].any())
+    )
 
 
 def filled_warning(ratio: float) -> str:
