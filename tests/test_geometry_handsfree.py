@@ -13,7 +13,7 @@ from scipy.stats import binom
 from conftest import ROOT
 from pendulum.angles.geometry import estimate_rig_geometry, fit_circle, pooled_pivot
 from pendulum.fit.output_error import fit_trials
-from pendulum.fit.records import FitSettings, load_record
+from pendulum.fit.records import FitSettings, load_record, rig_tolerances
 from pendulum.model.physics import PendulumModel, SimulationDiverged, simulate
 from pendulum.model.rig import Rig
 from pendulum.synthetic.records import synthetic_angle_table
@@ -93,6 +93,35 @@ def test_a_rig_can_be_defined_in_a_sidecar():
     }
     with pytest.raises(ConfigError, match="d.yaml .*defining rig r.*floats"):
         add_sidecar_rigs(config, floats)
+
+
+def test_a_sidecar_s_own_rig_value_takes_its_own_tolerance_not_the_rig_s():
+    """The rig's 1σ tolerances were stated for the rig's values. A sidecar that changes a value (an apple of
+    0.18 kg hung in the 3.53 kg vehicle's rig) drops the rig's absolute tolerance of it (5 g: 0.14 % of the
+    vehicle, 2.8 % of the apple) for the default fraction, unless it states its own; a value it repeats keeps
+    the rig's. Before, every trial took the rig's tolerances whatever its own values."""
+    config = config_with_rigs()
+    config["rigs"]["paper_rig"]["tolerances"] = {"mass_kg": 0.005, "length_m": 0.001, "frontal_area_m2": 0.0005}
+    apple = {"mass_kg": 0.18, "length_m": 0.76, "frontal_area_m2": 0.0038, "displaced_volume_m3": 0.0001}
+    plain = Trial("a", "video", "a.mp4", apple, "data/raw/a.yaml")
+    settings = trial_settings(config, plain)
+    assert settings["tolerances"] == {"length_m": 0.001}  # the rig's length (0.76 m, repeated) keeps its 1 mm
+    used = rig_tolerances(settings["rig"], settings["tolerances"])
+    assert used["mass_kg"] == pytest.approx(0.002 * 0.18) and used["frontal_area_m2"] == pytest.approx(0.02 * 0.0038)
+    own = Trial("b", "video", "b.mp4", {**apple, "tolerances": {"mass_kg": 0.001}}, "data/raw/b.yaml")
+    assert trial_settings(config, own)["tolerances"] == {"length_m": 0.001, "mass_kg": 0.001}
+    wrong = Trial("c", "video", "c.mp4", {**apple, "tolerances": {"mass_kg": 0.1}}, "data/raw/c.yaml")
+    with pytest.raises(ConfigError, match=r"c.yaml: tolerances/mass_kg = 0.1 is 56 % of mass_kg = 0.18"):
+        trial_settings(config, wrong)
+    unchanged = Trial("d", "video", "d.mp4", {}, "data/raw/d.yaml")
+    assert trial_settings(config, unchanged)["tolerances"] == config["rigs"]["paper_rig"]["tolerances"]
+    # a rig defined in a sidecar takes that sidecar's tolerances, for every trial that names it
+    trials = {
+        "e": Trial("e", "video", "e.mp4", {"rig": "tank2", **apple, "tolerances": {"mass_kg": 0.0005}}, "e.yaml"),
+        "f": Trial("f", "video", "f.mp4", {"rig": "tank2"}, "f.yaml"),
+    }
+    add_sidecar_rigs(config, trials)
+    assert trial_settings(config, trials["f"])["tolerances"] == {"mass_kg": 0.0005}
 
 
 @pytest.mark.parametrize("fps", [30.0, 240.0])

@@ -206,3 +206,14 @@ def test_rig_values_every_trial_overrides_are_shown_as_used(tmp_path):
     table = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": {}}}, variants=VARIANTS)
     table = table.rig_table()
     assert "1.766" in table  # the weight m g of the apple (0.18 kg × 9.81), not the rig's 34.63 N
+    # the tolerances as the trials' fits take them: the rig's 5 g was stated for its 3.53 kg, not for the apple
+    # (its sidecars state none: the default 0.2 %); a tolerance the trials state differently: per trial
+    stated = {"mass_kg": 0.005, "length_m": 0.001}
+    for t in trials:
+        trials[t]["tolerances"] = {"length_m": 0.001}
+    table = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": stated}}, variants=VARIANTS)
+    table = table.rig_table()
+    assert "± 3.6×10⁻⁴ (0.20 %, default)" in table and "2.8 %" not in table and "± 0.0010 (0.095 %)" in table
+    trials["c"]["tolerances"] = {"length_m": 0.001, "mass_kg": 0.001}
+    table = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": stated}}, variants=VARIANTS)
+    assert "per trial (sidecars)" in table.rig_table()

@@ -190,6 +190,29 @@ def check_rig_values(values: dict, where: str) -> None:
         )
 
 
+def check_tolerances(tolerances: dict, values: dict, where: str) -> None:
+    """Each 1σ tolerance finite and at most a quarter of its value (a fraction given for an absolute 1σ)."""
+    for key, sigma in tolerances.items():
+        value = values.get(key)
+        if not math.isfinite(sigma):
+            raise ConfigError(f"{where}/{key} is {sigma!r}; give a finite 1σ")
+        if value is not None and sigma > 0.25 * abs(value):
+            raise ConfigError(
+                f"{where}/{key} = {sigma:g} is {100 * sigma / abs(value):.0f} % of {key} = {value:g}; tolerances "
+                f"are 1σ in the value's own unit (e.g. {0.01 * abs(value):.3g} for 1 %), not fractions"
+            )
+
+
+def trial_tolerances(rig: dict, sidecar: dict) -> dict:
+    """The 1σ tolerances stated for one trial's rig values: the rig's, less those of values its sidecar changes
+    (the rig's tolerance was stated for the rig's value, not this one: a 5 g scale error is 0.14 % of a 3.5 kg
+    vehicle and 2.8 % of a 180 g apple), then the sidecar's own ``tolerances``. A value left without one takes
+    the default fraction (:data:`pendulum.fit.records.DEFAULT_RELATIVE_TOLERANCES`) downstream."""
+    stated = rig.get("tolerances") or {}
+    kept = {k: v for k, v in stated.items() if k not in sidecar or sidecar[k] == rig.get(k)}
+    return {**kept, **(sidecar.get("tolerances") or {})}
+
+
 def validate_config(config: dict, source: str = "config.yaml") -> None:
     """Schema check, finite numbers, rigs that sink, and cross-references (default rig exists)."""
     if isinstance(config, dict) and config.get("variants") in (None, [], {}) and "variants" in config:
@@ -203,16 +226,7 @@ def validate_config(config: dict, source: str = "config.yaml") -> None:
     _validate(config, "config.schema.yaml", source)
     for rig, values in config["rigs"].items():
         check_rig_values(values, f"{source}: rigs/{rig}")
-        for key, sigma in (values.get("tolerances") or {}).items():
-            value = values.get(key)
-            if not math.isfinite(sigma):
-                raise ConfigError(f"{source}: rigs/{rig}/tolerances/{key} is {sigma!r}; give a finite 1σ")
-            if value is not None and sigma > 0.25 * abs(value):
-                raise ConfigError(
-                    f"{source}: rigs/{rig}/tolerances/{key} = {sigma:g} is {100 * sigma / abs(value):.0f} % of "
-                    f"{key} = {value:g}; tolerances are 1σ in the value's own unit (e.g. {0.01 * abs(value):.3g} "
-                    "for 1 %), not fractions"
-                )
+        check_tolerances(values.get("tolerances") or {}, values, f"{source}: rigs/{rig}/tolerances")
     cameras = config.get("cameras") or {}
     for rig, values in config["rigs"].items():
         if values.get("camera") is not None and values["camera"] not in cameras:
@@ -390,8 +404,8 @@ def add_sidecar_rigs(config: dict, trials: dict[str, Trial]) -> list[str]:
     """Rigs defined in sidecars, added to ``config["rigs"]``; returns their names.
 
     A sidecar that names a rig not in config and gives at least its
-    mass_kg, length_m and frontal_area_m2 defines that rig (its rig values and
-    ``camera``; the first such sidecar by trial name). Its other trials may
+    mass_kg, length_m and frontal_area_m2 defines that rig (its rig values,
+    ``tolerances`` and ``camera``; the first such sidecar by trial name). Its other trials may
     name it without values. The geometry (pivot, vertical) stays estimated.
     """
     added = []
@@ -409,6 +423,9 @@ def add_sidecar_rigs(config: dict, trials: dict[str, Trial]) -> list[str]:
                     f"{sorted(config.get('cameras') or {})} in config.yaml"
                 )
             values["camera"] = trial.sidecar["camera"]
+        if trial.sidecar.get("tolerances"):  # the defining sidecar's tolerances are the rig's
+            check_tolerances(trial.sidecar["tolerances"], values, f"{trial.sidecar_path}: tolerances")
+            values["tolerances"] = dict(trial.sidecar["tolerances"])
         config["rigs"][rig] = values
         added.append(rig)
     return added
@@ -421,6 +438,8 @@ def trial_settings(config: dict, trial: Trial) -> dict:
     merged_rig.update({k: v for k, v in trial.sidecar.items() if k in RIG_KEYS + GEOMETRY_KEYS})
     if any(k in RIG_KEYS for k in trial.sidecar):
         check_rig_values(merged_rig, f"{trial.sidecar_path} (with rig {rig})")
+    tolerances = trial_tolerances(config["rigs"][rig], trial.sidecar)
+    check_tolerances(trial.sidecar.get("tolerances") or {}, merged_rig, f"{trial.sidecar_path}: tolerances")
     tracking = {**config["tracking"]}
     tracking.update({k: v for k, v in trial.sidecar.items() if k in TRACKING_KEYS})
     camera = config["rigs"][rig].get("camera")
@@ -432,7 +451,7 @@ def trial_settings(config: dict, trial: Trial) -> dict:
     return {
         "rig_name": rig,
         "rig": {k: merged_rig[k] for k in RIG_KEYS if k in merged_rig},
-        "tolerances": dict(config["rigs"][rig].get("tolerances") or {}),
+        "tolerances": tolerances,
         "pivot_px": merged_rig.get("pivot_px"),
         "vertical_deg": merged_rig.get("vertical_deg"),
         "geometry_from_sidecar": any(k in trial.sidecar for k in GEOMETRY_KEYS),

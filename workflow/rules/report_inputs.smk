@@ -75,7 +75,8 @@ def report_inputs(wildcards):
 
 
 def report_trials():
-    """Trial → rig, kind, source file and the rig values (and pivot, vertical) its sidecar overrides."""
+    """Trial → rig, kind, source file, the rig values (and pivot, vertical) its sidecar overrides and the 1σ
+    tolerances stated for its values."""
     out = {}
     for name in sorted(TRIALS):
         trial = TRIALS[name]
@@ -90,6 +91,8 @@ def report_trials():
             "kind": trial.kind,
             "source": trial.path,
             "overrides": overrides,
+            # as its fits take them (its sidecar's, for the values it gives)
+            "tolerances": SETTINGS[name]["tolerances"],
         }
     return out
 

@@ -87,8 +87,12 @@ class TableSections(ReportData):
                     ]
                     continue
                 values = with_rig_defaults(used)  # as the fits take them
-                stated = self.rigs[rig].get("tolerances") or {}
+                stated, differ = self.rig_tolerances_used(rig)
                 by_trials = used.get(key) != self.rigs[rig]["values"].get(key)  # every trial's sidecar gives it
+                if key in differ:  # trials state different tolerances of one value
+                    text = fmt(values.get(key), 4) + (" (the sidecars of all its trials)" if by_trials else "")
+                    cells += [td(esc(text), "num"), td(esc("per trial (sidecars)"), "na")]
+                    continue
                 value = values.get(key)
                 if used.get(key) is None and key in UNSTATED_RIG_DEFAULTS:
                     default = UNSTATED_RIG_DEFAULTS[key]  # not stated: what the model uses
@@ -170,7 +174,8 @@ class TableSections(ReportData):
         note += camera_rig_note({r: self.rigs[r] for r in rigs})
         caption = self.table_caption(
             "Rig values used (measured, not fitted) with their 1σ tolerances; a tolerance not stated in the "
-            "configuration takes the default fraction. They enter the fits' systematic error budget."
+            "configuration (or, for a value a sidecar gives, in that sidecar) takes the default fraction. They "
+            "enter the fits' systematic error budget."
         )
         return table_html(header, rows, caption=caption, table_id="table1", note=note)
 
@@ -188,6 +193,23 @@ class TableSections(ReportData):
                 else:
                     per_trial[key] = sorted(set(values))
         return used, per_trial
+
+    def rig_tolerances_used(self, rig: str) -> tuple[dict, set]:
+        """The 1σ tolerances the rig's trials state (``trials[t]["tolerances"]``: the rig's, a sidecar's for the
+        values it gives), where all its trials state the same or none; and the keys they differ in. Without
+        per-trial tolerances (an older build), the rig's stated ones."""
+        trials = self.rig_trials(rig)
+        if not trials or any("tolerances" not in self.trials[t] for t in trials):
+            return dict(self.rigs[rig].get("tolerances") or {}), set()
+        keys = {k for t in trials for k in self.trials[t]["tolerances"]}
+        common, differ = {}, set()
+        for key in sorted(keys):
+            sigmas = {self.trials[t]["tolerances"].get(key) for t in trials}
+            if len(sigmas) > 1:
+                differ.add(key)
+            elif None not in sigmas:
+                common[key] = sigmas.pop()
+        return common, differ
 
     def estimated_geometry_text(self, rig: str, key: str) -> str:
         """The pivot (± standard errors) or vertical a rig's angle records used when config gave none."""
