@@ -133,7 +133,7 @@ def test_apple_frames_lost_and_repeated_by_the_phone_are_found_and_put_right(app
     assert abs(at_half[138] - slips[276] / 2) <= 0.1 and abs(at_half[232] - slips[463] / 2) <= 0.1
 
 
-@pytest.mark.parametrize("variant", ["hand_release", "hand_release_long_dark"])
+@pytest.mark.parametrize("variant", ["hand_release", "hand_release_long_dark", "hand_release_fingers"])
 def test_a_hand_holding_the_apple_before_the_release_is_never_taken_for_it(apple, tmp_path, variant):
     """The clip released by hand in view (``real_variants._hand_release``: held at its first place by a hand from
     the upper left, fingers over its edge, then let go and the hand drawn back): 1.5 s by a hand lighter than the

@@ -11,7 +11,7 @@ from pendulum.synthetic.experiment import generate_trial, release_time_s
 from pendulum.synthetic.scene import draw_disk
 from pendulum.synthetic.specs import Camera, TrialSpec
 from pendulum.tracking.centroids import measure_marker
-from pendulum.tracking.checks import exposure_centre_correction
+from pendulum.tracking.checks import exposure_centre_correction, held_still_runs
 from pendulum.tracking.marker import track_video
 from pendulum.tracking.settings import TrackerSettings
 from truth import track_errors
@@ -221,3 +221,25 @@ def test_the_reference_along_the_arc_follows_a_smooth_curve_and_holds_beyond_it(
     assert ref.value(*at(0.5)) == pytest.approx(beyond, rel=0.003)
     assert ref.value(*at(0.8)) == pytest.approx(beyond, rel=0.003)
     assert ArcReference(arc, r, enabled=False).ratio(*at(0.3)) == 1.0
+
+
+def test_a_still_body_with_more_of_something_at_either_end_of_the_record_is_held():
+    """``held_still_runs``: fingers alone over the body's edge make its silhouette ~1.5 times its own area, under
+    the 1.5 that flags a hand: a run of still frames over 1.2 times from the record's first frame (or to its last)
+    is held; the same run while the body swings, a run of two frames, or one mid-record is not."""
+    n = 200
+    rng = np.random.default_rng(5)
+    t = np.arange(n) / 60.0
+    x = 300 + 100 * np.sin(2 * np.pi * (t - 0.5) / 2.0)
+    y = 500 + 10 * np.cos(2 * np.pi * (t - 0.5) / 2.0)
+    x[:30], y[:30] = x[30] + rng.uniform(-0.6, 0.6, 30), y[30] + rng.uniform(-0.6, 0.6, 30)  # held still, trembling
+    ratio = np.ones(n)
+    ratio[:30] = 1.47  # fingers and body together
+    ratio[-20:] = 1.3  # caught at the end: still again
+    x[-20:], y[-20:] = x[-21], y[-21]
+    ratio[100:110] = 1.4  # mid-record: an occlusion, not a hold
+    held = held_still_runs(ratio, x, y, 1.2, 1.5)
+    assert held[:30].all() and held[-20:].all() and not held[30:-20].any()
+    swinging = held_still_runs(np.where(np.arange(n) < 30, 1.47, 1.0), 300 + 100 * np.sin(2 * t), y, 1.2, 1.5)
+    assert not swinging.any()  # over 1.2 but moving 3.3 px per frame: a blurred body, not a held one
+    assert not held_still_runs(np.r_[1.5, 1.5, np.ones(n - 2)], x, y, 1.2, 1.5).any()  # two frames: none

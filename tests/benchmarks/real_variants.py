@@ -241,16 +241,22 @@ def _two_tone_before_band(frames: list, shares: list | None, last: int | None) -
 
 
 HOLD_FRAMES = 90  # the hand_release variant: the apple held still for 1.5 s before it is let go
-# the hand variants: (frames held, the hand's grey): lighter than the apple and darker than the wall; for 10 s, and
-# darker than the apple's lit side (a sleeve, a glove)
-HANDS = {"hand_release": (HOLD_FRAMES, 150.0), "hand_release_long_dark": (600, 90.0)}
+# the hand variants: (frames held, the hand's grey, its forearm's width in px): lighter than the apple and darker
+# than the wall; for 10 s, and darker than the apple's lit side (a sleeve, a glove); fingers alone reaching in
+# (a forearm 8 px wide: apple and fingers together are ~1.5 times the apple's area, not 2.5–4.4 times)
+HANDS = {
+    "hand_release": (HOLD_FRAMES, 150.0, 34),
+    "hand_release_long_dark": (600, 90.0, 34),
+    "hand_release_fingers": (HOLD_FRAMES, 150.0, 8),
+}
 
 
-def _hand_release(frames: list, hold: int = HOLD_FRAMES, level: float = 150.0) -> list:
+def _hand_release(frames: list, hold: int = HOLD_FRAMES, level: float = 150.0, arm_px: int = 34) -> list:
     """The swing released by hand in view: for ``hold`` frames the apple is held at its place in the first
     frame (near the end of its swing) by a hand from the upper left, fingers over its edge (``level`` grey levels,
-    a faint texture, soft edges; 150: skin lighter than the apple, darker than the wall), trembling by ±0.6 px;
-    then let go (the clip from its first frame), the hand drawn back out of the frame over 0.4 s (25 frames)."""
+    a faint texture, soft edges; 150: skin lighter than the apple, darker than the wall; a forearm ``arm_px``
+    wide), trembling by ±0.6 px; then let go (the clip from its first frame), the hand drawn back out of the frame
+    over 0.4 s (25 frames)."""
     import cv2
 
     h, w = frames[0].shape
@@ -262,7 +268,7 @@ def _hand_release(frames: list, hold: int = HOLD_FRAMES, level: float = 150.0) -
         cover = np.zeros((h, w), np.float32)
         fingers = (int(round(62 + dx)), int(round(156 + dy)))
         cv2.ellipse(cover, fingers, (20, 12), 35, 0, 360, 1.0, -1, cv2.LINE_AA)
-        cv2.line(cover, fingers, (int(round(-40 + dx)), int(round(20 + dy))), 1.0, 34, cv2.LINE_AA)
+        cv2.line(cover, fingers, (int(round(-40 + dx)), int(round(20 + dy))), 1.0, arm_px, cv2.LINE_AA)
         return cv2.GaussianBlur(cover, (0, 0), 1.2)
 
     out = []
@@ -383,6 +389,7 @@ def variants():
         "two_tone_shadow_band_colour_1080p": (None, 1, 0, 18),
         "hand_release": (None, 1, 0, 18),
         "hand_release_long_dark": (None, 1, 0, 18),
+        "hand_release_fingers": (None, 1, 0, 18),
         "two_pendulums": (None, 1, 0, 18),
         "two_pendulums_start_px": (None, 1, 0, 18),
     }

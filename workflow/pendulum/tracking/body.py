@@ -41,7 +41,8 @@ frame, touches the frame's border), ``occluded`` (its covered area departs from 
 and 10 %, or lies beyond 1.5× or ½ of its median where it moves, or the
 soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its radius (≥ 0.3 px)), ``jump``
 (leave-one-out cubic, as for the marker), ``held`` (over 1.5× that median before the body's first free frame or
-after its last: a hand before the release, or one that catches it) and ``lost`` (no body near the prediction).
+after its last: a hand before the release, or one that catches it; or, still, over 1.2× it from the record's first
+frame or to its last: fingers alone over its edge) and ``lost`` (no body near the prediction).
 
 A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most
 samples) shows as a silhouette smaller or larger mid-swing than at the ends
@@ -92,7 +93,7 @@ from pendulum.tracking.body_scene import (
     unseen,
     unseen_behind,
 )
-from pendulum.tracking.checks import flag_jumps, robust_outliers
+from pendulum.tracking.checks import flag_jumps, held_still_runs, robust_outliers
 from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.settings import TrackerSettings
 
@@ -106,6 +107,7 @@ CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft
 FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
 MOVING_PX = 0.3  # the body moves (px per frame): its area there is its own (MAX_AREA_RATIO, MIN_AREA_RATIO)
+STILL_PX = 1.5  # median step (px per frame) of a body held still: a hand trembles (±0.6 px in the hand variants)
 TYPICAL_SAMPLES, TYPICAL_AREA_RATIO = 9, 1.2  # samples spread over the clip for the body's usual size; its range
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px
@@ -466,6 +468,8 @@ def track_body(
     own = np.median(mass[moving]) if moving.sum() >= 0.2 * usable.sum() else reference  # a hold: no outlier
     merged = usable & ((mass > MAX_AREA_RATIO * own) | (mass < MIN_AREA_RATIO * own))
     flags[area_fault | centroid_fault | merged] = "occluded"
+    # fingers alone over its edge add less than MAX_AREA_RATIO: a still run over the body's usual size, at either end
+    flags[held_still_runs(mass / own, x, y, TYPICAL_AREA_RATIO, STILL_PX)] = "held"
     usable = flags == "ok"
     # the body with what holds it before the first free frame or after the last (a hand before the release, one
     # that catches it): ``held``, also where that touches the border
