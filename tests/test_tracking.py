@@ -243,3 +243,45 @@ def test_a_still_body_with_more_of_something_at_either_end_of_the_record_is_held
     swinging = held_still_runs(np.where(np.arange(n) < 30, 1.47, 1.0), 300 + 100 * np.sin(2 * t), y, 1.2, 1.5)
     assert not swinging.any()  # over 1.2 but moving 3.3 px per frame: a blurred body, not a held one
     assert not held_still_runs(np.r_[1.5, 1.5, np.ones(n - 2)], x, y, 1.2, 1.5).any()  # two frames: none
+
+
+def _disk(shape, cx, cy, r):
+    yy, xx = np.mgrid[0 : shape[0], 0 : shape[1]]
+    return np.hypot(xx - cx, yy - cy) <= r
+
+
+@pytest.mark.parametrize("post_visible", [True, False])
+def test_a_post_in_front_of_the_swing_is_found_where_the_body_is_never_seen(post_visible):
+    """``occluders``: a disk of radius 12 px swings across a dark post (columns 96–104) that hides the part of it
+    behind; a second one is printed (a third of its pixels drop out, in a different place every frame). The
+    frames whose disk comes within 2 px of the post, and only those, are found; the print leaves no hidden place;
+    where the static scene shows nothing there (the same hole, as grey as the wall around: no object stands in
+    front), none."""
+    from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
+
+    shape, r = (160, 200), 12.0
+    background = np.full(shape, 180.0, np.float32)
+    if post_visible:
+        background[:, 96:105] = 40.0
+    rng = np.random.default_rng(3)
+    t = np.arange(300) / 30.0
+    xs, ys = 100 + 60 * np.sin(2 * np.pi * t / 2.0), 80 + 6 * np.cos(4 * np.pi * t / 2.0)
+    plain, printed = SilhouetteCounts(shape, r), SilhouetteCounts(shape, r)
+    for x, y in zip(xs, ys, strict=True):
+        body = _disk(shape, x, y, r)
+        seen = body.copy()
+        seen[:, 96:105] = False
+        x0, y0 = int(x - 2 * r), int(y - 2 * r)
+        roi = (slice(y0, y0 + int(4 * r)), slice(x0, x0 + int(4 * r)))
+        plain.add(seen[roi], x0, y0, x, y)
+        drop = rng.uniform(size=shape) < 0.33  # a print's light squares: elsewhere on the body every frame
+        printed.add((body & ~drop)[roi], x0, y0, x, y)
+    frames, found = hidden_frames(plain, xs, ys, background, 1.0)
+    touches = np.abs(xs - 100) < r + 4.5 + 2
+    if post_visible:
+        assert found["box_px"][0] <= 97 and found["box_px"][0] + found["box_px"][2] >= 104, found
+        assert frames[touches & (np.abs(xs - 100) < r + 4.5)].all()  # every frame the post covers part of
+        assert not frames[np.abs(xs - 100) > r + 4.5 + 3].any()  # none whose disk stays 3 px clear of it
+    else:
+        assert not frames.any() and found["hidden_px"] == 0
+    assert not hidden_frames(printed, xs, ys, background, 1.0)[0].any()

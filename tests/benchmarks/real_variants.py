@@ -304,11 +304,12 @@ def _colour_planes(last: int | None = None) -> tuple[list, list, list]:
 
 
 def _in_colour(name: str, last: int | None = None) -> list:
-    """A colour variant (``..._colour``, ``..._colour_1080p``), packed yuv420p for ``write_video(colour=True)``:
-    its luma made as the grey variant's, its chroma composited with the same shares of apple (at chroma
-    resolution). A shadow scales the wall's light, so its chroma's distance from grey (128) too: ``shadow_band_colour``;
-    ``two_tone_shadow_band_colour`` (as the held-out clip: a bright patterned top, a dark blue bottom) paints the
-    ball's lower half dark blue (U 165, V 117) and its top grey (U = V = 128), before the band."""
+    """A colour variant (``..._colour``, ``..._colour_1080p``, ``..._colour_550``), packed yuv420p for
+    ``write_video(colour=True)``: its luma made as the grey variant's, its chroma composited with the same shares of
+    apple (at chroma resolution). A shadow scales the wall's light, so its chroma's distance from grey (128) too:
+    ``shadow_band_colour``; ``two_tone_shadow_band_colour`` (as the held-out clip: a bright patterned top, a dark
+    blue bottom) paints the ball's lower half dark blue (U 165, V 117) and its top grey (U = V = 128), before the
+    band."""
     import cv2
 
     ys, us, vs = _colour_planes(last)
@@ -339,6 +340,9 @@ def _in_colour(name: str, last: int | None = None) -> list:
             chroma.append(np.clip(np.round(shaded), 0, 255).astype(np.uint8))
         if name.endswith("_1080p"):  # every plane 3× (the held-out clip's size)
             image, *chroma = (cv2.resize(p, None, fx=3, fy=3, interpolation=cv2.INTER_CUBIC) for p in (image, *chroma))
+        if name.endswith("_550"):  # the held-out clip's other size, 550×310 (its chroma 275×155: odd rows)
+            image = cv2.resize(image, (550, 310), interpolation=cv2.INTER_AREA)
+            chroma = [cv2.resize(p, (275, 155), interpolation=cv2.INTER_AREA) for p in chroma]
         width = image.shape[1]
         out.append(np.concatenate([image.reshape(-1), chroma[0].reshape(-1), chroma[1].reshape(-1)]).reshape(-1, width))
     return out
@@ -387,6 +391,7 @@ def variants():
         "shadow_band_colour": (None, 1, 0, 18),
         "two_tone_shadow_band_colour": (None, 1, 0, 18),
         "two_tone_shadow_band_colour_1080p": (None, 1, 0, 18),
+        "two_tone_shadow_band_colour_550": (None, 1, 0, 18),
         "hand_release": (None, 1, 0, 18),
         "hand_release_long_dark": (None, 1, 0, 18),
         "hand_release_fingers": (None, 1, 0, 18),

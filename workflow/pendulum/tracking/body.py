@@ -35,28 +35,29 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    locking). Any point fixed to a rigid pendulum turns about the pivot with it, so its angle about the
    pivot is θ up to a constant (the vertical).
 
-Flags from the measurement's own evidence (never thresholds fitted to renders):
-``edge`` (the body itself, within 1.2 inner radii of its thickest point, not a rod or thread leaving the
-frame, touches the frame's border), ``occluded`` (its covered area departs from its running median by 6 robust σ
-and 10 %, or lies beyond 1.5× or ½ of its median where it moves, or the
-soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its radius (≥ 0.3 px)), ``jump``
-(leave-one-out cubic, as for the marker), ``held`` (over 1.5× that median before the body's first free frame or
-after its last: a hand before the release, or one that catches it; or, still, over 1.2× it from the record's first
-frame or to its last: fingers alone over its edge) and ``lost`` (no body near the prediction).
+Flags from the measurement's own evidence (never thresholds fitted to renders): ``edge`` (the body itself, within
+1.2 inner radii of its thickest point, not a rod or thread leaving the frame, touches the frame's border),
+``occluded`` (its covered area departs from its running median by 6 robust σ and 10 %, or lies beyond 1.5× or ½ of
+its median where it moves, or the soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its
+radius (≥ 0.3 px), or it reaches a place something in front of the swing hides:
+:mod:`pendulum.tracking.occluders`), ``jump`` (leave-one-out cubic, as for the marker), ``held`` (over 1.5× that
+median before the body's first free frame or after its last: a hand before the release, or one that catches it;
+or, still, over 1.2× it from the record's first frame or to its last: fingers alone over its edge) and ``lost``
+(no body near the prediction).
 
-A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most
-samples) shows as a silhouette smaller or larger mid-swing than at the ends
-(:func:`pendulum.tracking.path_shape.rest_place_area_ratio` outside 0.9–1/0.9): the scene there is
-taken again from the two ends of the swing (:func:`pendulum.tracking.body_scene.rest_place_scene`)
-and the body tracked again, up to :data:`REST_PLACE_REPAIRS` times; then refused, unless the scene from
-the swing's ends saw the rest place and is the median's there (``rest_place_clear``: it never held the body;
-the body's look changes with the wall behind it, a two-tone ball's light half before a shadow band): then
-a one-sided body is measured by its side only (as in step 2, where that was not taken), and a silhouette
-still smaller or larger mid-swing is kept with a ``warning`` in the track's body facts.
+A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most samples) shows
+as a silhouette smaller or larger mid-swing than at the ends
+(:func:`pendulum.tracking.path_shape.rest_place_area_ratio` outside 0.9–1/0.9): the scene there is taken again
+from the two ends of the swing (:func:`pendulum.tracking.body_scene.rest_place_scene`) and the body tracked again,
+up to :data:`REST_PLACE_REPAIRS` times; then refused, unless the scene from the swing's ends saw the rest place
+and is the median's there (``rest_place_clear``: it never held the body; the body's look changes with the wall
+behind it, a two-tone ball's light half before a shadow band): then a one-sided body is measured by its side only
+(as in step 2, where that was not taken), and a silhouette still smaller or larger mid-swing is kept with a
+``warning`` in the track's body facts.
 
 ``view`` (in :func:`find_body` and :func:`track_body`): the image taken of each frame, its luma by default
-(:func:`pendulum.tracking.colour.colour_view`: its colour's difference from the wall's). ECC alignment of
-the body's look was measured and not taken (docs/footage.md).
+(:func:`pendulum.tracking.colour.colour_view`: its colour's difference from the wall's). ECC alignment of the
+body's look was measured and not taken (docs/footage.md).
 """
 
 from __future__ import annotations
@@ -89,11 +90,13 @@ from pendulum.tracking.body_scene import (
     same_exposure,
     sample_clip,
     silhouette_fraction,
+    soft_centroid,
     touches_border,
     unseen,
     unseen_behind,
 )
 from pendulum.tracking.checks import flag_jumps, held_still_runs, robust_outliers
+from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
 from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.settings import TrackerSettings
 
@@ -165,46 +168,6 @@ def _body_close_size(inner_radius_px: float) -> int:
 def _open_size(inner_radius_px: float) -> int:
     """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
     return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
-
-
-def _silhouette(
-    diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION
-) -> tuple[np.ndarray | None, float]:
-    """The body's silhouette: its strong pixels (D > ½ C_f, C_f the component's 90th percentile of D) filled to
-    their convex hull, and C_f. A part that hardly differs from the wall (a bright half before a bright
-    wall, the light squares of a print) is left out or filled in the same way in every frame."""
-    contrast = float(np.percentile(diff[component], 90))
-    strong = cv2.findNonZero((component & (diff > fraction * contrast)).astype(np.uint8))
-    if strong is None or len(strong) < 3:
-        return None, contrast
-    filled = np.zeros(diff.shape, np.uint8)
-    cv2.fillConvexPoly(filled, cv2.convexHull(strong), 1)
-    return filled > 0, contrast
-
-
-def _soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION):
-    """Soft-silhouette centroid: (x, y, Σw, the filled silhouette's plain centroid x, y).
-
-    w = 1 in the silhouette's core (:func:`_silhouette` less its outer 2 px); in the 2 px on either side
-    of its outline, the pixel's coverage D / C_local, C_local the largest D of the core within 3 px (an
-    edge pixel of a body of contrast C covering a fraction f of it differs by f·C): no pixel locking.
-    """
-    inside, contrast = _silhouette(diff, component, fraction)
-    if inside is None:
-        return math.nan, math.nan, 0.0, math.nan, math.nan
-    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
-    hull = inside.astype(np.uint8)
-    core = cv2.erode(hull, disk)
-    grown = cv2.dilate(hull, disk) > 0
-    if core.sum() < 5:  # a body a few pixels across: the whole silhouette is its edge
-        core = hull
-    local = cv2.dilate(np.where(core > 0, diff, 0).astype(np.float32), np.ones((7, 7), np.uint8))
-    yy, xx = np.nonzero(grown)
-    edge = np.minimum(diff[yy, xx] / np.maximum(local[yy, xx], 1e-6), 1.0)
-    ww = np.where(core[yy, xx] > 0, 1.0, np.where(local[yy, xx] > 0, edge, 0.0))
-    total = float(ww.sum())
-    ys, xs = np.nonzero(inside)
-    return float(ww @ xx / total), float(ww @ yy / total), total, float(xs.mean()), float(ys.mean())
 
 
 def find_body(
@@ -374,7 +337,7 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
         return _Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
     fraction = silhouette_fraction(diff[opened])
-    x, y, _, _, _ = _soft_centroid(diff, opened, fraction)
+    x, y, _, _, _ = soft_centroid(diff, opened, fraction)
     return _Seen(x, y, contrast, fraction, opened, inner)
 
 
@@ -402,8 +365,7 @@ def track_body(
     x_prev, y_prev = scene.start_px
     vx = vy = 0.0
     lost_run = 0
-    binary = []
-    report: dict = {}
+    binary, report, seen = [], {}, SilhouetteCounts(background.shape, scene.radius_px)
     for index, time_s, image in iter_luma(path, report=report, view=view):
         half = reach + 2.0 * math.hypot(vx, vy) + 6 * lost_run
         px, py = x_prev + vx, y_prev + vy
@@ -422,7 +384,7 @@ def track_body(
                     component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area)
             if component is not None:
                 _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
-                sx, sy, mass, bx, by = _soft_centroid(diff, component, scene.silhouette_fraction)
+                sx, sy, mass, bx, by = soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
                     bx0, by0, bw, bh = box
@@ -433,6 +395,8 @@ def track_body(
                         or (by0 + bh + y0 >= height - 1 and y1 == height)
                     )
                     flag = "edge" if touches else "ok"
+                    if not touches:
+                        seen.add(component, x0, y0, x, y)
         if math.isfinite(x):
             if lost_run == 0 and rows and rows[-1][6] != "lost":
                 vx, vy = x - x_prev, y - y_prev
@@ -470,6 +434,8 @@ def track_body(
     flags[area_fault | centroid_fault | merged] = "occluded"
     # fingers alone over its edge add less than MAX_AREA_RATIO: a still run over the body's usual size, at either end
     flags[held_still_runs(mass / own, x, y, TYPICAL_AREA_RATIO, STILL_PX)] = "held"
+    hidden, in_front = hidden_frames(seen, x, y, background, scene.noise_grey)  # a post before the swing
+    flags[hidden & (flags == "ok")] = "occluded"
     usable = flags == "ok"
     # the body with what holds it before the first free frame or after the last (a hand before the release, one
     # that catches it): ``held``, also where that touches the border
@@ -483,7 +449,7 @@ def track_body(
     counts = table.flag.value_counts().to_dict()
     n_ok = int(counts.get("ok", 0))
     table.attrs["video"] = report
-    table.attrs["body"] = scene.to_dict()
+    table.attrs["body"] = {**scene.to_dict(), **({"in_front": in_front} if in_front["hidden_px"] else {})}
     fill_limit = max(3 * scene.noise_grey, UNSEEN_FILL_SHARE * contrast)
     unseen_facts, refusal = (
         unseen_behind(background, scene.unseen, np.column_stack([x, y])[usable], scene.radius_px, fill_limit)

@@ -356,6 +356,46 @@ def silhouette_fraction(values: np.ndarray) -> float:
     return max(STRONG_FRACTION, cut / top)
 
 
+def silhouette(
+    diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION
+) -> tuple[np.ndarray | None, float]:
+    """The body's silhouette: its strong pixels (D > ½ C_f, C_f the component's 90th percentile of D) filled to
+    their convex hull, and C_f. A part that hardly differs from the wall (a bright half before a bright
+    wall, the light squares of a print) is left out or filled in the same way in every frame."""
+    contrast = float(np.percentile(diff[component], 90))
+    strong = cv2.findNonZero((component & (diff > fraction * contrast)).astype(np.uint8))
+    if strong is None or len(strong) < 3:
+        return None, contrast
+    filled = np.zeros(diff.shape, np.uint8)
+    cv2.fillConvexPoly(filled, cv2.convexHull(strong), 1)
+    return filled > 0, contrast
+
+
+def soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION):
+    """Soft-silhouette centroid: (x, y, Σw, the filled silhouette's plain centroid x, y).
+
+    w = 1 in the silhouette's core (:func:`silhouette` less its outer 2 px); in the 2 px on either side
+    of its outline, the pixel's coverage D / C_local, C_local the largest D of the core within 3 px (an
+    edge pixel of a body of contrast C covering a fraction f of it differs by f·C): no pixel locking.
+    """
+    inside, contrast = silhouette(diff, component, fraction)
+    if inside is None:
+        return math.nan, math.nan, 0.0, math.nan, math.nan
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+    hull = inside.astype(np.uint8)
+    core = cv2.erode(hull, disk)
+    grown = cv2.dilate(hull, disk) > 0
+    if core.sum() < 5:  # a body a few pixels across: the whole silhouette is its edge
+        core = hull
+    local = cv2.dilate(np.where(core > 0, diff, 0).astype(np.float32), np.ones((7, 7), np.uint8))
+    yy, xx = np.nonzero(grown)
+    edge = np.minimum(diff[yy, xx] / np.maximum(local[yy, xx], 1e-6), 1.0)
+    ww = np.where(core[yy, xx] > 0, 1.0, np.where(local[yy, xx] > 0, edge, 0.0))
+    total = float(ww.sum())
+    ys, xs = np.nonzero(inside)
+    return float(ww @ xx / total), float(ww @ yy / total), total, float(xs.mean()), float(ys.mean())
+
+
 def body_component(diff: np.ndarray, threshold: float, open_px: int, close_px: int, near=None, area_px=None):
     """The moving pixels to take for the body: the component nearest ``near`` (else the heaviest) with every
     component whose box lies within 2 closing widths of it (a print's patches, a body cut by a wall-coloured

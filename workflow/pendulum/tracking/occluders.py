@@ -1,0 +1,93 @@
+"""Something static in front of the swing (a post, a tank's strut, a clamp): where the body is never seen
+although its path crosses there, and the frames whose body reaches that place.
+
+While the body is tracked, each frame's moving pixels (its component) are counted per image pixel (``seen``)
+and, aligned at the body's centroid, per pixel of the body's own frame (its ``shape``). After the pass the
+body's core (the pixels inside it in at least :data:`CORE_SHARE` of its frames) is stamped at every tracked
+position: how often each image pixel was *expected* inside the body. A pixel expected in at least
+:data:`MIN_EXPECTED` frames but seen in under :data:`SEEN_SHARE` of them, on something that stands out of the
+wall in the static scene, is hidden by an object in front; a frame whose body (its shape, grown by 2 px: its soft rim)
+reaches such a pixel shows only part of the body, and its centroid is pulled away from the hidden part.
+
+A print's light squares or a faint half that drop out of the silhouette either move with the body (seen in
+other frames there) or drop out of its shape too; a plain wall has nothing in front of the swing: neither
+leaves a hidden place.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+CORE_SHARE = 0.9  # the body's core: inside its silhouette in this share of its frames
+SHAPE_SHARE = 0.5  # its shape: in half of them
+MIN_EXPECTED = 8  # frames whose core covers a pixel before that pixel can be called hidden
+SEEN_SHARE = 0.2  # ... seen in fewer than this share of them: hidden
+MIN_HIDDEN_SHARE = 0.01  # a hidden place smaller than this share of the body's area is none (a few stray pixels)
+STANDS_OUT = 3.0  # an object in front stands out of the wall around it by this many noise σ in the static scene
+
+
+class SilhouetteCounts:
+    """Per image pixel how often the body was seen there, and its silhouettes aligned at their centroids."""
+
+    def __init__(self, shape: tuple[int, int], radius_px: float):
+        self.seen = np.zeros(shape, np.float32)
+        self.half = int(math.ceil(2.0 * radius_px)) + 2
+        self.shape = np.zeros((2 * self.half + 1, 2 * self.half + 1), np.float32)
+        self.n = 0
+
+    def add(self, component: np.ndarray, x0: int, y0: int, cx: float, cy: float) -> None:
+        """One frame's component (bool, at ``x0, y0`` in the image), its body centred at ``cx, cy``."""
+        h, w = component.shape
+        self.seen[y0 : y0 + h, x0 : x0 + w] += component
+        # the component in the body's frame, its centroid at the middle (to the nearest pixel)
+        ox, oy = self.half - int(round(cx - x0)), self.half - int(round(cy - y0))
+        a0, b0 = max(ox, 0), max(oy, 0)
+        a1, b1 = min(ox + w, self.shape.shape[1]), min(oy + h, self.shape.shape[0])
+        if a1 > a0 and b1 > b0:
+            self.shape[b0:b1, a0:a1] += component[b0 - oy : b1 - oy, a0 - ox : a1 - ox]
+            self.n += 1
+
+
+def _stamps(image_shape, stamp: np.ndarray, half: int, xs: np.ndarray, ys: np.ndarray):
+    """(index, image slice, stamp slice) of ``stamp`` centred at each finite (x, y), clipped to the image."""
+    height, width = image_shape
+    for k in np.flatnonzero(np.isfinite(xs) & np.isfinite(ys)):
+        x0, y0 = int(round(xs[k])) - half, int(round(ys[k])) - half
+        a0, b0 = max(x0, 0), max(y0, 0)
+        a1, b1 = min(x0 + stamp.shape[1], width), min(y0 + stamp.shape[0], height)
+        if a1 > a0 and b1 > b0:
+            yield k, (slice(b0, b1), slice(a0, a1)), stamp[b0 - y0 : b1 - y0, a0 - x0 : a1 - x0]
+
+
+def hidden_frames(
+    counts: SilhouetteCounts, xs: np.ndarray, ys: np.ndarray, background: np.ndarray, noise_grey: float
+) -> tuple[np.ndarray, dict]:
+    """The frames whose body reaches a place something in front hides (bool per frame), and what was found:
+    ``hidden_px`` (its pixel count), ``box_px`` (x, y, width, height) or None."""
+    none = np.zeros(xs.size, bool), {"hidden_px": 0, "box_px": None}
+    if counts.n < MIN_EXPECTED:
+        return none
+    mean_shape = counts.shape / counts.n
+    core = (mean_shape >= CORE_SHARE).astype(np.float32)
+    body = cv2.dilate((mean_shape >= SHAPE_SHARE).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    if core.sum() < 4:
+        return none
+    expected = np.zeros_like(counts.seen)
+    for _, where, stamp in _stamps(expected.shape, core, counts.half, xs, ys):
+        expected[where] += stamp
+    # something in front shows in the static scene: it stands out of the wall around it
+    wall = cv2.medianBlur(np.clip(background, 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
+    stands_out = np.abs(background - wall) > STANDS_OUT * max(noise_grey, 0.5)
+    stands_out = cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    hidden = (expected >= MIN_EXPECTED) & (counts.seen < SEEN_SHARE * expected) & stands_out
+    if hidden.sum() < max(4, MIN_HIDDEN_SHARE * core.sum()):
+        return none
+    frames = np.zeros(xs.size, bool)
+    for k, where, stamp in _stamps(hidden.shape, body, counts.half, xs, ys):
+        frames[k] = bool((hidden[where] & stamp).any())
+    ys_h, xs_h = np.nonzero(hidden)
+    box = [int(xs_h.min()), int(ys_h.min()), int(xs_h.max() - xs_h.min() + 1), int(ys_h.max() - ys_h.min() + 1)]
+    return frames, {"hidden_px": int(hidden.sum()), "box_px": box}
