@@ -324,3 +324,8 @@ def test_the_tracking_table_says_a_body_was_tracked_and_its_warning(tmp_path):
     assert ">tracked the body: no marker disk in the video</span></div><div" in row
     assert ">" + warning.replace("'", "&#x27;") + "</div>" in row
     assert "body, r 14.1 px, auto" in row
+    body["body"]["in_front"] = {"hidden_px": 436, "box_px": [295, 196, 14, 41]}  # a post before the swing
+    Path(report.files["trials"]["t10"]["tracks"]).write_text(json.dumps(body))
+    report.__post_init__()
+    row = _row(report.tracking_section(), trial="t10")
+    assert "hides part of the body at x 295–308, y 196–236 px" in row

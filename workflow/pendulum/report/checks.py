@@ -31,6 +31,15 @@ def _note(html: str) -> str:
     return f'<div style="margin:0 0 0.5em">{html}</div>'
 
 
+def in_front_text(box_px) -> str:
+    """The note on something static in front of the swing (the tracks JSON's ``body.in_front.box_px``)."""
+    x, y, w, h = box_px
+    return (
+        f"something in front of the swing hides part of the body at x {x}–{x + w - 1}, y {y}–{y + h - 1} px (a post, "
+        "a strut, a clamp): the frames in which the body reaches it are flagged occluded"
+    )
+
+
 def marker_text(tracks: dict) -> str:
     """The marker the tracker followed (tracks JSON ``marker``): polarity and radius, and whether detection found
     them (``detection`` present: config and sidecar left polarity or radius to it) or they were given."""
@@ -350,6 +359,8 @@ class CheckSections(ReportData):
                 notes.append(f'<span title="{esc(method.get("reason", ""))}">{esc(short)}</span>')
                 if ((tracks or {}).get("body") or {}).get("warning"):
                     notes.append(esc(tracks["body"]["warning"]))
+                if box := ((tracks or {}).get("body") or {}).get("in_front", {}).get("box_px"):
+                    notes.append(esc(in_front_text(box)))
             if kind == "video" and is_ok(tracks) and slip_sentence((tracks or {}).get("timing") or {}):
                 notes.append(esc(slip_sentence(tracks["timing"])))
             notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
