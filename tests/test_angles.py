@@ -153,6 +153,26 @@ def test_crossing_period_of_a_decaying_off_centre_swing():
     assert crossing_period(t[:150], theta[:150]) is None  # 2.5 s: one period
 
 
+def test_crossing_period_across_a_post_that_hides_every_crossing():
+    """A post before the swing at its middle hides the body around every crossing (0.075 s of flagged samples,
+    the apple clip's): each crossing timed across the gap (mid-swing θ is straight in t), the period as without the
+    post to 1e-5. Before 2026-11-29 only neighbouring usable samples timed a crossing: no period at all. A gap
+    longer than a fifth of the half swing times none."""
+    from pendulum.angles.swings import crossing_period
+
+    t = np.arange(0, 20, 1 / 60)
+    period = 2.078
+    phase = 2 * math.pi * t / period + 0.4
+    theta = 0.35 * np.exp(-0.02 * t) * np.cos(phase) + 0.03
+    clear = crossing_period(t, theta)
+    hidden = np.abs(np.cos(phase)) < np.sin(math.pi * 0.075 / period)  # ±0.0375 s about each crossing
+    assert hidden.sum() >= 4 * 2 * clear[2]  # every crossing, 4 or 5 samples each
+    got, _, cycles = crossing_period(t, np.where(hidden, np.nan, theta))
+    assert got == pytest.approx(clear[0], rel=1e-5) and cycles == clear[2]
+    wide = np.abs(np.cos(phase)) < np.sin(math.pi * 0.25 / period)  # a quarter of the half swing hidden
+    assert crossing_period(t, np.where(wide, np.nan, theta)) is None
+
+
 @pytest.mark.parametrize("fps", [30, 60, 240])
 def test_crossing_period_of_a_record_that_runs_to_rest(fps):
     """Noise about the rest at the end crosses the middle many times: none of it is a period (a review found 0.62 s

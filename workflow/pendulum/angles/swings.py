@@ -129,6 +129,7 @@ def sample_noise_rad(theta: np.ndarray) -> float:
 
 MIN_HELD_FRAMES = 3  # held frames before the first free one: a release by hand in view
 HAND_RELEASE_FIT_S = 0.25  # of the free swing's start, fitted to find where a hand let it go
+MAX_CROSSING_GAP = 0.2  # a crossing is timed across flagged samples spanning up to this share of the half swing
 
 
 @dataclass
@@ -271,8 +272,9 @@ def crossing_period(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, float
 
     The middle is halfway between the median maximum and minimum of the confirmed swing extrema
     (:func:`swing_extrema`: noise makes none, nor does the record's rest at its end); one crossing per
-    half swing between two of them (linear interpolation between neighbouring usable samples; the
-    median time where noise crosses more than once). The upward and downward crossings are each numbered
+    half swing between two of them (linear interpolation between neighbouring usable samples, also across
+    flagged ones where they span under :data:`MAX_CROSSING_GAP` of the half swing; the median time where noise
+    crosses more than once). The upward and downward crossings are each numbered
     by whole periods from the first and fitted with a line t = t₀ + P·n; P is the mean of the two
     directions' slopes (an off-centre swing makes its half periods alternate, not its periods), its
     standard error from the lines' residuals. None with fewer than two periods in either direction.
@@ -287,16 +289,19 @@ def crossing_period(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, float
     if high.size < 2 or low.size < 2:
         return None
     centred = th - 0.5 * (float(np.median(high)) + float(np.median(low)))
-    pair = np.isfinite(centred[:-1]) & np.isfinite(centred[1:])
+    usable = np.flatnonzero(np.isfinite(centred))
     crossings = {1: [], -1: []}
     for a, b in zip(extrema[:-1], extrema[1:], strict=True):
         direction = 1 if centred[b] > centred[a] else -1
         if direction * centred[a] >= 0 or direction * centred[b] <= 0:
             continue  # both on one side of the middle: no crossing to time
-        i = a + np.flatnonzero(pair[a:b] & (np.sign(centred[a:b]) != np.sign(centred[a + 1 : b + 1])))
-        i = i[centred[i] != centred[i + 1]]
+        k = usable[(usable >= a) & (usable <= b)]  # across a gap of flagged samples (a post before the swing)
+        i, j = k[:-1], k[1:]  # too, where it is short: mid-swing θ is straight in t to ω²Δt²/6 of its slope
+        keep = (np.sign(centred[i]) != np.sign(centred[j])) & (centred[i] != centred[j])
+        keep &= t[j] - t[i] <= MAX_CROSSING_GAP * (t[b] - t[a])
+        i, j = i[keep], j[keep]
         if i.size:
-            when = t[i] - centred[i] * (t[i + 1] - t[i]) / (centred[i + 1] - centred[i])
+            when = t[i] - centred[i] * (t[j] - t[i]) / (centred[j] - centred[i])
             crossings[direction].append(float(np.median(when)))
     slopes, variances, cycles = [], [], []
     for direction in (1, -1):
