@@ -78,12 +78,15 @@ def hidden_frames(
     expected = np.zeros_like(counts.seen)
     for _, where, stamp in _stamps(expected.shape, core, counts.half, xs, ys):
         expected[where] += stamp
+    hidden = (expected >= MIN_EXPECTED) & (counts.seen < SEEN_SHARE * expected)
+    least = max(4, MIN_HIDDEN_SHARE * core.sum())
+    if hidden.sum() < least:
+        return none
     # something in front shows in the static scene: it stands out of the wall around it
     wall = cv2.medianBlur(np.clip(background, 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
     stands_out = np.abs(background - wall) > STANDS_OUT * max(noise_grey, 0.5)
-    stands_out = cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
-    hidden = (expected >= MIN_EXPECTED) & (counts.seen < SEEN_SHARE * expected) & stands_out
-    if hidden.sum() < max(4, MIN_HIDDEN_SHARE * core.sum()):
+    hidden &= cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    if hidden.sum() < least:
         return none
     frames = np.zeros(xs.size, bool)
     for k, where, stamp in _stamps(hidden.shape, body, counts.half, xs, ys):
