@@ -396,7 +396,7 @@ def track_body(
                     )
                     flag = "edge" if touches else "ok"
                     if not touches:
-                        seen.add(component, x0, y0, x, y)
+                        seen.add(len(rows), component, x0, y0, x, y)
         if math.isfinite(x):
             if lost_run == 0 and rows and rows[-1][6] != "lost":
                 vx, vy = x - x_prev, y - y_prev
@@ -434,7 +434,7 @@ def track_body(
     flags[area_fault | centroid_fault | merged] = "occluded"
     # fingers alone over its edge add less than MAX_AREA_RATIO: a still run over the body's usual size, at either end
     flags[held_still_runs(mass / own, x, y, TYPICAL_AREA_RATIO, STILL_PX)] = "held"
-    hidden, in_front = hidden_frames(seen, x, y, background, scene.noise_grey)  # a post before the swing
+    hidden, in_front = hidden_frames(seen, x, y, background, max(NOISE_SIGMAS * scene.noise_grey, 4.0))  # a post
     flags[hidden & (flags == "ok")] = "occluded"
     usable = flags == "ok"
     # the body with what holds it before the first free frame or after the last (a hand before the release, one

@@ -139,16 +139,21 @@ def robust_outliers(values: np.ndarray, usable: np.ndarray, window: int, sigmas:
 def held_still_runs(area_ratio: np.ndarray, x: np.ndarray, y: np.ndarray, above: float, still_px: float) -> np.ndarray:
     """The record's leading and trailing runs of frames whose silhouette is over ``above`` times the body's own
     area (what holds it adds to it) while it stays still (median step ≤ ``still_px``): a hand before the release, or
-    one that catches it, with only its fingers in view. A run of fewer than 3 frames, or one that moves, is none."""
+    one that catches it, with only its fingers in view. A run ends where three frames in a row show the body at
+    its own size (a frame without a body, or a dip of one or two, does not end it); one with fewer than 3 frames
+    over, or one that moves, is none."""
     n = area_ratio.size
-    over = np.nan_to_num(area_ratio, nan=0.0) > above
+    seen = np.isfinite(area_ratio) & np.isfinite(x) & np.isfinite(y)
+    over = seen & (area_ratio > above)
+    at_size = (seen & ~over).astype(int)
     step = np.hypot(np.diff(x, prepend=np.nan), np.diff(y, prepend=np.nan))
     held = np.zeros(n, bool)
-    first_not = int(np.argmin(over)) if not over.all() else n  # frames [0, first_not) are over
-    last_not = n - 1 - int(np.argmin(over[::-1])) if not over.all() else -1  # frames (last_not, n) are over
-    for run in (np.arange(first_not), np.arange(last_not + 1, n)):
+    for forward in (True, False):
+        three = np.flatnonzero(np.convolve(at_size if forward else at_size[::-1], np.ones(3, int), "valid") == 3)
+        length = int(three[0]) if three.size else n
+        run = np.arange(length) if forward else np.arange(n - length, n)
         steps = step[run[1:]]
         steps = steps[np.isfinite(steps)]
-        if run.size >= 3 and steps.size and float(np.median(steps)) <= still_px:
+        if over[run].sum() >= 3 and steps.size and float(np.median(steps)) <= still_px:
             held[run] = True
     return held

@@ -3,11 +3,12 @@ although its path crosses there, and the frames whose body reaches that place.
 
 While the body is tracked, each frame's moving pixels (its component) are counted per image pixel (``seen``)
 and, aligned at the body's centroid, per pixel of the body's own frame (its ``shape``). After the pass the
-body's core (the pixels inside it in at least :data:`CORE_SHARE` of its frames) is stamped at every tracked
-position: how often each image pixel was *expected* inside the body. A pixel expected in at least
-:data:`MIN_EXPECTED` frames but seen in under :data:`SEEN_SHARE` of them, on something that stands out of the
-wall in the static scene, is hidden by an object in front; a frame whose body (its shape, grown by 2 px: its soft rim)
-reaches such a pixel shows only part of the body, and its centroid is pulled away from the hidden part.
+body's core (the pixels inside it in at least :data:`CORE_SHARE` of its frames) is stamped at the position of
+every frame counted (not one cut by the frame's border): how often each image pixel was *expected* inside the
+body. A pixel expected in at least :data:`MIN_EXPECTED` frames but seen in under :data:`SEEN_SHARE` of them, on
+something that stands out of the wall in the static scene by more than a moving body must differ by, is hidden
+by an object in front; a frame whose body (its shape, grown by 2 px: its soft rim) reaches such a pixel shows
+only part of the body, and its centroid is pulled away from the hidden part.
 
 A print's light squares or a faint half that drop out of the silhouette either move with the body (seen in
 other frames there) or drop out of its shape too; a plain wall has nothing in front of the swing: neither
@@ -26,7 +27,6 @@ SHAPE_SHARE = 0.5  # its shape: in half of them
 MIN_EXPECTED = 8  # frames whose core covers a pixel before that pixel can be called hidden
 SEEN_SHARE = 0.2  # ... seen in fewer than this share of them: hidden
 MIN_HIDDEN_SHARE = 0.01  # a hidden place smaller than this share of the body's area is none (a few stray pixels)
-STANDS_OUT = 3.0  # an object in front stands out of the wall around it by this many noise σ in the static scene
 
 
 class SilhouetteCounts:
@@ -37,11 +37,13 @@ class SilhouetteCounts:
         self.half = int(math.ceil(2.0 * radius_px)) + 2
         self.shape = np.zeros((2 * self.half + 1, 2 * self.half + 1), np.float32)
         self.n = 0
+        self.frames: list[int] = []  # the rows counted in ``seen``: only these are expected anywhere
 
-    def add(self, component: np.ndarray, x0: int, y0: int, cx: float, cy: float) -> None:
-        """One frame's component (bool, at ``x0, y0`` in the image), its body centred at ``cx, cy``."""
+    def add(self, row: int, component: np.ndarray, x0: int, y0: int, cx: float, cy: float) -> None:
+        """Row ``row``'s component (bool, at ``x0, y0`` in the image), its body centred at ``cx, cy``."""
         h, w = component.shape
         self.seen[y0 : y0 + h, x0 : x0 + w] += component
+        self.frames.append(row)
         # the component in the body's frame, its centroid at the middle (to the nearest pixel)
         ox, oy = self.half - int(round(cx - x0)), self.half - int(round(cy - y0))
         a0, b0 = max(ox, 0), max(oy, 0)
@@ -63,10 +65,12 @@ def _stamps(image_shape, stamp: np.ndarray, half: int, xs: np.ndarray, ys: np.nd
 
 
 def hidden_frames(
-    counts: SilhouetteCounts, xs: np.ndarray, ys: np.ndarray, background: np.ndarray, noise_grey: float
+    counts: SilhouetteCounts, xs: np.ndarray, ys: np.ndarray, background: np.ndarray, threshold_grey: float
 ) -> tuple[np.ndarray, dict]:
     """The frames whose body reaches a place something in front hides (bool per frame), and what was found:
-    ``hidden_px`` (its pixel count), ``box_px`` (x, y, width, height) or None."""
+    ``hidden_px`` (its pixel count), ``box_px`` (x, y, width, height) or None. The body is expected only where a
+    counted frame put it (one cut by the frame's border is not counted, nor expected); something in front stands
+    out of the wall around it by more than ``threshold_grey`` (the tracker's: what a moving body must differ by)."""
     none = np.zeros(xs.size, bool), {"hidden_px": 0, "box_px": None}
     if counts.n < MIN_EXPECTED:
         return none
@@ -76,15 +80,16 @@ def hidden_frames(
     if core.sum() < 4:
         return none
     expected = np.zeros_like(counts.seen)
-    for _, where, stamp in _stamps(expected.shape, core, counts.half, xs, ys):
+    rows = np.asarray(counts.frames, int)
+    for _, where, stamp in _stamps(expected.shape, core, counts.half, xs[rows], ys[rows]):
         expected[where] += stamp
     hidden = (expected >= MIN_EXPECTED) & (counts.seen < SEEN_SHARE * expected)
     least = max(4, MIN_HIDDEN_SHARE * core.sum())
     if hidden.sum() < least:
         return none
     # something in front shows in the static scene: it stands out of the wall around it
-    wall = cv2.medianBlur(np.clip(background, 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
-    stands_out = np.abs(background - wall) > STANDS_OUT * max(noise_grey, 0.5)
+    wall = cv2.medianBlur(np.clip(np.rint(background), 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
+    stands_out = np.abs(background - wall) > threshold_grey
     hidden &= cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
     if hidden.sum() < least:
         return none
