@@ -273,7 +273,7 @@ def crossing_period(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, float
     The middle is halfway between the median maximum and minimum of the confirmed swing extrema
     (:func:`swing_extrema`: noise makes none, nor does the record's rest at its end); one crossing per
     half swing between two of them (linear interpolation between neighbouring usable samples, also across
-    flagged ones where they span under :data:`MAX_CROSSING_GAP` of the half swing; the median time where noise
+    flagged ones where they span up to :data:`MAX_CROSSING_GAP` of the half swing; the median time where noise
     crosses more than once). The upward and downward crossings are each numbered
     by whole periods from the first and fitted with a line t = t₀ + P·n; P is the mean of the two
     directions' slopes (an off-centre swing makes its half periods alternate, not its periods), its

@@ -64,7 +64,10 @@ def _tolerance_text(key: str, tolerances: dict, stated: dict) -> str:
         return ""
     if base in (stated.get(rig_name) or {}):
         return f"{_number(value, unit)}, 1σ, as stated"
-    return f"{_number(value, unit)}, 1σ: the default share of its value; state yours under rigs.{rig_name}.tolerances"
+    return (
+        f"{_number(value, unit)}, 1σ: the default share of its value; state yours under rigs.{rig_name}.tolerances "
+        "in config.yaml, or under tolerances in the sidecar that gives the value"
+    )
 
 
 def percent(value: float) -> str:
