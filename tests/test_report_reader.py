@@ -150,7 +150,7 @@ def test_table_1_shows_the_estimated_pivot_and_defaults_and_the_notes_carry_geom
     report = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": {}}}, variants=VARIANTS)
     table = report.rig_table()
     # √0.0030 = 0.0548, √0.5036 = 0.7096
-    assert "300.07 ± 0.055, −42.317 ± 0.71 (estimated from the marker paths)" in table
+    assert "300.07 ± 0.055, −42.317 ± 0.71 (estimated from the tracked paths)" in table
     assert "0.0223 (estimated from the swings)" in table
     assert "1000 (default)" in table and "9.810 (default)" in table and "1.000×10⁻⁶ (default)" in table
     assert "± 2.0 (0.20 %, default)" in table and "not in the error budget" in table  # ρ: 0.2 %; ν: none

@@ -230,9 +230,9 @@ class TableSections(ReportData):
             sigmas = [math.sqrt(max(float(covariance[i][i]), 0.0)) for i in (0, 1)]
             return (
                 ", ".join(f"{fmt(x, 5)} ± {fmt(s, 2)}" for x, s in zip(angles[key], sigmas, strict=True))
-                + " (estimated from the marker paths)"
+                + " (estimated from the tracked paths)"
             )
-        return "not given: estimated from the marker paths"
+        return "not given: estimated from the tracked paths"
 
     def rms_table(self) -> str:
         """Table 2 (as the paper's): RMS residual per trial and variant in rad, degrees and arc millimetres."""
