@@ -216,4 +216,4 @@ def test_rig_values_every_trial_overrides_are_shown_as_used(tmp_path):
     assert "± 3.6×10⁻⁴ (0.20 %, default)" in table and "2.8 %" not in table and "± 0.0010 (0.095 %)" in table
     trials["c"]["tolerances"] = {"length_m": 0.001, "mass_kg": 0.001}
     table = R.Report(files=files, trials=trials, rigs={"rig": {"values": RIG, "tolerances": stated}}, variants=VARIANTS)
-    assert "per trial (sidecars)" in table.rig_table()
+    assert "per trial (sidecars): ± 0.0010, default" in table.rig_table()  # c states 1 g, a and b none

@@ -89,9 +89,12 @@ class TableSections(ReportData):
                 values = with_rig_defaults(used)  # as the fits take them
                 stated, differ = self.rig_tolerances_used(rig)
                 by_trials = used.get(key) != self.rigs[rig]["values"].get(key)  # every trial's sidecar gives it
-                if key in differ:  # trials state different tolerances of one value
+                if key in differ:  # trials state different tolerances of one value: which (default: none stated)
                     text = fmt(values.get(key), 4) + (" (the sidecars of all its trials)" if by_trials else "")
-                    cells += [td(esc(text), "num"), td(esc("per trial (sidecars)"), "na")]
+                    sigmas = {self.trials[t]["tolerances"].get(key) for t in self.rig_trials(rig)}
+                    listed = [f"± {fmt(v, 2)}" for v in sorted(v for v in sigmas if v is not None)]
+                    listed += ["default"] if None in sigmas else []
+                    cells += [td(esc(text), "num"), td(esc("per trial (sidecars): " + ", ".join(listed)), "na")]
                     continue
                 value = values.get(key)
                 if used.get(key) is None and key in UNSTATED_RIG_DEFAULTS:
