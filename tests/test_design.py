@@ -198,3 +198,17 @@ def test_a_coefficient_at_its_bound_gets_no_percentages():
     )
     assert "at zero (its bound)" in advice["sentence"] and "e+" not in advice["sentence"]
     assert [percent(v) for v in (3.94, 99.6, 199.3, 2345.0, 4e-5)] == ["3.9", "100", "200", "2300", "0.000040"]
+
+
+def test_a_tolerance_is_as_stated_for_a_rig_only_where_all_its_trials_state_it_alike():
+    """The design's advice calls a tolerance "as stated" for a rig only where every trial of it states that one: a
+    sidecar's own tolerance of its own value (or none, where it changes the value) is not the rig's. Before, the last
+    trial's stated tolerances stood for the rig."""
+    from pendulum.design.tolerances import stated_by_rig
+
+    trial_rigs = {
+        "a": {"name": "tank", "tolerances": {"mass_kg": 0.005, "length_m": 0.001}},
+        "b": {"name": "tank", "tolerances": {"length_m": 0.001}},  # its sidecar changed the mass
+        "c": {"name": "pool", "tolerances": {"mass_kg": 0.002}},
+    }
+    assert stated_by_rig(trial_rigs) == {"tank": {"length_m": 0.001}, "pool": {"mass_kg": 0.002}}

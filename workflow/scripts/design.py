@@ -2,6 +2,7 @@
 
 import _setup  # noqa: F401
 from pendulum.design.next_trials import ROW_COLUMNS, DesignOptions, design_group, design_table, fit_final_model
+from pendulum.design.tolerances import stated_by_rig
 from pendulum.fit.bodies import load_group
 from pendulum.fit.records import FitSettings
 from pendulum.io import read_json, script_logger, write_csv, write_json
@@ -22,7 +23,7 @@ def work():
         raise ValueError(f"group {name}: no trial could be fitted, so there is nothing to design from")
     fit = fit_final_model(group, discovery, settings)
     options = DesignOptions.from_config(sm.params.design)
-    stated = {entry["name"]: dict(entry.get("tolerances") or {}) for entry in sm.params.trial_rigs.values()}
+    stated = stated_by_rig(sm.params.trial_rigs)
     document, rows = design_group(
         fit, discovery["parameters"], settings, options, discovery.get("indistinguishable"), stated
     )

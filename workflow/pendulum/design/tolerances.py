@@ -54,6 +54,18 @@ def _number(value: float, unit: str) -> str:
     return f"±{text} {unit}".rstrip()
 
 
+def stated_by_rig(trial_rigs: dict) -> dict:
+    """Rig → the 1σ tolerances all its trials state alike (``trial_rigs``: trial → ``name``, ``tolerances``, as
+    :func:`pendulum.groups.group_trial_rigs`); a value one trial's sidecar states and another's does not is the
+    default share for some of them, so it is not 'as stated' for the rig."""
+    out: dict[str, dict] = {}
+    for entry in trial_rigs.values():
+        mine = dict(entry.get("tolerances") or {})
+        rig = entry["name"]
+        out[rig] = mine if rig not in out else {k: v for k, v in out[rig].items() if mine.get(k) == v}
+    return out
+
+
 def _tolerance_text(key: str, tolerances: dict, stated: dict) -> str:
     """Today's 1σ tolerance of an input, and whether it was stated or is the default share of the value."""
     base, rig = split_key(key)
