@@ -13,6 +13,7 @@ import math
 
 from pendulum.fit.uncertainty import Z95
 from pendulum.model.rig import RIG_VALUE_UNITS
+from pendulum.trials import tolerances_alike
 
 INPUT_WORDS = {  # error-budget input → (words in a sentence, unit)
     key: (words, RIG_VALUE_UNITS[key])
@@ -58,12 +59,10 @@ def stated_by_rig(trial_rigs: dict) -> dict:
     """Rig → the 1σ tolerances all its trials state alike (``trial_rigs``: trial → ``name``, ``tolerances``, as
     :func:`pendulum.groups.group_trial_rigs`); a value one trial's sidecar states and another's does not is the
     default share for some of them, so it is not 'as stated' for the rig."""
-    out: dict[str, dict] = {}
+    by_rig: dict[str, list] = {}
     for entry in trial_rigs.values():
-        mine = dict(entry.get("tolerances") or {})
-        rig = entry["name"]
-        out[rig] = mine if rig not in out else {k: v for k, v in out[rig].items() if mine.get(k) == v}
-    return out
+        by_rig.setdefault(entry["name"], []).append(dict(entry.get("tolerances") or {}))
+    return {rig: tolerances_alike(stated)[0] for rig, stated in by_rig.items()}
 
 
 def _tolerance_text(key: str, tolerances: dict, stated: dict) -> str:

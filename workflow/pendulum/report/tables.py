@@ -36,6 +36,7 @@ from pendulum.report.format import (
     table_html,
     td,
 )
+from pendulum.trials import tolerances_alike
 
 NOISE_WORDS = "the record's noise"  # record_checks.misfit_warning's words for its noise
 FIT_NOISE_NOTE = (
@@ -91,9 +92,7 @@ class TableSections(ReportData):
                 by_trials = used.get(key) != self.rigs[rig]["values"].get(key)  # every trial's sidecar gives it
                 if key in differ:  # trials state different tolerances of one value: which (default: none stated)
                     text = fmt(values.get(key), 4) + (" (the sidecars of all its trials)" if by_trials else "")
-                    sigmas = {self.trials[t]["tolerances"].get(key) for t in self.rig_trials(rig)}
-                    listed = [f"± {fmt(v, 2)}" for v in sorted(v for v in sigmas if v is not None)]
-                    listed += ["default"] if None in sigmas else []
+                    listed = ["default" if v is None else f"± {fmt(v, 2)}" for v in differ[key]]
                     cells += [td(esc(text), "num"), td(esc("per trial (sidecars): " + ", ".join(listed)), "na")]
                     continue
                 value = values.get(key)
@@ -197,22 +196,14 @@ class TableSections(ReportData):
                     per_trial[key] = sorted(set(values))
         return used, per_trial
 
-    def rig_tolerances_used(self, rig: str) -> tuple[dict, set]:
+    def rig_tolerances_used(self, rig: str) -> tuple[dict, dict]:
         """The 1σ tolerances the rig's trials state (``trials[t]["tolerances"]``: the rig's, a sidecar's for the
-        values it gives), where all its trials state the same or none; and the keys they differ in. Without
-        per-trial tolerances (an older build), the rig's stated ones."""
+        values it gives) where they all state them alike, and key → the values where they differ
+        (:func:`pendulum.trials.tolerances_alike`). Without per-trial tolerances (an older build), the rig's."""
         trials = self.rig_trials(rig)
         if not trials or any("tolerances" not in self.trials[t] for t in trials):
-            return dict(self.rigs[rig].get("tolerances") or {}), set()
-        keys = {k for t in trials for k in self.trials[t]["tolerances"]}
-        common, differ = {}, set()
-        for key in sorted(keys):
-            sigmas = {self.trials[t]["tolerances"].get(key) for t in trials}
-            if len(sigmas) > 1:
-                differ.add(key)
-            elif None not in sigmas:
-                common[key] = sigmas.pop()
-        return common, differ
+            return dict(self.rigs[rig].get("tolerances") or {}), {}
+        return tolerances_alike([self.trials[t]["tolerances"] for t in trials])
 
     def estimated_geometry_text(self, rig: str, key: str) -> str:
         """The pivot (± standard errors) or vertical a rig's angle records used when config gave none."""
