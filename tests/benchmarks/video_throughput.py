@@ -28,6 +28,15 @@ from pendulum.synthetic.experiment import generate_trial, load_specs  # noqa: E4
 from pendulum.tracking.marker import track_video  # noqa: E402
 from pendulum.tracking.settings import TrackerSettings  # noqa: E402
 
+try:  # what the tracks job calls (older code: the marker tracker alone)
+    from pendulum.tracking.method import track_trial as _track  # noqa: E402
+except ImportError:
+    _track = track_video
+try:  # frames spread over a clip, held between searches of one clip
+    from pendulum.tracking import samples as _samples  # noqa: E402
+except ImportError:
+    _samples = None
+
 
 def decode_only(path):
     n = 0
@@ -37,13 +46,17 @@ def decode_only(path):
 
 
 def pipeline(path, settings):
-    """What the frames, tracks and angles jobs do with one video, one after the other."""
+    """What the frames, tracks and angles jobs do with one video, one after the other, each in a new process:
+    nothing held from an earlier run (the spread frames that detection and the body's scene share are let go
+    first; until 2026-11-29 a repeated run found them held from the run before and skipped their decode)."""
+    if _samples is not None:
+        _samples.release()
     _, timeline = frame_timeline(path)
     if "timeline" in inspect.signature(contact_sheet).parameters:  # as the frames job calls it
         contact_sheet(path, timeline=timeline)
     else:
         contact_sheet(path)
-    track = track_video(path, settings)
+    track = _track(path, settings)
     geometry = estimate_rig_geometry({"bench": track}, vertical_deg=0.0)
     angles_from_track(track, pivot_px=geometry["pivot_px"], vertical_deg=0.0, length_m=0.76, source="bench")
     return len(track), track
