@@ -62,6 +62,33 @@ def test_frontal_area_enters_only_the_drag_coefficient():
         assert entry["ci95"][1] == pytest.approx(entry["value"] + 1.959964 * entry["stderr"])
 
 
+def test_a_joint_fit_whose_trials_state_different_frontal_areas_says_so_and_divides_by_their_mean():
+    """The joint drag area over an area the trials disagree on: C_d over their mean, half their range in its 1σ,
+    a warning naming both; the systematic inputs list each trial's tolerances (the first's alone before)."""
+    first = load_record(table(20, seed=12), "a", RIG, SETTINGS, tolerances={"frontal_area_m2": 0.0005})
+    same = load_record(table(15, seed=14), "b", RIG, SETTINGS, tolerances={"frontal_area_m2": 0.0005})
+    fit = fit_trials([first, same], TERMS, SETTINGS)
+    cd, area = fit["parameters"]["drag_coefficient"], fit["parameters"]["drag_area_m2"]
+    assert cd["value"] == pytest.approx(area["value"] / RIG["frontal_area_m2"])
+    assert cd["error_budget"]["frontal_area_m2"] == pytest.approx(-cd["value"] * 0.0005 / RIG["frontal_area_m2"])
+    assert not any("frontal areas" in w for w in fit["warnings"])
+    assert "rig_tolerances_by_trial" not in fit["uncertainty"]["systematic_inputs"]
+
+    other = dict(RIG, frontal_area_m2=0.0342)  # a sidecar's own area, with its own tolerance
+    second = load_record(table(15, seed=14), "b", other, SETTINGS, tolerances={"frontal_area_m2": 0.0002})
+    fit = fit_trials([first, second], TERMS, SETTINGS)
+    cd, area = fit["parameters"]["drag_coefficient"], fit["parameters"]["drag_area_m2"]
+    mean = 0.5 * (RIG["frontal_area_m2"] + 0.0342)
+    sigma = math.hypot(0.0005, 0.001)
+    assert cd["value"] == pytest.approx(area["value"] / mean)
+    assert cd["error_budget"]["frontal_area_m2"] == pytest.approx(-cd["value"] * sigma / mean)
+    assert any("different frontal areas" in w and "a 0.0322" in w and "b 0.0342" in w for w in fit["warnings"])
+    inputs = fit["uncertainty"]["systematic_inputs"]
+    assert inputs["rig_tolerances_by_trial"]["b"]["frontal_area_m2"] == 0.0002
+    assert inputs["rig_tolerances_by_trial"]["a"]["frontal_area_m2"] == 0.0005
+    assert "frontal_area_m2" not in inputs["rig_tolerances"] and inputs["rig_tolerances"]["mass_kg"] > 0
+
+
 def test_exact_rig_values_give_no_systematic_part():
     fit = fit_trials([load_record(table(20, seed=13), "a", RIG, SETTINGS)], TERMS, SETTINGS)
     for entry in fit["parameters"].values():

@@ -401,7 +401,7 @@ class Discovery:
 
     def coefficients(self, fit: GroupFit) -> tuple[dict, list[str]]:
         """The fit's coefficients with statistical, systematic and combined errors and 95 % intervals; warnings."""
-        return coefficient_entries(fit, self.settings, self.records[0].tolerances)
+        return coefficient_entries(fit, self.settings)
 
     def tables(self, document: dict):
         """The residuals and extinction curves of the models on the path (:func:`.findings.tables`)."""

@@ -27,6 +27,7 @@ from pendulum.fit.uncertainty import (
     drag_coefficient_entry,
     linear_response,
     sandwich_covariance,
+    shared_frontal_area,
     systematic_perturbations,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS
@@ -313,7 +314,7 @@ def start_values(records: list[AngleRecord], rigs: list[str], documents: list[di
     return values, nuisance, masks
 
 
-def coefficient_entries(fit: GroupFit, settings: FitSettings, tolerances: dict) -> tuple[dict, list[str]]:
+def coefficient_entries(fit: GroupFit, settings: FitSettings) -> tuple[dict, list[str]]:
     """The fit's coefficients as the fit documents report them (:func:`pendulum.fit.uncertainty.coefficient_entry`):
     sandwich statistical error, systematic budget by refits, combined error and 95 % interval; plus C_d.
     Returns the entries and their warnings (at a bound, not identifiable)."""
@@ -336,9 +337,9 @@ def coefficient_entries(fit: GroupFit, settings: FitSettings, tolerances: dict) 
             warnings,
         )
         if parameter == "drag_area_m2":
-            out["drag_coefficient"] = drag_coefficient_entry(
-                out[label], fit.problem.records[0].rig.frontal_area_m2, tolerances.get("frontal_area_m2", 0.0)
-            )
+            area, area_sigma, differ = shared_frontal_area(fit.problem.records)
+            out["drag_coefficient"] = drag_coefficient_entry(out[label], area, area_sigma)
+            warnings += [differ] if differ else []
     return out, warnings
 
 
@@ -354,7 +355,7 @@ def fit_body(records: list[AngleRecord], rigs: list[str], terms, documents: list
     values, nuisance, masks = start_values(records, rigs, documents)
     problem = GroupProblem(records, rigs, ordered(terms), masks, settings.max_step_s)
     fit = problem.solve(problem.start(values, nuisance), settings)
-    entries, warnings = coefficient_entries(fit, settings, records[0].tolerances)
+    entries, warnings = coefficient_entries(fit, settings)
     if not fit.converged:
         warnings.append("the body fit did not converge")
     trials = {}

@@ -49,6 +49,7 @@ from pendulum.fit.uncertainty import (
     lag1_autocorrelation,
     linear_response,
     sandwich_covariance,
+    shared_frontal_area,
     systematic_perturbations,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound
@@ -297,9 +298,9 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             warnings,
         )
         if name == "drag_area_m2":
-            params["drag_coefficient"] = drag_coefficient_entry(
-                params[name], rig.frontal_area_m2, records[0].tolerances.get("frontal_area_m2", 0.0)
-            )
+            area, area_sigma, differ = shared_frontal_area(records)
+            params["drag_coefficient"] = drag_coefficient_entry(params[name], area, area_sigma)
+            warnings += [differ] if differ else []
     warnings += rig_checks(rig, params[ADDED_MASS], starts)
     sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     corr = cov / np.outer(sd, sd)
@@ -410,9 +411,13 @@ def _samples_digest(records, masks) -> str:
 
 def _systematic_inputs(records) -> dict:
     """What the systematic budget propagated: each rig value's 1σ and the pivot covariance per trial."""
-    first = records[0]
+    first = records[0].tolerances
+    alike = {key: value for key, value in first.items() if all(r.tolerances.get(key) == value for r in records)}
+    differ = any(r.tolerances != first for r in records)
+    by_trial = {"rig_tolerances_by_trial": {r.trial: dict(r.tolerances) for r in records}} if differ else {}
     return {
-        "rig_tolerances": dict(first.tolerances),
+        "rig_tolerances": alike,  # what every trial states alike; all of each where they differ
+        **by_trial,
         "pivot_covariance_px2": {r.trial: r.pivot_covariance_px2 for r in records},
         "arm_radius_px": {r.trial: r.arm_radius_px for r in records},
     }

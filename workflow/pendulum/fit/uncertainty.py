@@ -293,6 +293,27 @@ def _share_of_estimate(relative: float) -> str:
     return f"{relative * 100:.0f} % of the estimate" if relative < 10 else f"{relative:.2g} times the estimate"
 
 
+def shared_frontal_area(records) -> tuple[float, float, str | None]:
+    """The frontal area A (m²) and its 1σ that C_d = C_dA / A of a fit over ``records`` uses, and a warning.
+
+    Records that state one area (one rig, or one body on several rigs): that, with the largest tolerance they
+    state. Records that state different areas (a sidecar's own): their mean, with a 1σ of the largest stated tolerance and half
+    their range added in quadrature (one drag area fitted to all, divided by an area they disagree on), and a
+    warning naming the trials' values."""
+    stated = [(float(r.rig.frontal_area_m2), float(r.tolerances.get("frontal_area_m2", 0.0))) for r in records]
+    areas = np.array([a for a, _ in stated])
+    if np.ptp(areas) == 0:  # one area (its tolerance, where trials state it differently: the largest)
+        return stated[0][0], max(s for _, s in stated), None
+    area = float(areas.mean())
+    sigma = math.hypot(max(s for _, s in stated), 0.5 * float(np.ptp(areas)))
+    given = ", ".join(f"{r.trial} {a:.6g} ± {s:.2g}" for r, (a, s) in zip(records, stated, strict=True))
+    warning = (
+        f"the trials state different frontal areas ({given} m²): C_d is the drag area over their mean, "
+        f"{area:.6g} ± {sigma:.2g} m² (half their range added to the tolerance)"
+    )
+    return area, sigma, warning
+
+
 def drag_coefficient_entry(drag_area: dict, frontal_area_m2: float, frontal_area_sigma_m2: float) -> dict:
     """C_d = C_dA / A: every input of the drag area's budget divided by A, plus A's own tolerance (−C_d σ_A / A)."""
     area = frontal_area_m2
