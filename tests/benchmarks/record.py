@@ -496,6 +496,8 @@ def linear_growth(points: dict[int, float]) -> dict:
 def fmt(value, digits=1, unit=""):
     if value is None:
         return "–"
+    if isinstance(value, str):  # a rule's function of its inputs (e.g. the tracks job's memory by picture size)
+        return f"`{value}`"
     return f"{value:.{digits}f}{unit}"
 
 

@@ -7,7 +7,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def rule_declarations() -> dict[str, dict]:
-    """Rule → threads, mem_mb, runtime and script, read from workflow/rules/*.smk."""
+    """Rule → threads, mem_mb, runtime and script, read from workflow/rules/*.smk (a resource given by a
+    function of the job's inputs: its name)."""
     rules = {}
     for smk in sorted((ROOT / "workflow" / "rules").glob("*.smk")):
         for block in re.split(r"^rule ", smk.read_text(), flags=re.M)[1:]:
@@ -16,11 +17,12 @@ def rule_declarations() -> dict[str, dict]:
             found = {}
             for key, pattern in (
                 ("threads", r"^\s+threads:\s*(\d+)"),
-                ("mem_mb", r"^\s+mem_mb=(\d+)"),
-                ("runtime", r"^\s+runtime=(\d+)"),
+                ("mem_mb", r"^\s+mem_mb=(\w+)"),
+                ("runtime", r"^\s+runtime=(\w+)"),
                 ("script", r"^\s+\"\.\./scripts/(\w+)\.py\""),
             ):
                 match = re.search(pattern, body, re.M)
-                found[key] = (match.group(1) if key == "script" else int(match.group(1))) if match else None
+                value = match.group(1) if match else None
+                found[key] = int(value) if value and value.isdigit() and key != "script" else value
             rules[name] = found
     return rules

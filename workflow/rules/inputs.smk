@@ -2,6 +2,8 @@
 # frames.smk, tracks.smk, calibration.smk, angles.smk, fits.smk and status.smk.
 import json
 
+from pendulum.tracking.settings import job_resources  # noqa: E402
+
 
 def raw_video(wildcards):
     trial = TRIALS[wildcards.trial]
@@ -12,6 +14,30 @@ def raw_video(wildcards):
 
 def tracking_settings(wildcards):
     return SETTINGS[wildcards.trial]["tracking"]
+
+
+def _tracks_job(path) -> tuple[int, int]:
+    """The tracks job's memory (MB) and runtime (min) for its clip's size, from the frames stage's summary
+    (pendulum.tracking.settings.job_resources); before that exists, a 1080p clip's (the job is not ready to
+    run then, and Snakemake evaluates its resources again when it is)."""
+    try:
+        summary = json.loads(Path(path).read_text())
+        size = (
+            summary["width_px"],
+            summary["height_px"],
+            int(summary.get("n_frames") or 0),
+        )
+    except (OSError, ValueError, KeyError, TypeError):
+        size = 1920, 1080, 0
+    return job_resources(*size)
+
+
+def tracks_mem_mb(wildcards, input):
+    return _tracks_job(input.frames_summary)[0]
+
+
+def tracks_runtime(wildcards, input):
+    return _tracks_job(input.frames_summary)[1]
 
 
 def geometry_trials(wildcards):

@@ -15,8 +15,8 @@ rule tracks:
         "benchmarks/jobs/tracks/{trial}.tsv"
     threads: 1  # the decoder's threads (video.iter_luma); `--set-threads tracks=2` for long 1080p clips
     resources:
-        mem_mb=2000,  # 60–119 sampled frames at full size, shared by the searches: peak 0.41 GB at 720p, ~1 GB at 1080p
-        runtime=60,
+        mem_mb=tracks_mem_mb,  # 2 GB up to 1080p, more for larger pictures (inputs.smk)
+        runtime=tracks_runtime,
     params:
         tracking=tracking_settings,
     script:

@@ -297,9 +297,9 @@ def shared_frontal_area(records) -> tuple[float, float, str | None]:
     """The frontal area A (m²) and its 1σ that C_d = C_dA / A of a fit over ``records`` uses, and a warning.
 
     Records that state one area (one rig, or one body on several rigs): that, with the largest tolerance they
-    state. Records that state different areas (a sidecar's own): their mean, with a 1σ of the largest stated tolerance and half
-    their range added in quadrature (one drag area fitted to all, divided by an area they disagree on), and a
-    warning naming the trials' values."""
+    state. Records that state different areas (a sidecar's own): their mean, with a 1σ of the largest stated
+    tolerance and half their range added in quadrature (one drag area fitted to all, divided by an area they
+    disagree on), and a warning naming the trials' values."""
     stated = [(float(r.rig.frontal_area_m2), float(r.tolerances.get("frontal_area_m2", 0.0))) for r in records]
     areas = np.array([a for a, _ in stated])
     if np.ptp(areas) == 0:  # one area (its tolerance, where trials state it differently: the largest)

@@ -76,12 +76,14 @@ from pendulum.tracking.body_scene import (
     MAX_AREA_RATIO,
     MIN_AREA_RATIO,
     STRONG_FRACTION,
+    EnlargedMasks,
     body_component,
     body_core,
     body_polarity,
     close_size,
     filled_warning,
     masked_median,
+    median_scene,
     moving_objects,
     noise_sigma,
     one_sided,
@@ -183,9 +185,9 @@ def find_body(
     which one is the pendulum.
     """
     samples = sample_clip(path, n_samples, view)
-    images = same_exposure([s for _, s in samples])
-    stack = np.stack(images)
-    first_pass = np.median(stack, axis=0).astype(np.float32)
+    stack = same_exposure([s for _, s in samples])
+    images = list(stack)  # views of the stack
+    first_pass = median_scene(stack)
     sigma = noise_sigma(images, first_pass)
     threshold = max(NOISE_SIGMAS * sigma, 4.0)
     # Each sample's moving objects leave the scene; again against the new scene, as a body that overlaps
@@ -206,12 +208,10 @@ def find_body(
         excluded = grown
         small_background = masked_median(small_stack, excluded, small_first)
     seen = [((ax * scale, ay * scale), (bx * scale, by * scale)) for (ax, ay), (bx, by) in seen]
-    if scale > 1:
-        size = (first_pass.shape[1], first_pass.shape[0])
-        excluded = np.stack([cv2.resize(e.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 for e in excluded])
+    excluded = EnlargedMasks(excluded, first_pass.shape)  # at full size a band at a time
     background = masked_median(stack, excluded, first_pass) if excluded.any() else first_pass
     hidden = unseen(excluded)
-    median_scene = background
+    scene_median = background
     if track is not None:
         frames = [frame for frame, _ in samples]
         background, ends_clear = rest_place_scene(frames, images, background, track, radius_px, threshold, hidden)
@@ -241,7 +241,7 @@ def find_body(
             return first, first
         seen = []
         for k in range(1, len(images), max(1, (len(images) - 1) // TYPICAL_SAMPLES)):
-            rows, cols = np.flatnonzero(excluded[k].any(axis=1)), np.flatnonzero(excluded[k].any(axis=0))
+            rows, cols = excluded.extent(k)
             if not rows.size:  # nothing moving in this sample
                 continue
             margin = 2 * close_px + 8  # the sample's moving objects, cut out with a margin (a 1080p frame is large)
@@ -299,7 +299,7 @@ def find_body(
         if track is None
         else bool(
             ends_clear
-            and np.count_nonzero(np.abs(background - median_scene) > CONTRAST_FRACTION * whole.contrast)
+            and np.count_nonzero(np.abs(background - scene_median) > CONTRAST_FRACTION * whole.contrast)
             < CLEAR_REST_PLACE * whole.component.sum()
         ),
     )

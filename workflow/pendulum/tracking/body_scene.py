@@ -62,17 +62,18 @@ def noise_sigma(samples: list[np.ndarray], background: np.ndarray) -> float:
     return max(float(1.4826 * np.median(np.abs(values - np.median(values)))), 0.5)
 
 
-def same_exposure(images: list[np.ndarray]) -> list[np.ndarray]:
-    """The samples brought to one exposure: each mapped by the gain and offset that best take it to the
-    samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD, at least 1.5 grey
-    levels: the body; by the offset alone where the pixels kept span under 4 grey levels, as on a plain wall,
-    whose gain they cannot tell: a fit there gave gains of 0.5 and offsets of 85)."""
+def same_exposure(images: list[np.ndarray]) -> np.ndarray:
+    """The samples brought to one exposure, as one (n, h, w) uint8 stack: each mapped by the gain and offset that
+    best take it to the samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD,
+    at least 1.5 grey levels: the body; by the offset alone where the pixels kept span under 4 grey levels, as on
+    a plain wall, whose gain they cannot tell: a fit there gave gains of 0.5 and offsets of 85)."""
     grid = np.stack([im[::4, ::4] for im in images]).astype(np.float32)
     reference = np.median(grid, axis=0).ravel()
+    out = np.empty((len(images), *images[0].shape), np.uint8)  # written in place: no second copy of the samples
     if np.ptp(reference) < 4:  # a flat picture: its gain is not defined, nothing to match
-        return images
-    out = []
-    for image, small in zip(images, grid, strict=True):
+        out[:] = images
+        return out
+    for k, (image, small) in enumerate(zip(images, grid, strict=True)):
         values = small.ravel()
         keep = np.ones(values.size, bool)
         for _ in range(2):
@@ -85,9 +86,18 @@ def same_exposure(images: list[np.ndarray]) -> list[np.ndarray]:
             residual = values - (gain * reference + offset)
             keep = np.abs(residual) <= max(3 * 1.4826 * float(np.median(np.abs(residual))), 1.5)
         if abs(gain - 1) < 0.005 and abs(offset) < 0.5:
-            out.append(image)
+            out[k] = image
         else:
-            out.append(np.clip(np.rint((image.astype(np.float32) - offset) / gain), 0, 255).astype(np.uint8))
+            out[k] = np.clip(np.rint((image.astype(np.float32) - offset) / gain), 0, 255)
+    return out
+
+
+def median_scene(stack: np.ndarray, rows: int = 64) -> np.ndarray:
+    """Per-pixel median of the (n, h, w) samples as float32, ``rows`` image rows at a time (``np.median`` sorts a
+    copy of what it is given: a band, not the whole stack; the same values)."""
+    out = np.empty(stack.shape[1:], np.float32)
+    for top in range(0, stack.shape[1], rows):
+        out[top : top + rows] = np.median(stack[:, top : top + rows], axis=0)
     return out
 
 
@@ -141,23 +151,74 @@ def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:
     return mask
 
 
-def masked_median(stack: np.ndarray, excluded: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """Per pixel, the median of the samples not excluded there; where fewer than :func:`min_clear_samples` are
-    left (:func:`unseen`), ``fallback`` filled from its surroundings there (:func:`fill`)."""
+MEDIAN_ROWS = 64  # image rows per band of the per-pixel medians (memory, not results)
+
+
+class EnlargedMasks:
+    """Per-sample masks found on reduced samples, read at full size as ``cv2.resize`` with ``INTER_NEAREST``
+    enlarges them (source index ⌊i · small / full⌋), a band of rows at a time: 60–119 full-size masks of a
+    4K clip would take 0.5–1 GB."""
+
+    def __init__(self, small: np.ndarray, shape: tuple[int, int]):
+        self.small = small
+        self.shape = (len(small), *shape)
+        self.rows = np.minimum((np.arange(shape[0]) * (small.shape[1] / shape[0])).astype(int), small.shape[1] - 1)
+        self.cols = np.minimum((np.arange(shape[1]) * (small.shape[2] / shape[1])).astype(int), small.shape[2] - 1)
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def band(self, top: int, bottom: int) -> np.ndarray:
+        """Full-size masks of image rows ``top`` to ``bottom`` (exclusive): (n, rows, width)."""
+        return self.small[:, self.rows[top:bottom]][:, :, self.cols]
+
+    def enlarged(self, image: np.ndarray) -> np.ndarray:
+        """A per-pixel image of the reduced size at full size (nearest)."""
+        return image[self.rows][:, self.cols]
+
+    def any(self) -> bool:
+        return bool(self.small.any())
+
+    def any_over_samples(self) -> np.ndarray:
+        return self.enlarged(self.small.any(axis=0))
+
+    def count_over_samples(self) -> np.ndarray:
+        return self.enlarged(self.small.sum(axis=0))
+
+    def extent(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The full-size rows and columns sample ``k``'s mask reaches."""
+        mask = self.small[k]
+        return np.flatnonzero(mask.any(axis=1)[self.rows]), np.flatnonzero(mask.any(axis=0)[self.cols])
+
+
+def as_masks(excluded) -> EnlargedMasks:
+    """``excluded`` as :class:`EnlargedMasks` (full-size masks: enlarged from themselves)."""
+    return excluded if isinstance(excluded, EnlargedMasks) else EnlargedMasks(excluded, excluded.shape[1:])
+
+
+def masked_median(stack: np.ndarray, excluded, fallback: np.ndarray) -> np.ndarray:
+    """Per pixel, the median of the samples not excluded there (``excluded``: (n, h, w) masks, or
+    :class:`EnlargedMasks`); where fewer than :func:`min_clear_samples` are left (:func:`unseen`), ``fallback``
+    filled from its surroundings there (:func:`fill`)."""
+    excluded = as_masks(excluded)
     background = fallback.copy()
-    union = excluded.any(axis=0)
+    union = excluded.any_over_samples()
     if union.any():
-        column = stack[:, union].astype(np.float32)
-        column[excluded[:, union]] = np.nan
-        column.sort(axis=0)  # NaN last: the median of the first `valid` values of each pixel
-        valid = np.isfinite(column).sum(axis=0)
-        lower = np.take_along_axis(column, np.maximum((valid - 1) // 2, 0)[None], axis=0)[0]
-        upper = np.take_along_axis(column, np.maximum(valid // 2, 0)[None], axis=0)[0]
-        second = 0.5 * (lower + upper)
-        enough = valid >= min_clear_samples(len(stack))
-        background[union] = np.where(enough, second, fallback[union])
         hidden = np.zeros(background.shape, bool)
-        hidden[union] = ~enough
+        for top in range(0, stack.shape[1], MEDIAN_ROWS):  # a band of rows at a time: a 4K clip's samples are large
+            band = slice(top, top + MEDIAN_ROWS)
+            inside = union[band]
+            if not inside.any():
+                continue
+            column = stack[:, band][:, inside].astype(np.float32)
+            column[excluded.band(top, top + MEDIAN_ROWS)[:, inside]] = np.nan
+            column.sort(axis=0)  # NaN last: the median of the first `valid` values of each pixel
+            valid = np.isfinite(column).sum(axis=0)
+            lower = np.take_along_axis(column, np.maximum((valid - 1) // 2, 0)[None], axis=0)[0]
+            upper = np.take_along_axis(column, np.maximum(valid // 2, 0)[None], axis=0)[0]
+            enough = valid >= min_clear_samples(len(stack))
+            background[band][inside] = np.where(enough, 0.5 * (lower + upper), fallback[band][inside])
+            hidden[band][inside] = ~enough
         if hidden.any():  # never seen clear (a body there, or a ghost of it, in nearly every sample): its surroundings
             background = fill(background, hidden)
     return background
@@ -168,11 +229,12 @@ def min_clear_samples(n: int) -> int:
     return max(5, n // 10)
 
 
-def unseen(excluded: np.ndarray) -> np.ndarray:
-    """The pixels no sample shows clear: a moving object there in all but fewer than :func:`min_clear_samples`
-    (:func:`masked_median` fills them from their surroundings)."""
+def unseen(excluded) -> np.ndarray:
+    """The pixels no sample shows clear (``excluded``: as in :func:`masked_median`): a moving object there in all
+    but fewer than :func:`min_clear_samples` (:func:`masked_median` fills them from their surroundings)."""
+    excluded = as_masks(excluded)
     n = len(excluded)
-    return excluded.any(axis=0) & (n - excluded.sum(axis=0) < min_clear_samples(n))
+    return excluded.any_over_samples() & (n - excluded.count_over_samples() < min_clear_samples(n))
 
 
 def fill(scene: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -20,6 +20,7 @@ from pendulum.tracking.samples import spread_frames, spread_indices
 
 PYRAMID_SIGMAS = (1.0, 1.5, 2.25, 3.375)  # DoG σ at each pyramid level (× 2^level), ratio 1.5
 RADIUS_PER_SIGMA = 1.7  # disk radius ≈ 1.7 σ of the DoG scale where it responds most
+PIXELS_PER_BLOCK = 1 << 18  # pixels per block of the marker-free median (memory, not results)
 
 
 def sample_frames(path, max_samples: int, max_full: int, max_frames: int):
@@ -221,9 +222,9 @@ def local_contrast(stack: np.ndarray, blobs: Blobs, track: ArcTrack, scale: int)
 
 
 def full_scene(frames) -> tuple[np.ndarray, np.ndarray]:
-    """The (n, h, w) float32 stack of ``frames`` [(index, image)] and its per-pixel median (computed once per clip)."""
+    """The (n, h, w) stack of ``frames`` [(index, image)] and its per-pixel median, float32 (computed once per clip)."""
     images = np.stack([img for _, img in frames])
-    return images.astype(np.float32), np.median(images, axis=0).astype(np.float32)
+    return images, np.median(images, axis=0).astype(np.float32)
 
 
 def marker_free_background(
@@ -249,10 +250,11 @@ def marker_free_background(
             disks.append((k, x, y))
             cv2.circle(near, (int(round(x)), int(round(y))), int(math.ceil(reach)) + 1, 1, -1)
     background = median.copy()
-    ys, xs = np.nonzero(near)
-    if ys.size:
-        values = stack[:, ys, xs]
-        seen = {k for k, _, _ in disks}
+    ys_all, xs_all = np.nonzero(near)
+    seen = {k for k, _, _ in disks}
+    for start in range(0, ys_all.size, PIXELS_PER_BLOCK):  # a block of pixels at a time (a 4K clip's are many)
+        ys, xs = ys_all[start : start + PIXELS_PER_BLOCK], xs_all[start : start + PIXELS_PER_BLOCK]
+        values = stack[:, ys, xs].astype(np.float32)
         for k in range(len(frames)):
             if k not in seen:  # marker not found in this frame (e.g. at rest, in the median): not used here
                 values[k] = np.nan
