@@ -463,7 +463,8 @@ def test_a_fill_of_the_unseen_scene_is_checked_where_the_scene_is_known():
     pixels the body's path never covers are not its concern."""
     import cv2
 
-    from pendulum.tracking.body_scene import fill, unseen_behind, unseen_regions
+    from pendulum.tracking.body_scene import unseen_behind, unseen_regions
+    from pendulum.tracking.scene_stack import fill
 
     yy, xx = np.mgrid[0:200, 0:300].astype(np.float32)
     smooth = 100 + 0.2 * xx + 0.1 * yy
@@ -506,7 +507,7 @@ def test_samples_of_a_plain_wall_keep_their_bob_s_contrast_when_brought_to_one_e
     the mean grey, and a span under 4 is matched by its offset: every sample's wall at 80 and its bob 80 above."""
     import warnings
 
-    from pendulum.tracking.body_scene import same_exposure
+    from pendulum.tracking.scene_stack import same_exposure
 
     yy, xx = np.mgrid[0:120, 0:160]
     wall = np.full(yy.shape, 80.0)
@@ -600,3 +601,68 @@ def test_a_marker_pass_stopped_early_decides_as_the_whole_pass_would(
     if passes == 1:
         said = track.attrs["method"]["tried"]["marker"]
         assert "under 95 %" in said and "by frame 7" in said and said in track.attrs["method"]["reason"]
+
+
+def test_masks_read_at_full_size_are_cv2_s_nearest_enlargement():
+    """The body's scene reads each sample's mask, found on the reduced sample, at full size a band of rows at a
+    time (a 4K clip's 60–119 full-size masks took 0.5–1 GB): as ``cv2.resize(INTER_NEAREST)`` enlarges it, for
+    every size (⌊i · small / full⌋ was one row off where that is whole: 1058 rows from 352, 1440 from 480)."""
+    import cv2
+
+    from pendulum.tracking.scene_stack import EnlargedMasks, nearest_source
+
+    for full in range(1, 2200):
+        for scale in (2, 3, 5, 6):
+            small = full // scale
+            if small:
+                line = np.arange(small, dtype=np.float32)[None, :]
+                enlarged = cv2.resize(line, (full, 1), interpolation=cv2.INTER_NEAREST)[0].astype(int)
+                assert np.array_equal(nearest_source(full, small), enlarged), (full, small)
+    rng = np.random.default_rng(5)
+    for shape in ((1058, 1920), (65, 129), (2160, 3840)):
+        small = rng.random((3, shape[0] // 6, shape[1] // 6)) < 0.3
+        masks = EnlargedMasks(small, shape)
+        whole = np.stack(
+            [cv2.resize(m.view(np.uint8), shape[::-1], interpolation=cv2.INTER_NEAREST) > 0 for m in small]
+        )
+        assert np.array_equal(masks.band(0, shape[0]), whole)
+        assert np.array_equal(masks.band(40, 104), whole[:, 40:104])
+        assert np.array_equal(masks.count_over_samples(), whole.sum(axis=0))
+        rows, cols = masks.extent(1)
+        assert np.array_equal(rows, np.flatnonzero(whole[1].any(axis=1)))
+        assert np.array_equal(cols, np.flatnonzero(whole[1].any(axis=0)))
+
+
+def test_the_body_s_components_are_the_whole_window_s():
+    """The closing and opening run on the box of the pixels above the threshold grown by both kernels' reach
+    (a 4K body's window is mostly wall: 87 → 81 s for 600 frames). Against the same operations over the whole
+    window (the reference below): the same labels, boxes and weights, also for bodies cut by the window's edge."""
+    import cv2
+
+    from pendulum.tracking.body_scene import components
+
+    def whole_window(diff, threshold, open_px, close_px):
+        mask = (diff > threshold).astype(np.uint8)
+        pad = close_px // 2 + 1
+        padded = cv2.copyMakeBorder(mask, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
+        disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px, close_px))
+        mask = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, disk)[pad:-pad, pad:-pad]
+        if open_px > 1:
+            mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px,) * 2))
+        return cv2.connectedComponentsWithStats(mask, connectivity=8)[1:3]
+
+    rng = np.random.default_rng(1)
+    for _ in range(600):
+        h, w = rng.integers(8, 400, 2)
+        yy, xx = np.mgrid[0:h, 0:w]
+        diff = np.zeros((h, w), np.float32)
+        for _ in range(rng.integers(0, 4)):  # disks, some cut by the edge
+            cx, cy, r = rng.uniform(-10, w + 10), rng.uniform(-10, h + 10), rng.uniform(1, 80)
+            diff[(xx - cx) ** 2 + (yy - cy) ** 2 <= r * r] = rng.uniform(5, 100)
+        diff += (rng.random((h, w)) < rng.choice([0, 0.001, 0.02])) * 50  # specks
+        open_px, close_px = int(rng.choice([1, 3, 9, 31, 71])), int(rng.choice([3, 9, 27]))
+        labels, stats, masses = components(diff, 4.0, open_px, close_px)
+        expected_labels, expected_stats = whole_window(diff, 4.0, open_px, close_px)
+        assert np.array_equal(labels, expected_labels)
+        assert np.array_equal(stats[1:], expected_stats[1:])
+        assert masses.size == len(expected_stats)

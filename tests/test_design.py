@@ -212,3 +212,31 @@ def test_a_tolerance_is_as_stated_for_a_rig_only_where_all_its_trials_state_it_a
         "c": {"name": "pool", "tolerances": {"mass_kg": 0.002}},
     }
     assert stated_by_rig(trial_rigs) == {"tank": {"length_m": 0.001}, "pool": {"mass_kg": 0.002}}
+
+
+def test_today_s_drag_coefficient_is_the_fits_where_trials_state_different_frontal_areas():
+    """Two trials of one body whose sidecars state frontal areas 30 % apart: discovery's C_d divides the drag
+    area by their mean (and warns); the design's 'today' C_d did by the first trial's (0.802 against 0.697)."""
+    from pendulum.fit.group import coefficient_entries
+    from pendulum.fit.records import load_record
+    from pendulum.model.physics import PendulumModel
+    from pendulum.model.rig import Rig
+    from pendulum.synthetic.records import synthetic_angle_table
+
+    records = []
+    areas = (design_study.PAPER_RIG["frontal_area_m2"], 1.3 * design_study.PAPER_RIG["frontal_area_m2"])
+    for i, (release, area) in enumerate(zip((30.0, -25.0), areas, strict=True)):
+        model = PendulumModel(Rig(**design_study.PAPER_RIG), design_study.TERMS)
+        rng = np.random.default_rng(3 + i)
+        table = synthetic_angle_table(
+            model, design_study.TRUTH, release, duration_s=20.0, rng=rng, **design_study.NOISE
+        )
+        rig = dict(design_study.PAPER_RIG, frontal_area_m2=area)
+        records.append(load_record(table, f"t{i}", rig, FitSettings(), tolerances={}))
+    fit = design_study.fit(records)
+    entries, warnings = coefficient_entries(fit, FitSettings())
+    assert any("different frontal areas" in w for w in warnings)
+    document, _ = design_group(fit, entries, FitSettings(), DesignOptions(coefficients=("drag_area_m2",)))
+    cd = entries["drag_coefficient"]["value"]
+    assert cd == pytest.approx(entries["drag_area_m2"]["value"] / (0.5 * sum(areas)))
+    assert document["today"]["drag_coefficient"]["value"] == pytest.approx(cd, rel=1e-9)

@@ -1,6 +1,7 @@
 # Inputs and settings of one job, by stage: the input functions and params of the rules in
 # frames.smk, tracks.smk, calibration.smk, angles.smk, fits.smk and status.smk.
 import json
+from pathlib import Path
 
 from pendulum.tracking.settings import job_resources  # noqa: E402
 
@@ -17,9 +18,10 @@ def tracking_settings(wildcards):
 
 
 def _tracks_job(path) -> tuple[int, int]:
-    """The tracks job's memory (MB) and runtime (min) for its clip's size, from the frames stage's summary
-    (pendulum.tracking.settings.job_resources); before that exists, a 1080p clip's (the job is not ready to
-    run then, and Snakemake evaluates its resources again when it is)."""
+    """The tracks job's memory (MB) and runtime (min) for its clip's size, from the frames
+    stage's summary (pendulum.tracking.settings.job_resources). Before the summary exists
+    the missing file is raised: Snakemake shows <TBD> and evaluates them again when the
+    job is ready; a failed summary (no size) gives a 1080p clip's."""
     try:
         summary = json.loads(Path(path).read_text())
         size = (
@@ -27,6 +29,8 @@ def _tracks_job(path) -> tuple[int, int]:
             summary["height_px"],
             int(summary.get("n_frames") or 0),
         )
+    except FileNotFoundError:
+        raise
     except (OSError, ValueError, KeyError, TypeError):
         size = 1920, 1080, 0
     return job_resources(*size)

@@ -36,6 +36,7 @@ from pendulum.design.candidates import (
 from pendulum.design.separation import separations
 from pendulum.design.tolerances import input_words, measurement_advice
 from pendulum.fit.group import GroupFit, GroupProblem, ordered, start_values
+from pendulum.fit.uncertainty import shared_frontal_area
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import SimulationDiverged
 from pendulum.model.rig import Rig
@@ -163,7 +164,7 @@ class Designer:
         self.noise = median_noise(noise)
         self.values = {label: float(fit.x[j]) for j, label in enumerate(problem.labels)}
         self.systematic = {k: float(v.get("stderr_systematic", 0.0)) for k, v in parameters.items()}
-        self.area = {"m2": problem.records[0].rig.frontal_area_m2}
+        self.area = {"m2": shared_frontal_area(problem.records)[0]}  # the area C_d is divided by in the fits
         self.now = self.widths(self.info)
         self.targets = tuple(c for c in options.coefficients if c in self.now)
         for name in options.coefficients:

@@ -76,30 +76,32 @@ from pendulum.tracking.body_scene import (
     MAX_AREA_RATIO,
     MIN_AREA_RATIO,
     STRONG_FRACTION,
-    EnlargedMasks,
     body_component,
     body_core,
     body_polarity,
     close_size,
     filled_warning,
-    masked_median,
-    median_scene,
     moving_objects,
-    noise_sigma,
     one_sided,
     reduced,
     rest_place_scene,
-    same_exposure,
     sample_clip,
     silhouette_fraction,
     soft_centroid,
     touches_border,
-    unseen,
     unseen_behind,
 )
 from pendulum.tracking.checks import flag_jumps, held_still_runs, robust_outliers
 from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
 from pendulum.tracking.path_shape import rest_place_area_ratio
+from pendulum.tracking.scene_stack import (
+    EnlargedMasks,
+    masked_median,
+    median_scene,
+    noise_sigma,
+    same_exposure,
+    unseen,
+)
 from pendulum.tracking.settings import TrackerSettings
 
 log = logging.getLogger(__name__)

@@ -1,10 +1,10 @@
 """The static scene behind a swinging body, from frames sampled over the clip (:mod:`pendulum.tracking.body`).
 
 Samples brought to one exposure, their moving objects found against a scene estimate and left out of the
-next (the per-pixel median of the rest; a compact one by its convex hull, so that a ghost of it in the scene
-leaves with it), the pixels that almost no sample shows clear filled from their surroundings and that fill checked
-(:func:`unseen_regions`), and, for a body that covers its own rest place in most samples, the scene there
-from the two ends of its swing (:func:`rest_place_scene`).
+next (the per-pixel median of the rest, :mod:`pendulum.tracking.scene_stack`; a compact one by its convex
+hull, so that a ghost of it in the scene leaves with it), the pixels that almost no sample shows clear filled
+from their surroundings and that fill checked (:func:`unseen_regions`), and, for a body that covers its own
+rest place in most samples, the scene there from the two ends of its swing (:func:`rest_place_scene`).
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 
 from pendulum.tracking.samples import spread_frames
+from pendulum.tracking.scene_stack import fill
 
 # closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
 CLOSE_FRACTION = 1 / 72
@@ -36,7 +37,21 @@ def close_size(shape) -> int:
 def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int = 5):
     """Connected components of ``diff > threshold`` after a closing (the image continued by background) and an
     opening (the image continued by the body where it is cut): (labels, stats, masses)."""
-    mask = (diff > threshold).astype(np.uint8)
+    whole = (diff > threshold).astype(np.uint8)
+    # The morphology on the pixels that can change: the box of the pixels above the threshold grown by both
+    # kernels' reach (beyond it the result is 0 whatever the border; where the box meets the image's edge, the
+    # edge's own rule below applies). The same labels as over the whole image; a large body's window (4K) is
+    # mostly wall, and an opening with a 70 px disk costs per pixel.
+    points = cv2.findNonZero(whole)
+    h, w = whole.shape
+    if points is None:
+        return np.zeros((h, w), np.int32), np.array([[0, 0, w, h, h * w]], np.int32), np.zeros(1)
+    bx, by, bw, bh = cv2.boundingRect(points)
+    reach = close_px // 2 + open_px // 2 + 2
+    # even corners: the labelling scans 2 × 2 blocks, whose order names the components
+    x0, y0 = max(bx - reach, 0) & ~1, max(by - reach, 0) & ~1
+    x1, y1 = min(bx + bw + reach, w), min(by + bh + reach, h)
+    mask = whole[y0:y1, x0:x1]
     # closed first: the dark squares of a print, or a body's dark patches, are one object; with the image
     # continued by background (OpenCV's default border counts beyond the image as foreground for the erosion,
     # so a closing would stretch a body near the border out to it, and call it cut by the border)
@@ -45,60 +60,21 @@ def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int =
     closed = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px,) * 2))
     mask = closed[pad:-pad, pad:-pad]
     if open_px > 1:  # OpenCV's default border on purpose: a body the border cuts is not opened away there
+        # (at an edge of the box inside the image the border's foreground reaches no pixel the closing set: those
+        # lie within the closing's reach of a pixel above the threshold, over the opening's reach from that edge)
         kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px, open_px))
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    n, part, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    labels = np.zeros((h, w), np.int32)
+    labels[y0:y1, x0:x1] = part
+    stats[1:, 0] += x0
+    stats[1:, 1] += y0
+    stats[0] = (0, 0, w, h, h * w - int(stats[1:, 4].sum()))  # the background: the rest of the image
     masses = np.zeros(n)
     if n > 1:
         masses = np.bincount(labels.ravel(), weights=diff.ravel(), minlength=n)
         masses[0] = 0.0
     return labels, stats, masses
-
-
-def noise_sigma(samples: list[np.ndarray], background: np.ndarray) -> float:
-    """Robust σ of I − B over a few samples (most pixels show the static scene)."""
-    picks = samples[:: max(1, len(samples) // 8)]
-    values = np.concatenate([(s.astype(np.float32) - background)[::2, ::2].ravel() for s in picks])
-    return max(float(1.4826 * np.median(np.abs(values - np.median(values)))), 0.5)
-
-
-def same_exposure(images: list[np.ndarray]) -> np.ndarray:
-    """The samples brought to one exposure, as one (n, h, w) uint8 stack: each mapped by the gain and offset that
-    best take it to the samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD,
-    at least 1.5 grey levels: the body; by the offset alone where the pixels kept span under 4 grey levels, as on
-    a plain wall, whose gain they cannot tell: a fit there gave gains of 0.5 and offsets of 85)."""
-    grid = np.stack([im[::4, ::4] for im in images]).astype(np.float32)
-    reference = np.median(grid, axis=0).ravel()
-    out = np.empty((len(images), *images[0].shape), np.uint8)  # written in place: no second copy of the samples
-    if np.ptp(reference) < 4:  # a flat picture: its gain is not defined, nothing to match
-        out[:] = images
-        return out
-    for k, (image, small) in enumerate(zip(images, grid, strict=True)):
-        values = small.ravel()
-        keep = np.ones(values.size, bool)
-        for _ in range(2):
-            if np.ptp(reference[keep]) < 4:
-                gain, offset = 1.0, float(np.median(values[keep] - reference[keep]))
-            else:  # about the mean grey: well conditioned however narrow the span
-                mean = float(reference[keep].mean())
-                gain, at_mean = np.polyfit(reference[keep] - mean, values[keep], 1)
-                offset = at_mean - gain * mean
-            residual = values - (gain * reference + offset)
-            keep = np.abs(residual) <= max(3 * 1.4826 * float(np.median(np.abs(residual))), 1.5)
-        if abs(gain - 1) < 0.005 and abs(offset) < 0.5:
-            out[k] = image
-        else:
-            out[k] = np.clip(np.rint((image.astype(np.float32) - offset) / gain), 0, 255)
-    return out
-
-
-def median_scene(stack: np.ndarray, rows: int = 64) -> np.ndarray:
-    """Per-pixel median of the (n, h, w) samples as float32, ``rows`` image rows at a time (``np.median`` sorts a
-    copy of what it is given: a band, not the whole stack; the same values)."""
-    out = np.empty(stack.shape[1:], np.float32)
-    for top in range(0, stack.shape[1], rows):
-        out[top : top + rows] = np.median(stack[:, top : top + rows], axis=0)
-    return out
 
 
 def reduced(image: np.ndarray, scale: int) -> np.ndarray:
@@ -149,99 +125,6 @@ def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:
             cv2.fillConvexPoly(mask, hull, 1)
         mask |= own
     return mask
-
-
-MEDIAN_ROWS = 64  # image rows per band of the per-pixel medians (memory, not results)
-
-
-class EnlargedMasks:
-    """Per-sample masks found on reduced samples, read at full size as ``cv2.resize`` with ``INTER_NEAREST``
-    enlarges them (source index ⌊i · small / full⌋), a band of rows at a time: 60–119 full-size masks of a
-    4K clip would take 0.5–1 GB."""
-
-    def __init__(self, small: np.ndarray, shape: tuple[int, int]):
-        self.small = small
-        self.shape = (len(small), *shape)
-        self.rows = np.minimum((np.arange(shape[0]) * (small.shape[1] / shape[0])).astype(int), small.shape[1] - 1)
-        self.cols = np.minimum((np.arange(shape[1]) * (small.shape[2] / shape[1])).astype(int), small.shape[2] - 1)
-
-    def __len__(self) -> int:
-        return self.shape[0]
-
-    def band(self, top: int, bottom: int) -> np.ndarray:
-        """Full-size masks of image rows ``top`` to ``bottom`` (exclusive): (n, rows, width)."""
-        return self.small[:, self.rows[top:bottom]][:, :, self.cols]
-
-    def enlarged(self, image: np.ndarray) -> np.ndarray:
-        """A per-pixel image of the reduced size at full size (nearest)."""
-        return image[self.rows][:, self.cols]
-
-    def any(self) -> bool:
-        return bool(self.small.any())
-
-    def any_over_samples(self) -> np.ndarray:
-        return self.enlarged(self.small.any(axis=0))
-
-    def count_over_samples(self) -> np.ndarray:
-        return self.enlarged(self.small.sum(axis=0))
-
-    def extent(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """The full-size rows and columns sample ``k``'s mask reaches."""
-        mask = self.small[k]
-        return np.flatnonzero(mask.any(axis=1)[self.rows]), np.flatnonzero(mask.any(axis=0)[self.cols])
-
-
-def as_masks(excluded) -> EnlargedMasks:
-    """``excluded`` as :class:`EnlargedMasks` (full-size masks: enlarged from themselves)."""
-    return excluded if isinstance(excluded, EnlargedMasks) else EnlargedMasks(excluded, excluded.shape[1:])
-
-
-def masked_median(stack: np.ndarray, excluded, fallback: np.ndarray) -> np.ndarray:
-    """Per pixel, the median of the samples not excluded there (``excluded``: (n, h, w) masks, or
-    :class:`EnlargedMasks`); where fewer than :func:`min_clear_samples` are left (:func:`unseen`), ``fallback``
-    filled from its surroundings there (:func:`fill`)."""
-    excluded = as_masks(excluded)
-    background = fallback.copy()
-    union = excluded.any_over_samples()
-    if union.any():
-        hidden = np.zeros(background.shape, bool)
-        for top in range(0, stack.shape[1], MEDIAN_ROWS):  # a band of rows at a time: a 4K clip's samples are large
-            band = slice(top, top + MEDIAN_ROWS)
-            inside = union[band]
-            if not inside.any():
-                continue
-            column = stack[:, band][:, inside].astype(np.float32)
-            column[excluded.band(top, top + MEDIAN_ROWS)[:, inside]] = np.nan
-            column.sort(axis=0)  # NaN last: the median of the first `valid` values of each pixel
-            valid = np.isfinite(column).sum(axis=0)
-            lower = np.take_along_axis(column, np.maximum((valid - 1) // 2, 0)[None], axis=0)[0]
-            upper = np.take_along_axis(column, np.maximum(valid // 2, 0)[None], axis=0)[0]
-            enough = valid >= min_clear_samples(len(stack))
-            background[band][inside] = np.where(enough, 0.5 * (lower + upper), fallback[band][inside])
-            hidden[band][inside] = ~enough
-        if hidden.any():  # never seen clear (a body there, or a ghost of it, in nearly every sample): its surroundings
-            background = fill(background, hidden)
-    return background
-
-
-def min_clear_samples(n: int) -> int:
-    """Samples that must show a pixel clear for the scene there to be their median: max(5, n/10) of ``n``."""
-    return max(5, n // 10)
-
-
-def unseen(excluded) -> np.ndarray:
-    """The pixels no sample shows clear (``excluded``: as in :func:`masked_median`): a moving object there in all
-    but fewer than :func:`min_clear_samples` (:func:`masked_median` fills them from their surroundings)."""
-    excluded = as_masks(excluded)
-    n = len(excluded)
-    return excluded.any_over_samples() & (n - excluded.count_over_samples() < min_clear_samples(n))
-
-
-def fill(scene: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """``scene`` with the ``mask`` pixels filled from their surroundings (Navier–Stokes inpainting: a plain wall
-    exactly, a gradient of 0.2 grey levels per px over a 20 px radius to 1.7 (90th percentile; 2.8 at most);
-    Telea's is 1.5 off a plain one)."""
-    return cv2.inpaint(scene.astype(np.float32), mask.astype(np.uint8), 3, cv2.INPAINT_NS)
 
 
 def unseen_regions(scene: np.ndarray, hidden: np.ndarray, avoid: np.ndarray) -> list[tuple[float, float, int, float]]:
