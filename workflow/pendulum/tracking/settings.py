@@ -66,10 +66,10 @@ class TrackerSettings:
 
 # The tracks job's memory and time grow with the picture: the frames sampled over the clip (60–119, held for the
 # searches and the body's scene) are full size. Peaks measured on 2026-11-29 (one decoder thread): 0.35 GB at
-# 720p, 0.5–0.8 GB at 1080p, 2.2 GB for a 4K clip holding 75 samples (up to 119: ~2.9 GB); 0.2 s per 4K frame
+# 720p, 0.5–0.8 GB at 1080p, 2.2 GB for a 4K clip holding 75 samples (up to 119: ~2.9 GB); 0.13 s per 4K frame
 # (the marker tried, then the body), 6 ms per 720p frame (a marker).
 JOB_MEM_MB, JOB_MEM_MB_PER_MPX, JOB_MIN_MEM_MB = 400, 350, 2000
-JOB_MIN_RUNTIME_MIN, JOB_S_PER_FRAME_MPX = 60, 0.1  # ~4× the seconds measured per frame and megapixel
+JOB_MIN_RUNTIME_MIN, JOB_S_PER_FRAME_MPX = 60, 0.1  # ~6× the seconds measured per 4K frame and megapixel
 
 
 def job_resources(width_px: int, height_px: int, n_frames: int) -> tuple[int, int]:
