@@ -213,19 +213,6 @@ def trial_tolerances(rig: dict, sidecar: dict) -> dict:
     return {**kept, **(sidecar.get("tolerances") or {})}
 
 
-def tolerances_alike(stated: list[dict]) -> tuple[dict, dict]:
-    """Of the 1σ tolerances several trials state (each its :func:`trial_tolerances`): those they all state alike,
-    and key → the distinct values where they differ (sorted; None last: a trial that states none, the default)."""
-    alike, differ = {}, {}
-    for key in sorted({k for tolerances in stated for k in tolerances}):
-        sigmas = {tolerances.get(key) for tolerances in stated}
-        if len(sigmas) > 1:
-            differ[key] = sorted(v for v in sigmas if v is not None) + ([None] if None in sigmas else [])
-        else:
-            alike[key] = sigmas.pop()
-    return alike, differ
-
-
 def validate_config(config: dict, source: str = "config.yaml") -> None:
     """Schema check, finite numbers, rigs that sink, and cross-references (default rig exists)."""
     if isinstance(config, dict) and config.get("variants") in (None, [], {}) and "variants" in config:

@@ -12,8 +12,7 @@ from __future__ import annotations
 import math
 
 from pendulum.fit.uncertainty import Z95
-from pendulum.model.rig import RIG_VALUE_UNITS
-from pendulum.trials import tolerances_alike
+from pendulum.model.rig import RIG_VALUE_UNITS, tolerances_alike
 
 INPUT_WORDS = {  # error-budget input → (words in a sentence, unit)
     key: (words, RIG_VALUE_UNITS[key])

@@ -54,6 +54,7 @@ from pendulum.fit.uncertainty import (
 )
 from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound
 from pendulum.model.physics import PendulumModel, SimulationDiverged, keulegan_carpenter_number, simulate
+from pendulum.model.rig import tolerances_alike
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
 
@@ -411,9 +412,7 @@ def _samples_digest(records, masks) -> str:
 
 def _systematic_inputs(records) -> dict:
     """What the systematic budget propagated: each rig value's 1σ and the pivot covariance per trial."""
-    first = records[0].tolerances
-    alike = {key: value for key, value in first.items() if all(r.tolerances.get(key) == value for r in records)}
-    differ = any(r.tolerances != first for r in records)
+    alike, differ = tolerances_alike([r.tolerances for r in records])
     by_trial = {"rig_tolerances_by_trial": {r.trial: dict(r.tolerances) for r in records}} if differ else {}
     return {
         "rig_tolerances": alike,  # what every trial states alike; all of each where they differ

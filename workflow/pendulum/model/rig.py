@@ -61,3 +61,17 @@ class Rig:
     def from_mapping(cls, values: dict) -> Rig:
         known = {f for f in cls.__dataclass_fields__}
         return cls(**{k: v for k, v in values.items() if k in known})
+
+
+def tolerances_alike(stated: list[dict]) -> tuple[dict, dict]:
+    """Of the 1σ tolerances several trials state (each its :func:`pendulum.trials.trial_tolerances`, or a fit
+    record's): those they all state alike, and key → the distinct values where they differ (sorted; None last: a
+    trial that states none, the default)."""
+    alike, differ = {}, {}
+    for key in sorted({k for tolerances in stated for k in tolerances}):
+        sigmas = {tolerances.get(key) for tolerances in stated}
+        if len(sigmas) > 1:
+            differ[key] = sorted(v for v in sigmas if v is not None) + ([None] if None in sigmas else [])
+        else:
+            alike[key] = sigmas.pop()
+    return alike, differ

@@ -15,7 +15,7 @@ from pendulum.fit.records import (
     rig_tolerances,
     with_rig_defaults,
 )
-from pendulum.model.rig import Rig
+from pendulum.model.rig import Rig, tolerances_alike
 from pendulum.report.data import (
     ReportData,
     failure_text,
@@ -36,7 +36,6 @@ from pendulum.report.format import (
     table_html,
     td,
 )
-from pendulum.trials import tolerances_alike
 
 NOISE_WORDS = "the record's noise"  # record_checks.misfit_warning's words for its noise
 FIT_NOISE_NOTE = (
@@ -199,7 +198,7 @@ class TableSections(ReportData):
     def rig_tolerances_used(self, rig: str) -> tuple[dict, dict]:
         """The 1σ tolerances the rig's trials state (``trials[t]["tolerances"]``: the rig's, a sidecar's for the
         values it gives) where they all state them alike, and key → the values where they differ
-        (:func:`pendulum.trials.tolerances_alike`). Without per-trial tolerances (an older build), the rig's."""
+        (:func:`pendulum.model.rig.tolerances_alike`). Without per-trial tolerances (an older build), the rig's."""
         trials = self.rig_trials(rig)
         if not trials or any("tolerances" not in self.trials[t] for t in trials):
             return dict(self.rigs[rig].get("tolerances") or {}), {}
