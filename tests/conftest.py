@@ -15,6 +15,25 @@ DEMO_RAW = ROOT / "data" / "raw"
 DEMO_TRUTH = ROOT / "data" / "truth"
 
 
+class SnakemakeFiles(dict):
+    """Stands for Snakemake's named input/output lists: attribute access and ``keys()``."""
+
+    __getattr__ = dict.__getitem__
+
+
+class FakeSnakemake:
+    """The ``snakemake`` object a rule's script sees, for running the script with :func:`runpy.run_path`."""
+
+    def __init__(self, inputs, output, log, params, wildcards=None):
+        self.input, self.output, self.params, self.wildcards = (
+            SnakemakeFiles(inputs),
+            SnakemakeFiles(output),
+            SnakemakeFiles(params),
+            SnakemakeFiles(wildcards or {}),
+        )
+        self.log = [log]
+
+
 # Fixtures that render videos, run the workflow or fit many records (seconds to minutes, once per session or
 # module): a test that uses one is in the slow tier. `pytest -m "not slow"` is the fast tier a developer
 # runs on every change; the full suite (what CI runs) is every test.

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from scipy.stats import binom
 
-from conftest import ROOT
+from conftest import ROOT, FakeSnakemake
 from pendulum.angles.geometry import estimate_rig_geometry, fit_circle, pooled_pivot
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record, rig_tolerances
@@ -91,8 +91,11 @@ def test_a_rig_can_be_defined_in_a_sidecar():
             "data/raw/d.yaml",
         )
     }
-    with pytest.raises(ConfigError, match="d.yaml .*defining rig r.*floats"):
+    # its fluid not given: water assumed, and the error says so (an apple filmed in air: 0.18 kg, 0.2 litre)
+    with pytest.raises(ConfigError, match="d.yaml .*defining rig r.*floats.*not given: water's 1000 kg/m³ assumed"):
         add_sidecar_rigs(config, floats)
+    in_air = {"d": Trial("d", "video", "d.mp4", {**floats["d"].sidecar, "fluid_density_kg_m3": 1.2}, "data/raw/d.yaml")}
+    assert add_sidecar_rigs(config, in_air) == ["r"]  # in air it hangs
 
 
 def test_a_sidecar_s_own_rig_value_takes_its_own_tolerance_not_the_rig_s():
@@ -237,23 +240,6 @@ def test_a_hold_with_one_shared_error_counts_as_one_point_of_the_path():
     assert covered_every_frame <= 20, covered_every_frame
 
 
-class _Files(dict):
-    """Stands for Snakemake's named input/output lists: attribute access and ``keys()``."""
-
-    __getattr__ = dict.__getitem__
-
-
-class _FakeSnakemake:
-    def __init__(self, inputs, output, log, params, wildcards):
-        self.input, self.output, self.params, self.wildcards = (
-            _Files(inputs),
-            _Files(output),
-            _Files(params),
-            _Files(wildcards),
-        )
-        self.log = [log]
-
-
 def test_a_geometry_failure_is_written_to_the_rule_log(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(ROOT / "workflow" / "scripts"))
     summary = tmp_path / "x.json"
@@ -262,7 +248,7 @@ def test_a_geometry_failure_is_written_to_the_rule_log(tmp_path, monkeypatch):
     track.write_text("frame,time_s,x_px,y_px,quality,flag\n")
     log = tmp_path / "geometry.log"
     out = tmp_path / "geometry.json"
-    sm = _FakeSnakemake(
+    sm = FakeSnakemake(
         {"tracks": [str(track)], "summaries": [str(summary)]},
         {"geometry": str(out)},
         str(log),
@@ -274,7 +260,8 @@ def test_a_geometry_failure_is_written_to_the_rule_log(tmp_path, monkeypatch):
     document = json.loads(out.read_text())
     assert document["status"] == "failed" and document["failed_stage"] == "geometry"
     text = log.read_text()
-    assert "rig tank: no usable track to estimate the pivot from (the tracks of x failed)" in text
+    assert "rig tank: no usable track to estimate the pivot from: the tracks of x failed (their errors are in" in text
+    assert "give pivot_px" not in text  # the trials' own errors say why; a pivot would not help
     assert "x: left out of the pooled geometry (tracking failed: x.mp4: no marker found)" in text
 
 

@@ -12,12 +12,13 @@ Config defaults, no hints: exactly what a new user gets.
 
 import math
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
-from conftest import ROOT, SHARED
+from conftest import ROOT, SHARED, FakeSnakemake
 
 pytestmark = pytest.mark.slow
 REAL = SHARED / "data" / "real-video"
@@ -192,21 +193,38 @@ def test_a_post_in_front_of_the_swing_flags_every_frame_it_hides_part_of_the_app
     assert off.max() < 0.7, off.max()
 
 
-def test_spinning_star_is_not_taken_for_a_pendulum():
+@pytest.mark.slow
+def test_spinning_star_is_refused_by_the_tracks_job_with_its_track_shown(tmp_path, monkeypatch):
+    """The frames and tracks jobs' own scripts on the star: a failed tracks document whose error leads with what it
+    is not (a rigid pendulum) and says why, and a sheet with the whole reason above the track it was measured from
+    (until 2026-12-02 the sheet was the reason alone, cut after six lines)."""
     if not STAR.is_file():
         pytest.skip(f"{STAR} not found")
-    from pendulum.camera.video import VideoError
-    from pendulum.tracking.method import track_trial
-    from pendulum.tracking.path_shape import path_departure
+    import json
+    import runpy
 
-    try:
-        track = track_trial(STAR, default_settings())
-    except VideoError as error:  # a clear refusal is as good as a flagged record
-        assert str(STAR) in str(error)
-        return
-    _, path = path_departure(track)
-    assert path["not_a_pendulum"], path
-    assert "not a rigid pendulum" in path["verdict"]
+    import cv2
+
+    monkeypatch.syspath_prepend(str(ROOT / "workflow" / "scripts"))
+    config = yaml.safe_load((ROOT / "config.yaml").read_text())
+    scripts = ROOT / "workflow" / "scripts"
+    names = (("timeline", "t.csv"), ("summary", "f.json"), ("contact_sheet", "c.png"))
+    frames = {k: str(tmp_path / n) for k, n in names}
+    tiles = {"tiles": config["frames"]["contact_sheet_tiles"]}
+    sm = FakeSnakemake({"video": str(STAR)}, frames, str(tmp_path / "f.log"), tiles)
+    runpy.run_path(str(scripts / "frames.py"), init_globals={"snakemake": sm})
+    tracks = {k: str(tmp_path / n) for k, n in (("track", "s.csv"), ("summary", "s.json"), ("sheet", "s.png"))}
+    inputs = {"video": str(STAR), "frames_summary": frames["summary"], "contact_sheet": frames["contact_sheet"]}
+    sm = FakeSnakemake(inputs, tracks, str(tmp_path / "t.log"), {"tracking": config["tracking"]})
+    runpy.run_path(str(scripts / "tracks.py"), init_globals={"snakemake": sm})
+    document = json.loads(Path(tracks["summary"]).read_text())
+    assert document["status"] == "failed" and document["failed_stage"] == "tracks"
+    assert document["error"].startswith(f"{STAR}: not a rigid pendulum about a fixed pivot (an object that spins")
+    assert "off the best circle" in document["error"] and document["path"]["not_a_pendulum"]
+    sheet, contact = cv2.imread(tracks["sheet"]), cv2.imread(frames["contact_sheet"])
+    assert sheet.shape[1] == contact.shape[1] and sheet.shape[0] >= contact.shape[0] + 200  # the reason, then the sheet
+    banner_rows = sheet.shape[0] - contact.shape[0]
+    assert (sheet[banner_rows:] != contact).any()  # the track drawn over it
 
 
 def test_zero_crossing_period_is_exact_on_a_cosine():

@@ -12,6 +12,7 @@ from pendulum.status import (
     UpstreamFailed,
     describe,
     failed,
+    failure_image,
     failure_summary,
     require_ok,
     run_stage,
@@ -175,3 +176,19 @@ def test_jacobian_rank_warnings_name_the_inseparable_parameters():
     assert len(warnings) == 1 and "C_dA and c cannot be told apart" in warnings[0]
     warnings = jacobian_rank_warnings(np.column_stack([a, b, 0 * c]), ["m_a", "C_dA", "tau_f"])
     assert warnings == ["tau_f has no effect on the fitted record (zero sensitivity)"]
+
+
+def test_a_failure_image_holds_the_whole_message():
+    """The star's refusal (about 450 characters) was cut after six lines of 70 characters: now every word, the
+    image as tall as it needs and as wide as the contact sheet it sits above."""
+    message = " ".join(f"word{k:03d}" for k in range(80))  # 640 characters
+    rows_with_text = []
+    for width in (960, 640):
+        image = failure_image(message, width, header="REFUSED:")
+        assert image.shape[1] == width and image.dtype == np.uint8
+        text_rows = np.flatnonzero((image > 150).any(axis=1))  # the light text on grey
+        rows_with_text.append(text_rows.max() - text_rows.min())
+        assert text_rows.max() < image.shape[0] - 4  # the last line inside the image
+        assert (image[:, -8:] == 60).all()  # no line runs off the right edge
+    assert rows_with_text[1] > rows_with_text[0]  # narrower: more lines, a taller image
+    assert failure_image("short", 960).shape == (200, 960)  # a short message keeps the old size

@@ -111,20 +111,26 @@ def empty_table(columns) -> pd.DataFrame:
     return pd.DataFrame({c: pd.Series(dtype=float) for c in columns})
 
 
-def failure_image(message: str, width_px: int = 960, height_px: int = 200) -> np.ndarray:
-    """A grey image that states why there is no contact sheet."""
+def failure_image(
+    message: str, width_px: int = 960, height_px: int = 200, header: str = "NO CONTACT SHEET:"
+) -> np.ndarray:
+    """A grey image that states why there is no contact sheet (or, above a refused track's, why it was refused):
+    the whole message, the image as tall as it needs (at least ``height_px``)."""
     import cv2
 
-    image = np.full((height_px, width_px), 60, np.uint8)
+    def fits(text: str) -> bool:  # the line's drawn width within the image's margins
+        return cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)[0][0] <= width_px - 32
+
     words, lines, line = message.split(), [], ""
     for word in words:
-        if len(line) + len(word) + 1 > 70:
+        if line and not fits(f"{line} {word}"):
             lines.append(line)
             line = word
         else:
             line = f"{line} {word}".strip()
     lines.append(line)
-    for i, text in enumerate(["NO CONTACT SHEET:"] + lines[:6]):
+    image = np.full((max(height_px, 30 + 26 * len(lines) + 16), width_px), 60, np.uint8)
+    for i, text in enumerate([header] + lines):
         cv2.putText(image, text, (16, 30 + 26 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 235, 1, cv2.LINE_AA)
     return image
 
@@ -162,4 +168,7 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     if bad.empty:
         return None
     items = "; ".join(f"{r.trial} ({r.stage}: {r.reason})" for r in bad.itertuples())
-    return f"{len(bad)} of {len(table)} trial(s) failed: {items}. See results/status/trials.csv and the report."
+    return (
+        f"{len(bad)} of {len(table)} trial(s) failed: {items}. See results/status/trials.csv and "
+        "results/report/report.html (built from the other trials)."
+    )

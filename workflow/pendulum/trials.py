@@ -184,9 +184,15 @@ def check_rig_values(values: dict, where: str) -> None:
         return
     weight, buoyancy = mass * g, rho * volume * g
     if buoyancy >= weight:
+        water = (
+            " (not given: water's 1000 kg/m³ assumed; a rig in air gives fluid_density_kg_m3: 1.2)"
+            if "fluid_density_kg_m3" not in values
+            else ""
+        )
         raise ConfigError(
             f"{where}: the pendulum floats: buoyancy ρ V g = {rho:g} × {volume:g} × {g:g} = {buoyancy:.4g} N is not "
-            f"below the weight m g = {mass:g} × {g:g} = {weight:.4g} N; check mass_kg and displaced_volume_m3 (m³)"
+            f"below the weight m g = {mass:g} × {g:g} = {weight:.4g} N; check mass_kg, displaced_volume_m3 (m³) and "
+            f"fluid_density_kg_m3{water}"
         )
 
 

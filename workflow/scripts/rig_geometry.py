@@ -56,10 +56,14 @@ def work():
             tracks[name] = map_track(pd.read_csv(path), calibration)
     pivot = map_point(sm.params.pivot_px, calibration)
     if not tracks and pivot is None:
-        why = f"the tracks of {', '.join(sorted(failed))} failed" if failed else "no trial of the rig is pooled"
+        if failed:  # nothing to measure on this rig: the trials' own errors say why (results/status/trials.csv)
+            raise ValueError(
+                f"rig {rig}: no usable track to estimate the pivot from: the tracks of {', '.join(sorted(failed))} "
+                "failed (their errors are in results/status/trials.csv and the report)"
+            )
         raise ValueError(
-            f"rig {rig}: no usable track to estimate the pivot from ({why}); give pivot_px (and vertical_deg) "
-            "in config or in the trials' sidecars"
+            f"rig {rig}: no usable track to estimate the pivot from (no trial of the rig is pooled); give pivot_px "
+            "(and vertical_deg) in config or in the trials' sidecars"
         )
     geometry = estimate_rig_geometry(tracks, pivot_px=pivot, vertical_deg=sm.params.vertical_deg)
     for name, reason in geometry["rejected_trials"].items():

@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import cv2
+import numpy as np
 
 import _setup  # noqa: F401
 from pendulum.camera.video import VideoError, track_over_sheet
@@ -27,6 +28,23 @@ settings = TrackerSettings.from_config(sm.params.tracking)
 TRACK_COLUMNS = ["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"]
 started = time.perf_counter()
 measured = {}  # facts of a track that was then refused, for the failed document
+refused_sheet = {}  # ... and that track drawn over the key frames: the user sees what was followed
+
+
+def drawn_sheet(track):
+    """The track over the frames stage's contact sheet (no frame decoded again), in image coordinates and at the
+    file's time stamps (the sheet's); None without a sheet."""
+    frames = json.loads(Path(sm.input.frames_summary).read_text())
+    in_image = track.assign(
+        x_px=track.get("x_image_px", track.x_px),
+        y_px=track.get("y_image_px", track.y_px),
+        time_s=track.get("stamp_s", track.time_s),
+    )
+    sheet = cv2.imread(sm.input.contact_sheet, cv2.IMREAD_GRAYSCALE)
+    times = frames.get("contact_sheet_times_s") or []
+    if sheet is not None and times and frames.get("width_px"):
+        return track_over_sheet(sheet, times, frames["width_px"], in_image)
+    return sheet
 
 
 def work():
@@ -39,6 +57,7 @@ def work():
     log.info("%s: %s", video, path["verdict"])
     if path.get("not_a_pendulum"):
         measured.update(method=method, path=path, body=track.attrs.get("body"), marker=track.attrs.get("marker"))
+        refused_sheet["image"] = drawn_sheet(track)
         raise VideoError(f"{video}: {path['verdict']}; no angle record is made from it")
     flags = track.flag.value_counts().to_dict()
     n_ok = int(flags.get("ok", 0))  # after the timing check (repeats flagged), unlike the method's share
@@ -59,19 +78,9 @@ def work():
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)
-    # the track over the frames stage's contact sheet (no frame decoded again), in image coordinates
-    frames = json.loads(Path(sm.input.frames_summary).read_text())
-    in_image = track.assign(  # in image coordinates, at the file's time stamps (the sheet's)
-        x_px=track.get("x_image_px", track.x_px),
-        y_px=track.get("y_image_px", track.y_px),
-        time_s=track.get("stamp_s", track.time_s),
-    )
-    sheet = cv2.imread(sm.input.contact_sheet, cv2.IMREAD_GRAYSCALE)
-    times = frames.get("contact_sheet_times_s") or []
-    drawn = sheet
-    if sheet is not None and times and frames.get("width_px"):
-        drawn = track_over_sheet(sheet, times, frames["width_px"], in_image)
+    drawn = drawn_sheet(track)
     write_png(drawn if drawn is not None else failure_image("no contact sheet"), sm.output.sheet)
+    frames = json.loads(Path(sm.input.frames_summary).read_text())
     write_json(
         {
             "video": video,
@@ -95,7 +104,14 @@ def work():
 
 def write_failed(document):
     write_csv(empty_table(TRACK_COLUMNS), sm.output.track)
-    write_png(failure_image(document["error"]), sm.output.sheet)
+    sheet = refused_sheet.get("image")
+    if sheet is None:
+        write_png(failure_image(document["error"]), sm.output.sheet)
+    else:  # a refused track: the reason above the track it was measured from (drawn in colour)
+        banner = failure_image(document["error"], sheet.shape[1], header="REFUSED:")
+        if sheet.ndim == 3:
+            banner = cv2.cvtColor(banner, cv2.COLOR_GRAY2BGR)
+        write_png(np.vstack([banner, sheet]), sm.output.sheet)
     # what was measured before the refusal (a path that is not a pendulum's): the user can see why
     write_json({"video": video, **document, **measured, "settings": settings.__dict__}, sm.output.summary)
 
