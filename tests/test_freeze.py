@@ -23,7 +23,7 @@ from pendulum.freeze import (
     lock_differences,
     manifest,
 )
-from pendulum.provenance import config_as_used, config_digest
+from pendulum.provenance import config_as_used, config_digest, repository_url
 from workflow_run import run
 
 TOP_LEVEL = {
@@ -310,3 +310,22 @@ def test_citation_takes_title_and_authors_from_config():
     cff = yaml.safe_load(text)
     assert cff["title"] == "ROV X (frozen results v2)" and cff["authors"][0]["family-names"] == "Doe"
     assert cff["date-released"] == "2024-05-06" and re.fullmatch("a{40}", cff["commit"])
+
+
+def test_the_repository_address_is_cited_where_the_clone_has_one():
+    """A reader holding only the folder learns where the commit lives: the origin remote as a web address (an ssh
+    remote turned into https, credentials and .git dropped), in CITATION.cff's repository-code."""
+    assert repository_url("git@github.com:lab/pendulum.git") == "https://github.com/lab/pendulum"
+    assert repository_url("ssh://git@gitlab.example.org/group/pendulum") == "https://gitlab.example.org/group/pendulum"
+    assert (
+        repository_url("ssh://git@gitlab.example.org:2222/group/pendulum.git")
+        == "https://gitlab.example.org/group/pendulum"
+    )
+    assert repository_url("https://user:secret@github.com/lab/pendulum.git") == "https://github.com/lab/pendulum"
+    assert repository_url("https://github.com/lab/pendulum") == "https://github.com/lab/pendulum"
+    assert repository_url("/home/me/pendulum") is None and repository_url(None) is None
+    git = {"commit": "a" * 40, "dirty": False, "repository": "https://github.com/lab/pendulum"}
+    cff = yaml.safe_load(citation_cff("v3", datetime(2024, 5, 6, tzinfo=UTC), git, None, "f" * 64))
+    assert cff["repository-code"] == "https://github.com/lab/pendulum" and cff["commit"] == "a" * 40
+    without = yaml.safe_load(citation_cff("v3", datetime(2024, 5, 6, tzinfo=UTC), {"commit": "a" * 40}, None, "f" * 64))
+    assert "repository-code" not in without

@@ -173,6 +173,8 @@ def citation_cff(tag: str, frozen_at: datetime, git: dict, citation: dict | None
     }
     if commit:
         document["commit"] = commit
+    if git.get("repository"):  # where the commit can be fetched (the origin remote)
+        document["repository-code"] = git["repository"]
     return yaml.safe_dump(document, sort_keys=False, allow_unicode=True, width=100)
 
 
@@ -193,9 +195,10 @@ def folder_readme(tag: str, provenance: dict, n_results: int) -> str:
     git = provenance["git"]
     commit = git["commit"] or "unknown (not a git work tree)"
     dirty = " — DIRTY, see DIRTY" if git.get("dirty") or git["commit"] is None else ""
+    where = f" of {git['repository']}" if git.get("repository") else ""
     return f"""# Frozen results: {tag}
 
-Frozen {provenance["frozen_at_utc"]} from commit {commit}{dirty}.
+Frozen {provenance["frozen_at_utc"]} from commit {commit}{where}{dirty}.
 
 Verify every file: `sha256sum -c {MANIFEST}` in this folder. Verify the raw inputs:
 `sha256sum -c results/frozen/{tag}/{RAW_HASHES}` from the workflow's directory.

@@ -28,7 +28,8 @@ def discovery_settings(config: dict) -> dict | None:
     if "baseline" in given:
         raise ConfigError(
             f"config.yaml: discovery/baseline {settings['baseline']!r} is not one of variants "
-            f"{sorted(config['variants'])}"
+            f"{sorted(config['variants'])}: keep that variant (discovery adds terms to it), or set "
+            "discovery/baseline to one of them (discovery and the design then run again)"
         )
     return None
 

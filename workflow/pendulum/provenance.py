@@ -84,16 +84,34 @@ def _git(root: Path, *args: str) -> str | None:
     return proc.stdout.rstrip("\n") if proc.returncode == 0 else None
 
 
+def repository_url(remote: str | None) -> str | None:
+    """A git remote as the web address a reader can open: ``git@host:owner/repo.git`` and
+    ``ssh://git@host/owner/repo`` become ``https://host/owner/repo``; credentials in an https address
+    (``https://user:token@host/…``) are dropped; ``.git`` at the end is dropped. None for a local path."""
+    if not remote:
+        return None
+    remote = remote.strip()
+    if match := re.fullmatch(r"ssh://(?:[^@/]+@)?([\w.-]+)(?::\d+)?/(.+?)/?", remote):  # a port is the ssh server's
+        remote = f"https://{match.group(1)}/{match.group(2)}"
+    elif match := re.fullmatch(r"[\w.-]+@([\w.-]+):(.+?)/?", remote):  # scp-like: user@host:path
+        remote = f"https://{match.group(1)}/{match.group(2)}"
+    if not re.match(r"https?://", remote):
+        return None
+    remote = re.sub(r"^(https?://)[^/@]*@", r"\1", remote)
+    return remote[:-4] if remote.endswith(".git") else remote
+
+
 def git_state(root: str | Path = ".") -> dict:
-    """Commit, its UTC commit time and whether code or config differ from it.
+    """Commit, its UTC commit time, whether code or config differ from it, and the repository's address.
 
     Outside a git work tree every field is None. `dirty_files` lists changed or
-    untracked paths outside results/, logs/, .snakemake/, .venv/ and data/raw/.
+    untracked paths outside results/, logs/, .snakemake/, .venv/ and data/raw/. `repository` is the
+    ``origin`` remote as a web address (:func:`repository_url`; None without one or for a local path).
     """
     root = Path(root)
     commit = _git(root, "rev-parse", "HEAD")
     if commit is None:
-        return {"commit": None, "commit_time_utc": None, "dirty": None, "dirty_files": None}
+        return {"commit": None, "commit_time_utc": None, "dirty": None, "dirty_files": None, "repository": None}
     commit_time = _git(root, "log", "-1", "--format=%cd", "--date=format-local:%Y-%m-%dT%H:%M:%SZ")
     status = _git(root, "-c", "core.quotepath=off", "status", "--porcelain", "--untracked-files=all") or ""
     dirty_files = sorted(
@@ -106,6 +124,7 @@ def git_state(root: str | Path = ".") -> dict:
         "commit_time_utc": commit_time,
         "dirty": bool(dirty_files),
         "dirty_files": dirty_files,
+        "repository": repository_url(_git(root, "remote", "get-url", "origin")),
     }
 
 
