@@ -96,7 +96,9 @@ def method_note(method: dict, body: dict) -> str:
         return f"tracked the body: {method.get('reason', '')}"
     colour = body.get("view") == "colour"
     usable = tried.get("body_by_colour" if colour else "body", "")
-    note = f"tracked the body itself by its {'colour' if colour else 'silhouette'}, {usable}"
+    # the shares each method gave when one was chosen (before the frames the phone lost or repeated were found:
+    # the flags column has the record's final count)
+    note = f"tracked the body itself by its {'colour' if colour else 'silhouette'}, {usable} at the choice"
     if colour:
         brightness = tried.get("body", "")
         note += "; its brightness silhouette " + (
@@ -338,7 +340,9 @@ class CheckSections(ReportData):
             elif is_ok(tracks):
                 flags = tracks.get("flags") or {}
                 bad = {k: n for k, n in sorted(flags.items()) if k != "ok" and n}
-                flag_cell = td(f"ok {flags.get('ok', 0)}" + "".join(f", {esc(k)} {n}" for k, n in bad.items()))
+                free = sum(flags.values()) - flags.get("held", 0)  # as the tracks log: frames not held by hand
+                share = f" ({100 * flags.get('ok', 0) / free:.1f} %)" if free > 0 else ""
+                flag_cell = td(f"ok {flags.get('ok', 0)}{share}" + "".join(f", {esc(k)} {n}" for k, n in bad.items()))
             else:
                 flag_cell = failure_cell(tracks, said)
             if is_ok(angles):
