@@ -33,7 +33,7 @@ refused_sheet = {}  # ... and that track drawn over the key frames: the user see
 
 def drawn_sheet(track):
     """The track over the frames stage's contact sheet (no frame decoded again), in image coordinates and at the
-    file's time stamps (the sheet's); None without a sheet."""
+    file's time stamps (the sheet's); the sheet as it is without its times, None without a sheet."""
     frames = json.loads(Path(sm.input.frames_summary).read_text())
     in_image = track.assign(
         x_px=track.get("x_image_px", track.x_px),
@@ -57,7 +57,10 @@ def work():
     log.info("%s: %s", video, path["verdict"])
     if path.get("not_a_pendulum"):
         measured.update(method=method, path=path, body=track.attrs.get("body"), marker=track.attrs.get("marker"))
-        refused_sheet["image"] = drawn_sheet(track)
+        try:
+            refused_sheet["image"] = drawn_sheet(track)
+        except (OSError, ValueError, KeyError, cv2.error) as error:  # the refusal is said all the same
+            log.warning("%s: the refused track could not be drawn over the contact sheet (%s)", video, error)
         raise VideoError(f"{video}: {path['verdict']}; no angle record is made from it")
     flags = track.flag.value_counts().to_dict()
     n_ok = int(flags.get("ok", 0))  # after the timing check (repeats flagged), unlike the method's share
