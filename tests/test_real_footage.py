@@ -193,7 +193,6 @@ def test_a_post_in_front_of_the_swing_flags_every_frame_it_hides_part_of_the_app
     assert off.max() < 0.7, off.max()
 
 
-@pytest.mark.slow
 def test_spinning_star_is_refused_by_the_tracks_job_with_its_track_shown(tmp_path, monkeypatch):
     """The frames and tracks jobs' own scripts on the star: a failed tracks document whose error leads with what it
     is not (a rigid pendulum) and says why, and a sheet with the whole reason above the track it was measured from

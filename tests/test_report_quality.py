@@ -279,18 +279,18 @@ def test_the_tracking_table_says_briefly_how_a_body_was_tracked():
     }
     method = {"used": "body", "reason": reason, "tried": tried}
     assert method_note(method, {"view": "colour"}) == (
-        "tracked the body itself by its colour, usable in 99.7 % of the frames at the choice; its brightness "
-        "silhouette usable in 93.5 % of the frames, changing with the wall; a marker disk usable in under 95 % of "
-        "the frames"
+        "tracked the body itself by its colour, usable in 99.7 % of the frames when the method was chosen; its "
+        "brightness silhouette usable in 93.5 % of the frames, changing with the wall; a marker disk usable in under "
+        "95 % of the frames"
     )
     assert method_note(method, {}) == (
-        "tracked the body itself by its silhouette, usable in 93.5 % of the frames at the choice; a marker disk usable "
-        "in under 95 % of the frames"
+        "tracked the body itself by its silhouette, usable in 93.5 % of the frames when the method was chosen; a "
+        "marker disk usable in under 95 % of the frames"
     )
     failed = {**method, "tried": {**tried, "marker": "failed: no marker found", "body": "failed: two objects"}}
     assert method_note(failed, {"view": "colour"}) == (
-        "tracked the body itself by its colour, usable in 99.7 % of the frames at the choice; its brightness "
-        "silhouette could not be followed; a marker disk could not be found"
+        "tracked the body itself by its colour, usable in 99.7 % of the frames when the method was chosen; its "
+        "brightness silhouette could not be followed; a marker disk could not be found"
     )
 
 

@@ -31,10 +31,10 @@ measured = {}  # facts of a track that was then refused, for the failed document
 refused_sheet = {}  # ... and that track drawn over the key frames: the user sees what was followed
 
 
-def drawn_sheet(track):
-    """The track over the frames stage's contact sheet (no frame decoded again), in image coordinates and at the
-    file's time stamps (the sheet's); the sheet as it is without its times, None without a sheet."""
-    frames = json.loads(Path(sm.input.frames_summary).read_text())
+def drawn_sheet(track, frames: dict):
+    """The track over the frames stage's contact sheet (no frame decoded again; ``frames``: that stage's summary),
+    in image coordinates and at the file's time stamps (the sheet's); the sheet as it is without its times, None
+    without a sheet."""
     in_image = track.assign(
         x_px=track.get("x_image_px", track.x_px),
         y_px=track.get("y_image_px", track.y_px),
@@ -49,7 +49,7 @@ def drawn_sheet(track):
 
 def work():
     # a video the frames stage could not read is not tracked again: its failure is said once, by that stage
-    require_ok(json.loads(Path(sm.input.frames_summary).read_text()), "frames")
+    frames = require_ok(json.loads(Path(sm.input.frames_summary).read_text()), "frames")
     track = track_trial(video, settings, progress=log.info)
     method = track.attrs.get("method", {})
     log.info("%s: tracked the %s (%s)", video, method.get("used"), method.get("reason"))
@@ -58,7 +58,7 @@ def work():
     if path.get("not_a_pendulum"):
         measured.update(method=method, path=path, body=track.attrs.get("body"), marker=track.attrs.get("marker"))
         try:
-            refused_sheet["image"] = drawn_sheet(track)
+            refused_sheet["image"] = drawn_sheet(track, frames)
         except (OSError, ValueError, KeyError, cv2.error) as error:  # the refusal is said all the same
             log.warning("%s: the refused track could not be drawn over the contact sheet (%s)", video, error)
         raise VideoError(f"{video}: {path['verdict']}; no angle record is made from it")
@@ -81,9 +81,8 @@ def work():
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)
-    drawn = drawn_sheet(track)
+    drawn = drawn_sheet(track, frames)
     write_png(drawn if drawn is not None else failure_image("no contact sheet"), sm.output.sheet)
-    frames = json.loads(Path(sm.input.frames_summary).read_text())
     write_json(
         {
             "video": video,

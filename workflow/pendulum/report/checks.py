@@ -98,7 +98,7 @@ def method_note(method: dict, body: dict) -> str:
     usable = tried.get("body_by_colour" if colour else "body", "")
     # the shares each method gave when one was chosen (before the frames the phone lost or repeated were found:
     # the flags column has the record's final count)
-    note = f"tracked the body itself by its {'colour' if colour else 'silhouette'}, {usable} at the choice"
+    note = f"tracked the body itself by its {'colour' if colour else 'silhouette'}, {usable} when the method was chosen"
     if colour:
         brightness = tried.get("body", "")
         note += "; its brightness silhouette " + (
