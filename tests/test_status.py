@@ -1,6 +1,7 @@
 """Failure as data (per-trial status), outlying tracks in the pooled pivot, and singular-Jacobian warnings."""
 
 import logging
+import math
 
 import numpy as np
 import pandas as pd
@@ -116,6 +117,37 @@ def test_a_track_from_a_moved_camera_is_left_out_of_the_pooled_pivot(seed):
     assert np.hypot(own["pivot_px"][0] - PIVOT[0] - 6, own["pivot_px"][1] - PIVOT[1] + 4) < 3.0
     rig, why = trial_geometry(tracks["good1"], geometry, vertical_deg=0.0)
     assert why is None and rig["pivot_px"] == geometry["pivot_px"]
+
+
+def released_track(centre, radius, amplitude_deg, n, decay, seed):
+    """A swing released at +amplitude and decaying as exp(−decay·t/T) over the record, 0.03 px noise."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 1, n)
+    angle = np.radians(amplitude_deg) * np.cos(10 * np.pi * t) * np.exp(-decay * t)
+    x = centre[0] + radius * np.sin(angle) + rng.normal(0, 0.03, n)
+    y = centre[1] + radius * np.cos(angle) + rng.normal(0, 0.03, n)
+    return pd.DataFrame({"x_px": x, "y_px": y, "flag": "ok"})
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_long_clip_of_another_pendulum_is_left_out_and_the_rest_still_share_their_pivot(seed):
+    """The real apple clip (1,300 frames, ±22°, its pivot 500 px from the demo's) dropped among the five demo
+    videos without a sidecar: it pulled the pooled circle 57 px RMS off every path, three of the demo's lay
+    farther off it than the apple, and the vote that left out the farthest left out none (2026-12-02): every
+    trial then used its own pivot and the rig warned of a 90° tilted swing plane. Measured the same way here
+    (65 px RMS before); the apple is left out, the demo's five keep their shared pivot."""
+    amplitudes = (5, 15, 5, 20, 75)
+    tracks = {
+        f"demo{k}": released_track((640.0, 70.0), 560, a, 660, 3.0, 10 * seed + k) for k, a in enumerate(amplitudes)
+    }
+    tracks["apple"] = released_track((301.0, -338.0), 554, 22, 1300, 0.2, 10 * seed + 9)
+    circle, rejected = pooled_pivot(tracks)
+    assert set(rejected) == {"apple"} and "another pendulum" in rejected["apple"], rejected
+    assert math.hypot(circle.pivot_x_px - 640.0, circle.pivot_y_px - 70.0) < 0.2 and circle.rms_px < 0.1
+    geometry = estimate_rig_geometry(tracks, vertical_deg=0.0)
+    assert geometry["shared"] and geometry["warnings"] == [], geometry["warnings"]
+    own, why = trial_geometry(tracks["apple"], geometry, vertical_deg=0.0)
+    assert "its own track" in why and math.hypot(own["pivot_px"][0] - 301.0, own["pivot_px"][1] + 338.0) < 3.0
 
 
 @pytest.mark.parametrize("seed", range(5))

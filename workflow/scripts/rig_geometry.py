@@ -69,7 +69,12 @@ def work():
     for name, reason in geometry["rejected_trials"].items():
         log.warning("%s: left out of the pooled geometry: %s", name, reason)
     circle = geometry.get("circle")
-    if circle and max(geometry.get("pivot_stderr_px", [0, 0])) > PIVOT_STDERR_WARN_FRACTION * circle["radius_px"]:
+    shared = geometry.get("shared", True)  # False: the pooled circle is no pivot (each trial's own is used)
+    if (
+        circle
+        and shared
+        and max(geometry.get("pivot_stderr_px", [0, 0])) > PIVOT_STDERR_WARN_FRACTION * circle["radius_px"]
+    ):
         geometry["warnings"].append(
             f"the pivot is poorly determined by the marker paths (standard error {max(geometry['pivot_stderr_px']):.3g}"
             f" px on an arm of {circle['radius_px']:.0f} px over an arc of {circle['arc_span_deg']:.0f}°); "
@@ -77,9 +82,16 @@ def work():
         )
     if not (calibration and calibration.get("plane")):
         kept = {k: v for k, v in tracks.items() if k not in geometry["rejected_trials"]}
-        geometry["path_tilt"], warning = tilt_warning(kept)
-        if warning:
-            geometry["warnings"].append(warning)
+        if shared:
+            geometry["path_tilt"], warning = tilt_warning(kept)
+            if warning:
+                geometry["warnings"].append(warning)
+        else:  # paths about different pivots are no one ellipse: each is tested alone
+            geometry["path_tilt"] = {}
+            for name in sorted(kept):
+                geometry["path_tilt"][name], warning = tilt_warning({name: kept[name]})
+                if warning:
+                    geometry["warnings"].append(f"{name}: {warning}")
     if calibration:
         geometry["coordinates"] = ImageToPlane(calibration).describe()
     for warning in geometry["warnings"]:
