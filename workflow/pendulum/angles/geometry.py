@@ -15,7 +15,6 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import least_squares
 
 from pendulum.angles.swings import swing_centre_rad
 
@@ -38,6 +37,8 @@ def fit_circle(x, y, weights=None) -> CircleFit:
     ``weights`` w per point (None: all 1). The pivot covariance is σ² (JᵀWJ)⁻¹
     with σ² = Σ w r² / (n − 3), inflated for the residuals' lag-1 correlation.
     """
+    from scipy.optimize import least_squares  # here: the angles job imports this module and rarely fits a circle
+
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     good = np.isfinite(x) & np.isfinite(y)
