@@ -265,6 +265,39 @@ def test_a_geometry_failure_is_written_to_the_rule_log(tmp_path, monkeypatch):
     assert "x: left out of the pooled geometry (tracking failed: x.mp4: no marker found)" in text
 
 
+def test_a_rig_whose_trials_share_no_pivot_tests_each_path_for_tilt_alone(tmp_path, monkeypatch):
+    """Three clips from three places in one rig (no sidecars): their pooled circle is no pivot, so its
+    precision and its "ellipse" say nothing (before 2026-12-02 the rig of the demo videos and the real apple
+    clip warned of a pivot 35 px uncertain and of a swing plane turned 90°, axis ratio 5496, on every trial's
+    record). Each path is tested alone instead: the one filmed at 40° to its swing plane is named."""
+    monkeypatch.syspath_prepend(str(ROOT / "workflow" / "scripts"))
+    inputs = {"tracks": [], "summaries": []}
+    pivots = {"a": (320.0, 12.0), "b": (900.0, -300.0), "turned": (150.0, -80.0)}
+    for k, (name, pivot) in enumerate(pivots.items()):
+        track = swing_track(40.0, pivot=pivot, arm=300.0 + 100 * k, decay_s=8.0, seed=k)
+        if name == "turned":  # the swing plane turned 40° about the image's vertical: x compressed by cos 40°
+            track["x_px"] = pivot[0] + (track.x_px - pivot[0]) * math.cos(math.radians(40))
+        track.to_csv(tmp_path / f"{name}.csv", index=False)
+        (tmp_path / f"{name}.json").write_text(json.dumps({"status": "ok"}))
+        inputs["tracks"].append(str(tmp_path / f"{name}.csv"))
+        inputs["summaries"].append(str(tmp_path / f"{name}.json"))
+    out = tmp_path / "geometry.json"
+    sm = FakeSnakemake(
+        inputs, {"geometry": str(out)}, str(tmp_path / "g.log"), {"pivot_px": None, "vertical_deg": 0.0}, {"rig": "r"}
+    )
+    runpy.run_path(str(ROOT / "workflow" / "scripts" / "rig_geometry.py"), init_globals={"snakemake": sm})
+    logging.getLogger("rig_geometry").handlers.clear()
+    document = json.loads(out.read_text())
+    assert document["status"] == "ok" and document["shared"] is False
+    warnings = document["warnings"]
+    assert "do not share one pivot" in warnings[0]
+    assert not any("poorly determined" in w for w in warnings), warnings
+    tilted = [w for w in warnings if "is an ellipse" in w]
+    assert len(tilted) == 1 and tilted[0].startswith("turned: "), warnings
+    assert abs(document["path_tilt"]["turned"]["tilt_deg"] - 40.0) < 3.0, document["path_tilt"]
+    assert set(document["path_tilt"]) == set(pivots)
+
+
 def test_a_jump_at_the_start_of_a_record_is_left_out_and_the_fit_finds_the_truth():
     """The real fit's `ValueError: math domain error`: a jump in the first samples gave θ̇0 ≈ −4700°/s, RK4 ran
     to ∞. The decay analysis now finds the 3 jumped samples and the fit leaves them out (truth m_a = 2.5 kg);
