@@ -223,6 +223,38 @@ def test_the_summary_does_not_recommend_a_fit_that_misses_its_records(documents)
     assert "Recommended" not in box and "<h3>Best of the variants tried, none fits within the record's noise" in box
 
 
+def test_a_rig_whose_values_cannot_give_its_trials_periods_says_so_in_the_summary(tmp_path):
+    """Real clips dropped into the shipped rig without sidecars: every fit refused (``rig_mismatch``); the summary
+    says the rig's values are another pendulum's, with the periods, and what to give (before: "No joint fit
+    succeeded" alone)."""
+    ok = {"status": "ok"}
+    (tmp_path / "ok.json").write_text(json.dumps(ok))
+    (tmp_path / "summary.csv").write_text("variant,fit\n")
+    fits = {}
+    for name, period in (("apple", 2.061), ("clock", 1.654)):
+        refused = {
+            "status": "failed",
+            "failed_stage": "fit",
+            "error": f"trial {name}: its period {period} s is shorter than its rig values allow (3.238 s ...)",
+            "rig_mismatch": [{"trial": name, "period_s": period, "fastest_period_s": 3.2378}],
+        }
+        (tmp_path / f"{name}.json").write_text(json.dumps(refused))
+        fits[name] = {"fit": str(tmp_path / f"{name}.json"), "curve": str(tmp_path / "none.csv"), "cycles": ""}
+    doc = str(tmp_path / "ok.json")
+    files = {
+        "summary": str(tmp_path / "summary.csv"),
+        "trials": {n: {"angles": doc, "frames": doc, "tracks": doc} for n in fits},
+        "fits": {v: fits for v in VARIANTS},
+        "joint": {v: {"rig": str(tmp_path / "apple.json")} for v in VARIANTS},
+    }
+    trials = {n: {"rig": "rig", "kind": "video", "source": f"data/raw/{n}.mp4", "overrides": {}} for n in fits}
+    rigs = {"rig": {"values": {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322}, "tolerances": {}}}
+    box = R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS).summary_box()
+    assert "No joint fit succeeded" in box
+    assert "cannot give the swing of 2 of its 2 trial(s): their periods 1.65–2.06 s" in box, box
+    assert "3.238 s at the least" in box and "<code>rig</code>" in box
+
+
 def test_trial_order_puts_trials_without_a_release_angle_last(documents):
     assert documents.trial_order() == ["t20", "bad"]
     assert documents.release_deg("t20") == 20.0 and documents.release_deg("bad") is None

@@ -41,6 +41,19 @@ def test_run_stage_records_bad_input_in_the_users_words():
     ]
 
 
+def test_run_stage_keeps_what_a_refusal_measured_as_data():
+    from pendulum.fit.output_error import RigMismatch
+
+    facts = {"rig_mismatch": [{"trial": "apple", "period_s": 2.06, "fastest_period_s": 3.238}]}
+
+    def work():
+        raise RigMismatch("trial apple: its period 2.06 s is shorter than its rig values allow", facts)
+
+    ok, written = run_and_capture(work)
+    assert not ok and written[0]["error"].startswith("trial apple: its period 2.06 s")
+    assert written[0]["rig_mismatch"] == facts["rig_mismatch"]
+
+
 def test_run_stage_calls_an_unexpected_error_a_bug():
     def work():
         return {}["missing"] + 1 if False else None.shape  # AttributeError

@@ -83,7 +83,8 @@ def fitted_trials(
 
 
 def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_failed: Callable[[dict], None]) -> bool:
-    """Run ``work``; on any exception log it and ``write_failed(failed document)`` instead.
+    """Run ``work``; on any exception log it and ``write_failed(failed document)`` instead (with the error's
+    ``facts``, a dict of what it measured, where it has them).
 
     Returns True when the work succeeded. An upstream failure keeps its own
     stage and message; an unexpected error is logged with its traceback.
@@ -102,7 +103,7 @@ def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_f
             log.exception("%s", reason)
         else:
             log.error("%s", reason)
-        write_failed(failed(stage, reason))
+        write_failed(failed(stage, reason, **getattr(exc, "facts", {})))  # what the error measured, as data
     return False
 
 

@@ -146,6 +146,24 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
     return out
 
 
+def smooth_swing(record: AngleRecord) -> bool:
+    """Whether the record itself moves smoothly: RMS over robust σ of its own third differences
+    (:func:`noise_differences`) within :data:`MAX_ROUGHNESS_RATIO`, from at least :data:`MIN_NOISE_TRIPLES` runs.
+    Its period can then be trusted before any fit; a record that hops between objects has none."""
+    d3 = noise_differences(record.time_s, record.theta_rad)
+    if d3.size < MIN_NOISE_TRIPLES:
+        return False
+    robust = float(1.4826 * np.median(np.abs(d3 - np.median(d3))))
+    return robust > 0 and float(np.sqrt(np.mean(d3**2))) <= MAX_ROUGHNESS_RATIO * robust
+
+
+def fastest_period_s(record: AngleRecord, added_mass_lower_kg: float) -> float:
+    """The shortest small-amplitude period the record's rig values allow: T_min = 2π √((I_p + m_a,min L²) / τ_g)."""
+    rig = record.rig
+    inertia = rig.pivot_inertia_kg_m2 + added_mass_lower_kg * rig.length_m**2
+    return 2 * math.pi * math.sqrt(max(inertia, 1e-12) / rig.restoring_torque_nm)
+
+
 def rig_period_problem(record: AngleRecord, period_s: float, added_mass_lower_kg: float) -> str | None:
     """A sentence when the record's small-amplitude period lies outside what the rig values allow, else None.
 
@@ -153,9 +171,7 @@ def rig_period_problem(record: AngleRecord, period_s: float, added_mass_lower_kg
     τ_g = (m g − ρ V g) L; a shorter measured period, or no restoring torque at all, means the rig values
     (length, mass, volume, fluid) are not this pendulum's.
     """
-    rig = record.rig
-    inertia = rig.pivot_inertia_kg_m2 + added_mass_lower_kg * rig.length_m**2
-    fastest = 2 * math.pi * math.sqrt(max(inertia, 1e-12) / rig.restoring_torque_nm)
+    fastest = fastest_period_s(record, added_mass_lower_kg)
     if not math.isfinite(period_s) or period_s >= 0.98 * fastest:
         return None
     return (

@@ -36,7 +36,14 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from pendulum.fit.checks import misfit_warning, record_checks, rig_checks, rig_period_problem
+from pendulum.fit.checks import (
+    fastest_period_s,
+    misfit_warning,
+    record_checks,
+    rig_checks,
+    rig_period_problem,
+    smooth_swing,
+)
 from pendulum.fit.decay import decay_analysis
 from pendulum.fit.records import AngleRecord, FitSettings
 from pendulum.fit.uncertainty import (
@@ -53,7 +60,7 @@ from pendulum.fit.uncertainty import (
     systematic_perturbations,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound
-from pendulum.model.physics import PendulumModel, SimulationDiverged, keulegan_carpenter_number, simulate
+from pendulum.model.physics import PendulumModel, keulegan_carpenter_number, simulate
 from pendulum.model.rig import tolerances_alike
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
@@ -178,25 +185,30 @@ def _phys_start(model, starts):
     return {n: float(np.median([s["physical"][n] for s in starts])) for n in model.parameter_names}
 
 
+class RigMismatch(ValueError):
+    """A record swings faster than its rig's values allow at the least added mass: they are not its pendulum's.
+
+    ``facts``: per such trial its small-amplitude period and the shortest its rig values allow, for the failed
+    fit's document (:func:`pendulum.status.run_stage`) and the report."""
+
+    def __init__(self, message: str, facts: dict):
+        super().__init__(message)
+        self.facts = facts
+
+
 def fit_trials(records: list[AngleRecord], terms, settings: FitSettings | None = None) -> dict:
     """Fit one model variant to one or more trials (shared coefficients, per-trial nuisance).
 
-    A simulation that diverges during the fit says, besides its start state, when the rig values cannot
-    give the record's period (the usual cause on a new user's first clip: another rig's values).
+    Raises :class:`RigMismatch` before fitting when a smooth record's period
+    (:func:`~pendulum.fit.checks.smooth_swing`) is more than 2 % shorter than its rig values allow
+    (:func:`~pendulum.fit.checks.rig_period_problem`; the usual cause on a new user's first clip: another rig's
+    values): no coefficients can fit it, and before 2026-12-02 such a fit either diverged (a message that led
+    with the simulation's start state) or ended at the bound with coefficients of nothing.
     """
     settings = settings or FitSettings()
     if not records:
         raise ValueError("no trials to fit")
-    try:
-        return _fit_trials(records, terms, settings)
-    except SimulationDiverged as exc:
-        model_for = _model_factory(terms)
-        lower = _added_mass_lower_kg(records, settings)
-        hints = [rig_period_problem(r, decay_analysis(model_for(r.rig), r)["period_s"], lower) for r in records]
-        hints = [h for h in hints if h]
-        if not hints:
-            raise
-        raise SimulationDiverged(f"{exc}. More likely: {'; '.join(hints)}") from exc
+    return _fit_trials(records, terms, settings)
 
 
 def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dict:
@@ -204,10 +216,22 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
     model = model_for(records[0].rig)
     names = model.parameter_names
     starts = [decay_analysis(model_for(r.rig), r) for r in records]
+    lower_added_mass_kg = _added_mass_lower_kg(records, settings)
+    mismatched = [  # a record that hops between objects has no period to trust: its checks say so after the fit
+        rig_period_problem(r, s["period_s"], lower_added_mass_kg) if smooth_swing(r) else None
+        for r, s in zip(records, starts, strict=True)
+    ]
+    if any(mismatched):
+        periods = [
+            {"trial": r.trial, "period_s": s["period_s"], "fastest_period_s": fastest_period_s(r, lower_added_mass_kg)}
+            for r, s, m in zip(records, starts, mismatched, strict=True)
+            if m
+        ]
+        raise RigMismatch("; ".join(m for m in mismatched if m), {"rig_mismatch": periods})
     phys0 = _phys_start(model, starts)
     x0 = np.array([phys0[n] for n in names] + [s[k] for s in starts for k in NUISANCE])
     lower = np.array([lower_bound(n) for n in names] + [-np.inf] * (3 * len(records)))
-    lower[0] = _added_mass_lower_kg(records, settings)
+    lower[0] = lower_added_mass_kg
     problem = _Problem(model_for, records, names, settings.max_step_s)
     for k, start in enumerate(starts):  # jumps in a record's first samples (decay analysis) are never fitted:
         problem.masks[k][start.get("start_outlier_samples", [])] = False  # least squares would chase them (θ̇0 → ∞)

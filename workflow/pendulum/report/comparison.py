@@ -31,6 +31,27 @@ from pendulum.tracking.timing import slip_counts
 class ComparisonSections(ReportData):
     """The summary box (recommended coefficients per rig) and the model comparison with term-by-term evidence."""
 
+    def _rig_mismatch_note(self, trials: list[str]) -> str:
+        """Where the rig's values cannot give its trials' periods (their fits refused: ``rig_mismatch``), one
+        sentence that says so with the numbers and what to give; empty otherwise."""
+        found = {}
+        for trial in trials:
+            for variant in self.order:
+                for entry in (self.fits.get((variant, trial)) or {}).get("rig_mismatch", []):
+                    found.setdefault(entry["trial"], entry)
+        if not found:
+            return ""
+        periods = [e["period_s"] for e in found.values()]
+        fastest = min(e["fastest_period_s"] for e in found.values())
+        span = f"{min(periods):.3g} s" if len(periods) == 1 else f"{min(periods):.3g}–{max(periods):.3g} s"
+        return (
+            f" The rig's values cannot give the swing of {len(found)} of its {len(trials)} trial(s): their periods "
+            f"{span}, where these values allow {fastest:.4g} s at the least; they are another pendulum's. Give each "
+            "pendulum its own rig in the trials' sidecars (<code>rig</code>, <code>mass_kg</code>, "
+            "<code>length_m</code>, <code>frontal_area_m2</code>; docs/your-data.md); their tracks and angle records "
+            "stand (Tracking quality)."
+        )
+
     def summary_box(self) -> str:
         """Recommended coefficients per rig (joint fit of the best-supported variant), verdict, warnings."""
         boxes = []
@@ -42,7 +63,8 @@ class ComparisonSections(ReportData):
             if best is None:
                 boxes.append(
                     f'<section class="summary-box"><h3>Rig {esc(rig)}</h3><p class="warn">No joint fit succeeded: '
-                    "no coefficients can be recommended. See the failed trials below.</p></section>"
+                    f"no coefficients can be recommended.{self._rig_mismatch_note(trials)} See the failed trials "
+                    "below.</p></section>"
                 )
                 continue
             variant = best["variant"]
