@@ -181,10 +181,33 @@ def test_a_smooth_record_the_rig_values_cannot_give_is_refused_before_any_fit(se
     for period_s in (2.06, 1.66):
         theta = 0.3 * np.cos(2 * math.pi * t / period_s) * np.exp(-t / 30) + rng.normal(0, 1e-4, t.size)
         record = load_record(pd.DataFrame({"time_s": t, "theta_rad": theta, "flag": "ok"}), "apple", rig, FitSettings())
-        with pytest.raises(RigMismatch, match=r"^trial apple: its period \S+ s is shorter .* \(3\.238 s") as refused:
+        with pytest.raises(
+            RigMismatch, match=r"^trial apple: its small-amplitude period \S+ s is shorter .* \(3\.238 s"
+        ) as refused:
             fit_trials([record], ["quadratic_drag"])
-        said = float(str(refused.value).split("its period ")[1].split(" s")[0])  # small-amplitude: sin θ taken out
+        said = float(
+            str(refused.value).split("its small-amplitude period ")[1].split(" s")[0]
+        )  # small-amplitude: sin θ taken out
         assert said == pytest.approx(period_s, rel=0.01)
     slow = 0.3 * np.cos(2 * math.pi * t / 3.4) * np.exp(-t / 30) + rng.normal(0, 1e-4, t.size)
     record = load_record(pd.DataFrame({"time_s": t, "theta_rad": slow, "flag": "ok"}), "slow", rig, FitSettings())
     assert fit_trials([record], ["quadratic_drag"])["parameters"]["added_mass_kg"]["value"] > 0
+
+
+def test_a_drag_coefficient_no_body_has_names_the_fluid_density():
+    """An apple in air (C_d 1.45, A 0.0038 m²) fitted with water's default density: C_dA comes out 1000/1.2 times
+    too small, C_d ≈ 0.0017, which no body has (a new user's sidecar without fluid_density_kg_m3, 2026-12-02: no
+    warning then). The fit says which rig values to check; with the air's density it says nothing of the kind."""
+    air = {"mass_kg": 0.18, "length_m": 1.053, "frontal_area_m2": 0.0038, "fluid_density_kg_m3": 1.2}
+    model = PendulumModel(Rig.from_mapping(air), ("quadratic_drag",))
+    table = synthetic_angle_table(
+        model, {"added_mass_kg": 0.0, "drag_area_m2": 1.45 * 0.0038}, 22.0, rng=np.random.default_rng(3), fps=60.0
+    )
+    for rig, warned in ((air, False), ({**air, "fluid_density_kg_m3": 1000.0}, True)):
+        fit = fit_trials([load_record(table.copy(), "apple", rig, FitSettings())], ["quadratic_drag"])
+        drag = [w for w in fit["warnings"] if "fitted drag coefficient" in w]
+        assert bool(drag) == warned, (rig, fit["parameters"]["drag_coefficient"]["value"], fit["warnings"])
+        if warned:
+            assert "is far below any body's" in drag[0] and "1000 kg/m³ here" in drag[0] and "air is 1.2" in drag[0]
+        else:
+            assert fit["parameters"]["drag_coefficient"]["value"] == pytest.approx(1.45, rel=0.05)

@@ -251,8 +251,12 @@ def test_a_rig_whose_values_cannot_give_its_trials_periods_says_so_in_the_summar
     rigs = {"rig": {"values": {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322}, "tolerances": {}}}
     box = R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS).summary_box()
     assert "No joint fit succeeded" in box
-    assert "cannot give the swing of 2 of its 2 trial(s): their periods 1.65–2.06 s" in box, box
-    assert "3.238 s at the least" in box and "<code>rig</code>" in box
+    assert "cannot give the swing of 2 of its 2 trial(s): their small-amplitude periods 1.65–2.06 s" in box, box
+    assert (
+        "3.238 s at the least" in box
+        and "<code>rig</code>" in box
+        and "<code>fluid_density_kg_m3</code>: 1.2 in air" in box
+    )
 
 
 def test_trial_order_puts_trials_without_a_release_angle_last(documents):

@@ -97,6 +97,9 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
     assert table.loc[1, "log"] == "logs/f/b.log"
     text = failure_summary(table)
     assert text.startswith("2 of 3 trial(s) failed") and "b (fit:linear: record too short)" in text
+    assert text.endswith("report.html (built from the other trials).")
+    every = failure_summary(table[table.status != "ok"])  # no other trial to build from: the report says why
+    assert every.startswith("2 of 2 trial(s) failed") and every.endswith("report.html (it says why, trial by trial).")
     assert failure_summary(table[table.status == "ok"]) is None
 
 

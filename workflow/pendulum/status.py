@@ -169,7 +169,8 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     if bad.empty:
         return None
     items = "; ".join(f"{r.trial} ({r.stage}: {r.reason})" for r in bad.itertuples())
+    built = "built from the other trials" if len(bad) < len(table) else "it says why, trial by trial"
     return (
         f"{len(bad)} of {len(table)} trial(s) failed: {items}. See results/status/trials.csv and "
-        "results/report/report.html (built from the other trials)."
+        f"results/report/report.html ({built})."
     )

@@ -146,6 +146,26 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
     return out
 
 
+DRAG_COEFFICIENT_RANGE = (0.05, 10.0)  # any body's C_d, streamlined to a flat plate and its rod: outside, a rig value
+
+
+def drag_checks(rig: Rig, drag_coefficient: dict) -> list[str]:
+    """A warning when a measured C_d lies far outside any body's (:data:`DRAG_COEFFICIENT_RANGE`): the drag torque
+    ½ ρ C_d A L³ θ̇|θ̇| gives C_d only through ρ and A, so a fluid density or frontal area that is not the rig's
+    shows here first (a pendulum in air with water's default density: C_d ≈ 0.0018 for an apple's 1.5)."""
+    value = drag_coefficient.get("value")
+    if value is None or drag_coefficient.get("at_bound") or drag_coefficient.get("identifiable") is False:
+        return []
+    low, high = DRAG_COEFFICIENT_RANGE
+    if low <= value <= high:
+        return []
+    return [
+        f"fitted drag coefficient C_d = {value:.3g} is far {'below' if value < low else 'above'} any body's "
+        f"({low:g}–{high:g}): check fluid_density_kg_m3 ({rig.fluid_density_kg_m3:g} kg/m³ here; water's 1000 is "
+        "the default, air is 1.2) and frontal_area_m2"
+    ]
+
+
 def smooth_swing(record: AngleRecord) -> bool:
     """Whether the record itself moves smoothly: RMS over robust σ of its own third differences
     (:func:`noise_differences`) within :data:`MAX_ROUGHNESS_RATIO`, from at least :data:`MIN_NOISE_TRIPLES` runs.
@@ -175,7 +195,7 @@ def rig_period_problem(record: AngleRecord, period_s: float, added_mass_lower_kg
     if not math.isfinite(period_s) or period_s >= 0.98 * fastest:
         return None
     return (
-        f"trial {record.trial}: its period {period_s:.4g} s is shorter than its rig values allow "
+        f"trial {record.trial}: its small-amplitude period {period_s:.4g} s is shorter than its rig values allow "
         f"({fastest:.4g} s at the least added mass): its values (length_m, mass_kg, displaced_volume_m3, "
         "fluid_density_kg_m3) are not this pendulum's; give the trial's rig in config or its sidecar"
     )

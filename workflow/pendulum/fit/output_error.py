@@ -37,6 +37,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from pendulum.fit.checks import (
+    drag_checks,
     fastest_period_s,
     misfit_warning,
     record_checks,
@@ -327,6 +328,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             params["drag_coefficient"] = drag_coefficient_entry(params[name], area, area_sigma)
             warnings += [differ] if differ else []
     warnings += rig_checks(rig, params[ADDED_MASS], starts)
+    warnings += drag_checks(rig, params["drag_coefficient"]) if "drag_coefficient" in params else []
     sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     corr = cov / np.outer(sd, sd)
     labels = names + [f"{k}[{r.trial}]" for r in records for k in NUISANCE]
