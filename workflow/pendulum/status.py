@@ -142,17 +142,27 @@ def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, s
     ``documents``: (stage, log path, JSON document) in pipeline order; a stage
     may be qualified (``fit:quadratic``). The trial failed at the first failed
     document, in the stage named there (an upstream failure passed on keeps its
-    origin, e.g. ``geometry`` for an angle record without a pivot).
+    origin, e.g. ``geometry`` for an angle record without a pivot). Where every document of a qualified stage
+    failed with one error (every variant's fit refused for the rig's values), the stage is named so:
+    ``fit (every variant)``.
     """
     for stage, log_path, document in documents:
         if is_failed(document):
             origin = document.get("failed_stage", stage)
+            named = stage if origin == stage.split(":")[0] else origin
+            family = [d for s, _, d in documents if ":" in stage and s.split(":")[0] == stage.split(":")[0]]
+            if (
+                named == stage
+                and len(family) > 1
+                and all(is_failed(d) and d.get("error") == document.get("error") for d in family)
+            ):
+                named = f"{stage.split(':')[0]} (every variant)"
             return {
                 "trial": trial,
                 "source": source,
                 "rig": rig,
                 "status": "failed",
-                "stage": stage if origin == stage.split(":")[0] else origin,
+                "stage": named,
                 "reason": document.get("error", ""),
                 "log": log_path,
             }
