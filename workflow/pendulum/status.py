@@ -150,13 +150,14 @@ def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, s
         if is_failed(document):
             origin = document.get("failed_stage", stage)
             named = stage if origin == stage.split(":")[0] else origin
-            family = [d for s, _, d in documents if ":" in stage and s.split(":")[0] == stage.split(":")[0]]
+            base = stage.split(":")[0]
+            family = [d for s, _, d in documents if s.split(":")[0] == base] if ":" in stage else []
             if (
                 named == stage
                 and len(family) > 1
                 and all(is_failed(d) and d.get("error") == document.get("error") for d in family)
             ):
-                named = f"{stage.split(':')[0]} (every variant)"
+                named = f"{base} (every variant)"
             return {
                 "trial": trial,
                 "source": source,

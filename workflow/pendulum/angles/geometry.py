@@ -179,7 +179,7 @@ def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, 
     points = {name: path_points(track) for name, track in tracks.items()}
     circle = _pooled_circle(kept, points)
     while len(kept) >= 3:
-        farthest = sorted(sorted(kept), key=lambda name: -_radial_rms_px(kept[name], circle))[:OUTLIER_CANDIDATES]
+        farthest = sorted(kept, key=lambda name: (-_radial_rms_px(kept[name], circle), name))[:OUTLIER_CANDIDATES]
         without = {name: _pooled_circle({k: v for k, v in kept.items() if k != name}, points) for name in farthest}
         worst = min(farthest, key=lambda name: without[name].rms_px)  # the first of equals: the farthest
         others = {k: v for k, v in kept.items() if k != worst}
