@@ -236,7 +236,9 @@ def test_a_rig_whose_values_cannot_give_its_trials_periods_says_so_in_the_summar
             "status": "failed",
             "failed_stage": "fit",
             "error": f"trial {name}: its period {period} s is shorter than its rig values allow (3.238 s ...)",
-            "rig_mismatch": [{"trial": name, "period_s": period, "fastest_period_s": 3.2378}],
+            "rig_mismatch": [
+                {"trial": name, "period_s": period, "swing_period_s": period + 0.02, "fastest_period_s": 3.2378}
+            ],
         }
         (tmp_path / f"{name}.json").write_text(json.dumps(refused))
         fits[name] = {"fit": str(tmp_path / f"{name}.json"), "curve": str(tmp_path / "none.csv"), "cycles": ""}
@@ -251,7 +253,8 @@ def test_a_rig_whose_values_cannot_give_its_trials_periods_says_so_in_the_summar
     rigs = {"rig": {"values": {"mass_kg": 3.53, "length_m": 0.76, "frontal_area_m2": 0.0322}, "tolerances": {}}}
     box = R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS).summary_box()
     assert "No joint fit succeeded" in box
-    assert "cannot give the swing of 2 of its 2 trial(s): their small-amplitude periods 1.65–2.06 s" in box, box
+    # the periods as swung (what the tracking table and a stopwatch give), not the small-amplitude ones
+    assert "cannot give the swing of 2 of its 2 trial(s): their periods 1.674–2.081 s as swung" in box, box
     assert (
         "3.238 s at the least" in box
         and "<code>rig</code>" in box

@@ -98,7 +98,11 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
     text = failure_summary(table)
     assert text.startswith("2 of 3 trial(s) failed") and "b (fit:linear: record too short)" in text
     assert text.endswith("report.html (built from the other trials).")
-    refused = {"status": "failed", "failed_stage": "fit", "error": "trial d: its small-amplitude period 2.06 s …"}
+    refused = {
+        "status": "failed",
+        "failed_stage": "fit",
+        "error": "trial d: its period 2.078 s as swung (2.06 s at small amplitude) …",
+    }
     variants = [(f"fit:{v}", f"logs/fits/{v}/d.log", refused) for v in ("friction", "linear", "quadratic")]
     assert trial_status("d", "data/raw/d.mp4", "rig", [("angles", "logs/a/d.log", ok), *variants])["stage"] == (
         "fit (every variant)"

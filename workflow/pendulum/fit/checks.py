@@ -184,20 +184,28 @@ def fastest_period_s(record: AngleRecord, added_mass_lower_kg: float) -> float:
     return 2 * math.pi * math.sqrt(max(inertia, 1e-12) / rig.restoring_torque_nm)
 
 
-def rig_period_problem(record: AngleRecord, period_s: float, added_mass_lower_kg: float) -> str | None:
+def rig_period_problem(
+    record: AngleRecord, period_s: float, added_mass_lower_kg: float, swing_period_s: float | None = None
+) -> str | None:
     """A sentence when the record's small-amplitude period lies outside what the rig values allow, else None.
 
     With the added mass at its lower bound the rig swings fastest: T_min = 2π √((I_p + m_a,min L²) / τ_g),
     τ_g = (m g − ρ V g) L; a shorter measured period, or no restoring torque at all, means the rig values
-    (length, mass, volume, fluid) are not this pendulum's.
+    (length, mass, volume, fluid) are not this pendulum's. ``swing_period_s``, the period as swung (what a
+    stopwatch gives; longer than the small-amplitude one by T₀ A²/16), leads the sentence where given: a reader
+    checks the record against it.
     """
     fastest = fastest_period_s(record, added_mass_lower_kg)
     if not math.isfinite(period_s) or period_s >= 0.98 * fastest:
         return None
+    measured = f"small-amplitude period {period_s:.4g} s"
+    if swing_period_s is not None and math.isfinite(swing_period_s):
+        measured = f"period {swing_period_s:.4g} s as swung ({period_s:.4g} s at small amplitude)"
     return (
-        f"trial {record.trial}: its small-amplitude period {period_s:.4g} s is shorter than its rig values allow "
-        f"({fastest:.4g} s at the least added mass): its values (length_m, mass_kg, displaced_volume_m3, "
-        "fluid_density_kg_m3) are not this pendulum's; give the trial's rig in config or its sidecar"
+        f"trial {record.trial}: its {measured} is shorter than its rig values allow "
+        f"({fastest:.4g} s at small amplitude with the least added mass): its values (length_m, mass_kg, "
+        "displaced_volume_m3, fluid_density_kg_m3) are not this pendulum's; give the trial's rig in config or its "
+        "sidecar"
     )
 
 

@@ -36,6 +36,7 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
+from pendulum.angles.swings import crossing_period
 from pendulum.fit.checks import (
     drag_checks,
     fastest_period_s,
@@ -189,8 +190,8 @@ def _phys_start(model, starts):
 class RigMismatch(ValueError):
     """A record swings faster than its rig's values allow at the least added mass: they are not its pendulum's.
 
-    ``facts``: per such trial its small-amplitude period and the shortest its rig values allow, for the failed
-    fit's document (:func:`pendulum.status.run_stage`) and the report."""
+    ``facts``: per such trial its small-amplitude period, its period as swung and the shortest (small-amplitude)
+    its rig values allow, for the failed fit's document (:func:`pendulum.status.run_stage`) and the report."""
 
     def __init__(self, message: str, facts: dict):
         super().__init__(message)
@@ -218,17 +219,23 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
     names = model.parameter_names
     starts = [decay_analysis(model_for(r.rig), r) for r in records]
     lower_added_mass_kg = _added_mass_lower_kg(records, settings)
-    mismatched = [  # a record that hops between objects has no period to trust: its checks say so after the fit
-        rig_period_problem(r, s["period_s"], lower_added_mass_kg) if smooth_swing(r) else None
-        for r, s in zip(records, starts, strict=True)
-    ]
-    if any(mismatched):
-        periods = [
-            {"trial": r.trial, "period_s": s["period_s"], "fastest_period_s": fastest_period_s(r, lower_added_mass_kg)}
-            for r, s, m in zip(records, starts, mismatched, strict=True)
-            if m
-        ]
-        raise RigMismatch("; ".join(m for m in mismatched if m), {"rig_mismatch": periods})
+    mismatched, periods = [], []
+    for record, start in zip(records, starts, strict=True):
+        # a record that hops between objects has no period to trust: its checks say so after the fit
+        if smooth_swing(record) and rig_period_problem(record, start["period_s"], lower_added_mass_kg):
+            found = crossing_period(record.time_s, record.theta_rad)  # as swung: the angles JSON's period_s
+            swing_period_s = found[0] if found else None
+            mismatched.append(rig_period_problem(record, start["period_s"], lower_added_mass_kg, swing_period_s))
+            periods.append(
+                {
+                    "trial": record.trial,
+                    "period_s": start["period_s"],
+                    "swing_period_s": swing_period_s,
+                    "fastest_period_s": fastest_period_s(record, lower_added_mass_kg),
+                }
+            )
+    if mismatched:
+        raise RigMismatch("; ".join(mismatched), {"rig_mismatch": periods})
     phys0 = _phys_start(model, starts)
     x0 = np.array([phys0[n] for n in names] + [s[k] for s in starts for k in NUISANCE])
     lower = np.array([lower_bound(n) for n in names] + [-np.inf] * (3 * len(records)))

@@ -41,13 +41,13 @@ class ComparisonSections(ReportData):
                     found.setdefault(entry["trial"], entry)
         if not found:
             return ""
-        periods = [e["period_s"] for e in found.values()]
+        periods = [e.get("swing_period_s") or e["period_s"] for e in found.values()]
         fastest = min(e["fastest_period_s"] for e in found.values())
-        span = f"{min(periods):.3g} s" if len(periods) == 1 else f"{min(periods):.3g}–{max(periods):.3g} s"
+        span = f"{min(periods):.4g} s" if len(periods) == 1 else f"{min(periods):.4g}–{max(periods):.4g} s"
         return (
             f" The rig's values cannot give the swing of {len(found)} of its {len(trials)} trial(s): their "
-            f"small-amplitude periods {span}, where these values allow {fastest:.4g} s at the least; they are another "
-            "pendulum's. Give each pendulum its own rig in the trials' sidecars (<code>rig</code>, "
+            f"periods {span} as swung, where these values allow {fastest:.4g} s at the least (at small amplitude); "
+            "they are another pendulum's. Give each pendulum its own rig in the trials' sidecars (<code>rig</code>, "
             "<code>mass_kg</code>, <code>length_m</code>, <code>frontal_area_m2</code>, "
             "<code>displaced_volume_m3</code> and <code>fluid_density_kg_m3</code>: 1.2 in air, where water's 1000 "
             "is the default; docs/your-data.md); their tracks and angle records stand (Tracking quality)."

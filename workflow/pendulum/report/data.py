@@ -163,7 +163,7 @@ def short_warning(text: str) -> str:
         ("inseparable", "inseparable parameters"),
         ("time base", "time base?"),
         ("correlated", "correlated parameters"),
-        ("small-amplitude period", "period vs rig values"),
+        ("shorter than its rig values allow", "period vs rig values"),
     ):
         if key in lowered:
             return short
