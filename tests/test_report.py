@@ -531,7 +531,7 @@ def test_a_log_axis_spanning_less_than_a_factor_three_has_several_labels():
 def test_the_summary_says_what_the_videos_records_carry(documents):
     """A creeping camera, a path off one circle and frames the phone lost are said where users read first (the real
     apple clip's were only in the tracking table's notes)."""
-    assert "What the videos' records carry" not in documents.summary_box()
+    assert "records carry" not in documents.summary_box()
     documents.docs[("t20", "tracks")] = {
         "status": "ok",
         "path": {
@@ -547,6 +547,11 @@ def test_the_summary_says_what_the_videos_records_carry(documents):
     assert "<b>t20</b>: the camera crept by 13 px (corrected)" in box
     assert "off one circle by 0.44 px RMS (0.045°), which the angles carry" in box
     assert "1 frame(s) lost, 1 repeated, 1 slip(s) of the clock by part of a frame under even time stamps" in box
+    # a trial the recommended joint fit leaves out (failed, refused) is not among the records its numbers rest on
+    # (a reviewer's run, 2026-12-02: seven failed clips' notes listed under the coefficients of five others)
+    for joint in documents.joint.values():
+        joint["trials"] = {t: v for t, v in (joint.get("trials") or {}).items() if t != "t20"}
+    assert "records carry" not in documents.summary_box()
 
 
 def test_a_record_without_a_release_is_labelled_by_its_first_swing_extremum(documents):

@@ -178,6 +178,17 @@ def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, 
     rejected: dict[str, str] = {}
     points = {name: path_points(track) for name, track in tracks.items()}
     circle = _pooled_circle(kept, points)
+    if len(kept) >= 3 and unshared_pivot(kept, circle):  # several placements or pendulums: the most that share one
+        found = _largest_shared_group(kept, points)
+        if found is not None:
+            group, circle = found
+            for name in sorted(set(kept) - set(group)):
+                off = _radial_rms_px(kept[name], circle)
+                rejected[name] = (
+                    f"its marker path is {off:.2f} px RMS off the circle that {len(group)} of the rig's {len(kept)} "
+                    f"trials share (the most that share one pivot): {ELSEWHERE}"
+                )
+            kept = {name: kept[name] for name in group}
     while len(kept) >= 3:
         farthest = sorted(kept, key=lambda name: (-_radial_rms_px(kept[name], circle), name))[:OUTLIER_CANDIDATES]
         without = {name: _pooled_circle({k: v for k, v in kept.items() if k != name}, points) for name in farthest}
@@ -200,6 +211,48 @@ ELSEWHERE = (
     "the camera moved between trials, they were filmed from different places, or it is another pendulum (one rig "
     "per camera placement and pendulum: `rig` in a trial's sidecar names its own)"
 )
+
+
+SHARED_GROUP_SEEDS = 12  # tracks tried as the seed of a group that shares one pivot (the widest arcs first)
+SHARED_GROUP_ROUNDS = 5  # refits of a group's circle, each taking in the tracks that lie on it
+
+
+def _largest_shared_group(tracks: dict[str, pd.DataFrame], points: dict) -> tuple[list[str], CircleFit] | None:
+    """The largest set of tracks that lie on one circle, and its circle; None unless it has at least three tracks
+    and every other set found is smaller.
+
+    Each seed (the widest arc not yet in a set, up to :data:`SHARED_GROUP_SEEDS`) starts from its own circle;
+    a track lies on a circle when it is no farther off it than OUTLIER_TRACK_FACTOR × its own RMS off its own
+    circle (at most the median track's) and OUTLIER_TRACK_FLOOR_PX; the set's pooled circle is refitted and
+    the set taken again until it holds. Seven clips of other pendulums (the real apple, transformed, at three
+    scales and mirrored) dropped beside the five demo videos lay 131 px RMS off the pooled circle, none farther
+    than the rest: no one track's leaving out helped, and all twelve trials, the demo's too, used their own
+    pivots (a ±5° trial's 6 px off; 2026-12-02). Here the demo's five are the largest set.
+    """
+    own = {name: _pooled_circle({name: track}, points) for name, track in tracks.items()}
+    own_rms = {name: _radial_rms_px(track, own[name]) for name, track in tracks.items()}
+    median = float(np.median([v for v in own_rms.values() if math.isfinite(v)] or [math.inf]))
+    limit = {n: max(OUTLIER_TRACK_FACTOR * min(v, median), OUTLIER_TRACK_FLOOR_PX) for n, v in own_rms.items()}
+    groups: list[tuple[list[str], CircleFit]] = []
+    seen: set[str] = set()
+    by_arc = sorted(tracks, key=lambda name: (-own[name].arc_span_deg, name))
+    for seed in by_arc:
+        if seed in seen or len(groups) >= SHARED_GROUP_SEEDS:
+            continue
+        group, circle = [seed], own[seed]
+        for _ in range(SHARED_GROUP_ROUNDS):
+            on = sorted(name for name, track in tracks.items() if _radial_rms_px(track, circle) <= limit[name])
+            if not on or on == group:
+                break
+            group = on
+            circle = _pooled_circle({name: tracks[name] for name in group}, points)
+        seen.update(group)
+        seen.add(seed)
+        groups.append((group, circle))
+    groups.sort(key=lambda found: -len(found[0]))
+    if not groups or len(groups[0][0]) < 3 or (len(groups) > 1 and len(groups[1][0]) >= len(groups[0][0])):
+        return None
+    return groups[0]
 
 
 SHARED_PIVOT_CHI2 = 30.0  # a track's own pivot this far (Mahalanobis², its own covariance) from the pooled one

@@ -21,7 +21,9 @@ from pendulum.report.format import (
 )
 from pendulum.tracking.timing import slip_sentence
 
-NOTES_STYLE = "max-width:26em;min-width:14em;overflow-wrap:anywhere"  # one note a line; the table within the page
+# One note a line; the table within the page (a minimum of 14em made the tracking table 1140 px wide in its 1120 px
+# column: a reviewer saw the notes cut mid-word, 2026-12-02).
+NOTES_STYLE = "max-width:26em;min-width:10em;overflow-wrap:anywhere"
 # Frames-stage warnings that :func:`frame_notes` says in its own words (video.probe's sentences).
 _NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
 

@@ -238,9 +238,12 @@ class ComparisonSections(ReportData):
             out.append(
                 f"Per-trial {esc(variant)} fits with warnings: {', '.join(esc(t) for t in per_trial)} (Table 3)."
             )
-        tracking = [f"<b>{esc(t)}</b>: {esc(n)}" for t in self.rig_trials(rig) if (n := self._tracking_note(t))]
+        fitted = set(joint["trials"] if "trials" in joint else self.rig_trials(rig))  # not a failed trial's record
+        tracking = [
+            f"<b>{esc(t)}</b>: {esc(n)}" for t in self.rig_trials(rig) if t in fitted and (n := self._tracking_note(t))
+        ]
         if tracking:
-            out.append("What the videos' records carry (Tracking quality): " + "; ".join(tracking) + ".")
+            out.append("What the fitted videos' records carry (Tracking quality): " + "; ".join(tracking) + ".")
         if not self.provenance.get("commit"):
             out.append("Not built from a git commit: the code version of these results is not recorded.")
         elif self.provenance.get("dirty"):
