@@ -211,6 +211,24 @@ def test_the_summary_recommends_the_best_variant_and_warns_of_the_failed_trial(d
     assert "1 of 2 trial(s) failed" in failures
 
 
+def test_a_trial_refused_at_the_fit_shows_its_usable_frames_and_period_among_the_failed(documents):
+    """A clip whose track and angle record stand but whose fit the rig's values refused: the failed trials' table
+    and the header say so (a reviewer found the periods of seven such clips only in the tracking table)."""
+    refused = "trial t20: its period 2.078 s as swung (2.059 s at small amplitude) is shorter …"
+    documents.status = pd.DataFrame(
+        [
+            ("bad", "data/raw/bad.mp4", "rig", "failed", "tracks", "", "", "not a video file", "logs/tracks/bad.log"),
+            ("t20", "data/raw/t20.mp4", "rig", "failed", "fit (every variant)", 99.85, 2.078132, refused, "l.log"),
+        ],
+        columns=["trial", "source", "rig", "status", "stage", "ok_frames_pct", "period_s", "reason", "log"],
+    )
+    failures = documents.failures_section()
+    assert "<th>usable frames (%)</th><th>period (s)</th>" in failures
+    assert '<td class="num">99.85</td><td class="num">2.07813</td>' in failures, failures
+    assert '<td>bad</td><td>tracks</td><td class="num">—</td><td class="num">—</td>' in failures
+    assert "2 trial(s) failed</span> (1 of them after their angle records were made)" in documents.header()
+
+
 def test_the_summary_does_not_recommend_a_fit_that_misses_its_records(documents):
     """A best variant whose joint fit misses its records by far more than their noise is the best tried, not a
     recommendation (the real apple clip's quadratic fit: 78× the noise, titled "Recommended" before)."""

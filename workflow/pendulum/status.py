@@ -19,7 +19,7 @@ import pandas as pd
 from pendulum.io import write_failure
 
 STAGE_ORDER = ("frames", "tracks", "geometry", "angles", "fit", "curve")
-STATUS_COLUMNS = ["trial", "source", "rig", "status", "stage", "reason", "log"]
+STATUS_COLUMNS = ["trial", "source", "rig", "status", "stage", "ok_frames_pct", "period_s", "reason", "log"]
 
 
 class UpstreamFailed(Exception):
@@ -144,8 +144,12 @@ def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, s
     document, in the stage named there (an upstream failure passed on keeps its
     origin, e.g. ``geometry`` for an angle record without a pivot). Where every document of a qualified stage
     failed with one error (every variant's fit refused for the rig's values), the stage is named so:
-    ``fit (every variant)``.
+    ``fit (every variant)``. Where the track and the angle record were made (also when a later stage failed:
+    another rig's values refuse the fit, the record stands), ``ok_frames_pct`` is the share of the frames not held
+    by hand that are usable and ``period_s`` the record's period as swung (the tracks and angles JSON's); else
+    None.
     """
+    measured = _measured(documents)
     for stage, log_path, document in documents:
         if is_failed(document):
             origin = document.get("failed_stage", stage)
@@ -164,10 +168,35 @@ def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, s
                 "rig": rig,
                 "status": "failed",
                 "stage": named,
+                **measured,
                 "reason": document.get("error", ""),
                 "log": log_path,
             }
-    return {"trial": trial, "source": source, "rig": rig, "status": "ok", "stage": "", "reason": "", "log": ""}
+    return {
+        "trial": trial,
+        "source": source,
+        "rig": rig,
+        "status": "ok",
+        "stage": "",
+        **measured,
+        "reason": "",
+        "log": "",
+    }
+
+
+def _measured(documents: list[tuple[str, str, dict]]) -> dict:
+    """The usable share of a trial's frames (its tracks document) and its record's period (its angles document)."""
+    found = {"ok_frames_pct": None, "period_s": None}
+    for stage, _, document in documents:
+        if is_failed(document):
+            continue
+        if stage == "tracks" and document.get("flags"):
+            flags = document["flags"]
+            free = sum(flags.values()) - flags.get("held", 0)  # as the tracks log: frames not held by hand
+            found["ok_frames_pct"] = round(100.0 * flags.get("ok", 0) / free, 2) if free > 0 else None
+        elif stage == "angles" and isinstance(document.get("period_s"), (int, float)):
+            found["period_s"] = round(float(document["period_s"]), 6)
+    return found
 
 
 def status_table(rows: list[dict]) -> pd.DataFrame:
@@ -181,7 +210,20 @@ def failure_summary(table: pd.DataFrame) -> str | None:
         return None
     items = "; ".join(f"{r.trial} ({r.stage}: {r.reason})" for r in bad.itertuples())
     built = "built from the other trials" if len(bad) < len(table) else "it says why, trial by trial"
+    recorded = _recorded(bad)
     return (
-        f"{len(bad)} of {len(table)} trial(s) failed: {items}. See results/status/trials.csv and "
+        f"{len(bad)} of {len(table)} trial(s) failed{recorded}: {items}. See results/status/trials.csv and "
         f"results/report/report.html ({built})."
+    )
+
+
+def _recorded(bad: pd.DataFrame) -> str:
+    """Of failed trials, how many have their angle records (a later stage failed: the fit, its curve)."""
+    if "period_s" not in bad:
+        return ""
+    n = int(pd.to_numeric(bad.period_s, errors="coerce").notna().sum())
+    if not n:
+        return ""
+    return (
+        f" ({n} of them after their angle records were made: their usable frames and periods are in the status table)"
     )

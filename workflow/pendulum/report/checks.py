@@ -21,6 +21,15 @@ from pendulum.report.format import (
 )
 from pendulum.tracking.timing import slip_sentence
 
+
+def _number(value) -> float | None:
+    """A status table's cell as a number (None where empty: the trial failed before that was measured)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
+
+
 # One note a line; the table within the page (a minimum of 14em made the tracking table 1140 px wide in its 1120 px
 # column: a reviewer saw the notes cut mid-word, 2026-12-02).
 NOTES_STYLE = "max-width:26em;min-width:10em;overflow-wrap:anywhere"
@@ -193,13 +202,16 @@ class CheckSections(ReportData):
             if commit
             else 'Code: <span class="warn">version not recorded (not built from a git commit)</span>'
         )
-        n_failed = len(self.failed_trials())
+        failed = self.failed_trials()
+        n_failed = len(failed)
+        n_recorded = sum(is_finite(_number(v)) for v in (failed["period_s"] if "period_s" in failed else []))
         n_garbage = sum(bool(self.trial_problems(t)) for t in self.trials)
         return (
             "<header><h1>Free-decay pendulum: added mass and drag coefficient</h1>"
             f'<p class="subtitle">{len(self.trials)} trial(s) on {len(self.rig_names)} rig(s), '
             f"{len(self.variants)} model variant(s) fitted side by side"
             + (f', <span class="warn">{n_failed} trial(s) failed</span>' if n_failed else "")
+            + (f" ({n_recorded} of them after their angle records were made)" if n_recorded else "")
             + (
                 f', <span class="warn">{n_garbage} trial(s) on unreliable records</span> {garbage_badge()}'
                 if n_garbage
@@ -455,23 +467,28 @@ class CheckSections(ReportData):
                 f"<p>All {n} trial(s) succeeded at every stage (<code>results/status/trials.csv</code>).</p>"
                 + self.renamed_note()
             )
-        rows = [
-            [
-                td(esc(str(r.trial))),
-                td(esc(str(r.stage))),
-                td(esc(str(r.reason))),
-                td(f"<code>{esc(str(r.log))}</code>"),
-            ]
-            for r in failed.itertuples()
-        ]
+        measured = {"ok_frames_pct", "period_s"} <= set(failed.columns)
+        rows = []
+        for r in failed.itertuples():
+            cells = [td(esc(str(r.trial))), td(esc(str(r.stage)))]
+            if measured:  # the track and angle record of a trial that failed later (its fit) stand
+                cells += [
+                    td(esc(fmt(_number(r.ok_frames_pct), 4)), "num"),
+                    td(esc(fmt(_number(r.period_s), 6)), "num"),
+                ]
+            rows.append(cells + [td(esc(str(r.reason))), td(f"<code>{esc(str(r.log))}</code>")])
         caption = self.table_caption(
-            f"{len(failed)} of {n} trial(s) failed and are missing from the tables and the joint fits above: the "
-            "stage where each failed, the reason and the log to read."
+            f"{len(failed)} of {n} trial(s) failed and are missing from the fits' tables and the joint fits above: "
+            "the stage where each failed, "
+            + (
+                "the share of its frames usable and its period as swung where its angle record was made, "
+                if measured
+                else ""
+            )
+            + "the reason and the log to read."
         )
-        return (
-            table_html(["trial", "stage", "reason", "log"], rows, caption=caption, table_id="failed-table")
-            + self.renamed_note()
-        )
+        header = ["trial", "stage"] + (["usable frames (%)", "period (s)"] if measured else []) + ["reason", "log"]
+        return table_html(header, rows, caption=caption, table_id="failed-table") + self.renamed_note()
 
     def renamed_note(self) -> str:
         """The files whose names are not their trials' names (spaces, brackets, accents made ``_``)."""
