@@ -195,7 +195,9 @@ def test_table3_has_a_row_per_trial_and_variant_and_says_why_a_fit_is_missing(do
     for trial in ("t20", "bad"):
         for variant in VARIANTS:
             assert f'data-trial="{trial}" data-variant="{variant}" data-kind="trial"' in html
-    assert html.count("tracks failed: data/raw/bad.mp4: not a video file") == 2
+    # the reason once a trial (a reviewer counted each refusal three times, 2026-12-02); the next variant's "as above"
+    assert html.count("tracks failed: data/raw/bad.mp4: not a video file") == 2  # once shown, once as its tooltip
+    assert html.count(">failed, as above</td>") == 1
     assert not re.search(r"\de-\d", html) and "(at bound; &lt; 0.0030)" in html
     assert 'data-trial="joint:rig" data-variant="linear" data-kind="joint"' in html
 
@@ -227,6 +229,18 @@ def test_a_trial_refused_at_the_fit_shows_its_usable_frames_and_period_among_the
     assert '<td class="num">99.85</td><td class="num">2.07813</td>' in failures, failures
     assert '<td>bad</td><td>tracks</td><td class="num">—</td><td class="num">—</td>' in failures
     assert "2 trial(s) failed</span> (1 of them after their angle records were made)" in documents.header()
+    # beside the recommended coefficients of the others, the summary says why too (it did so only where no joint
+    # fit succeeded)
+    for variant in VARIANTS:
+        documents.fits[(variant, "bad")] = {
+            "status": "failed",
+            "failed_stage": "fit",
+            "error": refused,
+            "rig_mismatch": [{"trial": "bad", "period_s": 2.059, "swing_period_s": 2.078, "fastest_period_s": 3.2378}],
+        }
+    box = documents.summary_box()
+    assert "Recommended coefficients" in box and "cannot give the swing of 1 of its 2 trial(s)" in box, box
+    assert "trial(s): its period 2.078 s as swung" in box
 
 
 def test_the_summary_does_not_recommend_a_fit_that_misses_its_records(documents):

@@ -43,10 +43,14 @@ class ComparisonSections(ReportData):
             return ""
         periods = [e.get("swing_period_s") or e["period_s"] for e in found.values()]
         fastest = min(e["fastest_period_s"] for e in found.values())
-        span = f"{min(periods):.4g} s" if len(periods) == 1 else f"{min(periods):.4g}–{max(periods):.4g} s"
+        span = (
+            f"its period {min(periods):.4g} s"
+            if len(periods) == 1
+            else f"their periods {min(periods):.4g}–{max(periods):.4g} s"
+        )
         return (
-            f" The rig's values cannot give the swing of {len(found)} of its {len(trials)} trial(s): their "
-            f"periods {span} as swung, where these values allow {fastest:.4g} s at the least (at small amplitude); "
+            f" The rig's values cannot give the swing of {len(found)} of its {len(trials)} trial(s): "
+            f"{span} as swung, where these values allow {fastest:.4g} s at the least (at small amplitude); "
             "they are another pendulum's. Give each pendulum its own rig in the trials' sidecars (<code>rig</code>, "
             "<code>mass_kg</code>, <code>length_m</code>, <code>frontal_area_m2</code>, "
             "<code>displaced_volume_m3</code> and <code>fluid_density_kg_m3</code>: 1.2 in air, where water's 1000 "
@@ -179,7 +183,7 @@ class ComparisonSections(ReportData):
             names = ", ".join(esc(t) for t in failed.trial)
             out.append(
                 f'<span class="warn">{len(failed)} trial(s) failed and are not in the fit: {names}</span> '
-                '(see <a href="#failed-trials">Failed trials</a>).'
+                '(see <a href="#failed-trials">Failed trials</a>).' + self._rig_mismatch_note(self.rig_trials(rig))
             )
         joint_problems = record_problems(joint)
         if joint_problems:

@@ -314,9 +314,12 @@ class TableSections(ReportData):
         )
         rows, attrs, notes = [], [], []
 
-        def fit_row(label_cells, v, fit, kind, trial):
-            if not is_ok(fit):
-                row = label_cells + [td(esc(v)), td(esc(failure_text(fit)), "na fail", span=len(names) + 1)]
+        def fit_row(label_cells, v, fit, kind, trial, above=None):
+            if not is_ok(fit):  # the reason once a trial: a variant that failed for the same says so
+                text = failure_text(fit)
+                shown = "failed, as above" if text == above else text
+                title = text if shown != text else None
+                row = label_cells + [td(esc(v)), td(esc(shown), "na fail", span=len(names) + 1, title=title)]
             else:
                 warnings = fit.get("warnings", [])
                 problems = record_problems(fit)
@@ -336,7 +339,7 @@ class TableSections(ReportData):
             attrs.append({"data-trial": trial, "data-variant": v, "data-kind": kind})
 
         for trial in self.trial_order():
-            first = True
+            first, above = True, None
             for v in self.order:
                 kc = self.kc(v, trial)
                 label = [
@@ -344,7 +347,9 @@ class TableSections(ReportData):
                     td(self.angle_label(trial) if first else "", "num"),
                     td(esc(fmt(kc, 2)), "num"),
                 ]
-                fit_row(label, v, self.fits.get((v, trial)), "trial", trial)
+                fit = self.fits.get((v, trial))
+                fit_row(label, v, fit, "trial", trial, above)
+                above = None if is_ok(fit) else failure_text(fit)
                 first = False
             problems = self.trial_problems(trial)
             if problems:
