@@ -37,8 +37,14 @@ NOTES_STYLE = "max-width:26em;min-width:10em;overflow-wrap:anywhere"
 _NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
 
 
+NEUTRAL = "\x00"  # marks a note that states a fact (the method used, a release by hand), not a warning
+
+
 def _note(html: str) -> str:
-    """One note of the tracking table, set apart from the next."""
+    """One note of the tracking table, set apart from the next; a fact (``NEUTRAL`` first) in the page's muted ink,
+    not the warnings' colour."""
+    if html.startswith(NEUTRAL):
+        return f'<div style="margin:0 0 0.5em;color:var(--muted)">{html[1:]}</div>'
     return f'<div style="margin:0 0 0.5em">{html}</div>'
 
 
@@ -374,7 +380,7 @@ class CheckSections(ReportData):
             method = (tracks or {}).get("method") or {}
             if kind == "video" and is_ok(tracks) and method.get("used") == "body":
                 short = method_note(method, (tracks or {}).get("body") or {})
-                notes.append(f'<span title="{esc(method.get("reason", ""))}">{esc(short)}</span>')
+                notes.append(f'{NEUTRAL}<span title="{esc(method.get("reason", ""))}">{esc(short)}</span>')
                 if ((tracks or {}).get("body") or {}).get("warning"):
                     notes.append(esc(tracks["body"]["warning"]))
                 if box := ((tracks or {}).get("body") or {}).get("in_front", {}).get("box_px"):
@@ -384,7 +390,7 @@ class CheckSections(ReportData):
             notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
             if is_ok(angles) and angles.get("held_frames") and is_finite(angles.get("hold_angle_deg")):
                 notes.append(
-                    f"released by hand in view at {angles['release_time_s']:.2f} s from "
+                    f"{NEUTRAL}released by hand in view at {angles['release_time_s']:.2f} s from "
                     f"{with_minus_sign(format(angles['hold_angle_deg'], '+.1f'))}° (found from the free swing's "
                     f"start; {angles['held_frames']} frames held before it)"
                 )
