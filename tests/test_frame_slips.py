@@ -154,6 +154,16 @@ def test_the_sentence_counts_frames_not_slips():
     assert "3 frame(s) lost (before frame 120, 300)" in slip_sentence(timing)
 
 
+def test_a_record_whose_frame_times_could_not_be_checked_says_so():
+    """A record where a lost frame would stand out almost nowhere (a reviewer's stand-in clip, replayed from the
+    nearest frames, 0.19° of noise: 0 % checked, and nothing said, where its twin said what it found)."""
+    assert slip_sentence({"slips": [], "repeated": [], "checked_fraction": 0.9}) == ""
+    assert slip_sentence({"slips": [], "repeated": [], "checked_fraction": 0.44}) == ""  # the demo's 5° trials
+    said = slip_sentence({"slips": [], "repeated": [], "checked_fraction": 0.0})
+    assert said.startswith("lost or repeated frames could be told from the motion in only 0 % of this record")
+    assert slip_sentence({"slips": [], "repeated": []}) == ""  # a track from before the check
+
+
 def test_frames_flagged_at_the_bottom_of_every_swing_make_no_slips():
     """Glare or a post hiding the body where it moves fastest: a window across such a gap is too wide for the
     polynomial, and a shift would fit the curve it misses (a review found slips of +0.2–0.28 at every crossing in

@@ -384,6 +384,9 @@ def slip_counts(timing: dict) -> tuple[int, int, int]:
     return int(lost), len(timing.get("repeated") or []), other
 
 
+UNCHECKED_FRACTION = 0.2  # below this share of a record where a lost frame would stand out, the check is said unmade
+
+
 def slip_sentence(timing: dict) -> str:
     """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
     slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
@@ -394,6 +397,13 @@ def slip_sentence(timing: dict) -> str:
             f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock explains "
             "(frames lost in a row, two slips close together, or the picture moving): the frames after it may be off "
             "in time or place"
+        )
+    checked = timing.get("checked_fraction")
+    if checked is not None and float(checked) < UNCHECKED_FRACTION and not slips and not repeated:
+        others.append(
+            f"lost or repeated frames could be told from the motion in only {100 * float(checked):.0f} % of this "
+            "record (a slip of one frame stands out only where the body moves fast and its track is clean): its frame "
+            "times are the stamps' as they are"
         )
     moved = "; ".join(s for s in others if s)
     if not slips and not repeated:
