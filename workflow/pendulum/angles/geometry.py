@@ -166,7 +166,9 @@ def _pooled_circle(tracks: dict[str, pd.DataFrame], points: dict | None = None) 
 def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, str]]:
     """Circle through the pooled marker paths, leaving out tracks that are not on it.
 
-    With three or more tracks, the track whose leaving out lets the others fit one circle best (the least RMS; of
+    Where the tracks share no pivot (:func:`unshared_pivot`), the largest set that lies on one circle keeps it
+    and the others are left out (:func:`_largest_shared_group`; none when there is no largest set of three).
+    Then, with three or more tracks, the track whose leaving out lets the others fit one circle best (the least RMS; of
     the :data:`OUTLIER_CANDIDATES` tracks farthest off the pooled circle) is compared with the circle fitted to the
     others: more than OUTLIER_TRACK_FACTOR × their RMS and more than OUTLIER_TRACK_FLOOR_PX off, it is left out
     (a moved camera, a tracked reflection, another rig's clip) and the test repeated. Not simply the track
@@ -237,7 +239,9 @@ def _largest_shared_group(tracks: dict[str, pd.DataFrame], points: dict) -> tupl
     seen: set[str] = set()
     by_arc = sorted(tracks, key=lambda name: (-own[name].arc_span_deg, name))
     for seed in by_arc:
-        if seed in seen or len(groups) >= SHARED_GROUP_SEEDS:
+        if len(groups) >= SHARED_GROUP_SEEDS:
+            break
+        if seed in seen:
             continue
         group, circle = [seed], own[seed]
         for _ in range(SHARED_GROUP_ROUNDS):
