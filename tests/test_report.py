@@ -602,3 +602,19 @@ def test_a_record_without_a_release_is_labelled_by_its_first_swing_extremum(docu
     }
     assert documents.angle_label("t20") == "+22°‡"
     assert "Released by hand in view" in documents.dagger_note() and "No release" not in documents.dagger_note()
+
+
+def test_table1_gives_the_pivot_most_trials_share_and_counts_the_others(documents):
+    """Seven clips of other pendulums beside the demo's five, each on its own pivot: Table 1 said only 'not one for
+    all trials' where five trials share the rig's pooled pivot (a reviewer, 2026-12-02)."""
+    shared = {"status": "ok", "pivot_px": [640.3, 70.59], "pivot_covariance_px2": [[1e-4, 0], [0, 6e-4]]}
+    names = [f"d{k}" for k in range(5)] + ["apple", "clock"]
+    for name in names:
+        documents.docs[(name, "angles")] = dict(shared)
+    documents.docs[("apple", "angles")]["pivot_px"] = [301.1, -337.6]
+    documents.docs[("clock", "angles")]["pivot_px"] = [979.0, -338.0]
+    documents.rig_trials = lambda rig: names
+    text = documents.estimated_geometry_text("rig", "pivot_px")
+    assert text.startswith("640.30 ± 0.010, 70.590 ± 0.024") and "2 other trial(s) their own" in text, text
+    documents.rig_trials = lambda rig: ["d0", "apple", "clock"]  # no pivot that most share
+    assert documents.estimated_geometry_text("rig", "pivot_px").startswith("not one for all trials")

@@ -245,7 +245,7 @@ def test_the_tracking_table_keeps_a_clean_trial_quiet_and_notes_a_phone_file(gar
     html = garbage.tracking_section()
     clean = re.search(r'<tr data-trial="t20">(.*?)</tr>', html).group(1)
     assert '<td class="num">30.00</td>' in clean and clean.endswith(
-        '<td class="warncell notes" style="max-width:26em;min-width:10em;overflow-wrap:anywhere"></td>'
+        '<td class="warncell notes" style="max-width:30em;min-width:20em;overflow-wrap:anywhere"></td>'
     )
     phone = _row(html, trial="t10")
     assert 'data-trial="t10" data-notes="6"' in html  # garbage in + five frame notes

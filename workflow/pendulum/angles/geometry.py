@@ -187,7 +187,7 @@ def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, 
             for name in sorted(set(kept) - set(group)):
                 off = _radial_rms_px(kept[name], circle)
                 rejected[name] = (
-                    f"its marker path is {off:.2f} px RMS off the circle that {len(group)} of the rig's {len(kept)} "
+                    f"its tracked path is {off:.2f} px RMS off the circle that {len(group)} of the rig's {len(kept)} "
                     f"trials share (the most that share one pivot): {ELSEWHERE}"
                 )
             kept = {name: kept[name] for name in group}
@@ -202,7 +202,7 @@ def pooled_pivot(tracks: dict[str, pd.DataFrame]) -> tuple[CircleFit, dict[str, 
         if not off > limit:
             break
         rejected[worst] = (
-            f"its marker path is {off:.2f} px RMS off the circle through the other {len(others)} trials' paths "
+            f"its tracked path is {off:.2f} px RMS off the circle through the other {len(others)} trials' paths "
             f"(limit {limit:.2f} px): {ELSEWHERE}"
         )
         kept, circle = others, reference
@@ -311,7 +311,7 @@ def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
     off = _radial_rms_px(track, CircleFit(**circle))
     limit = max(OUTLIER_TRACK_FACTOR * circle["rms_px"], OUTLIER_TRACK_FLOOR_PX)
     if off > limit:
-        return f"the marker path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): {ELSEWHERE}"
+        return f"the tracked path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): {ELSEWHERE}"
     return None
 
 

@@ -30,9 +30,9 @@ def _number(value) -> float | None:
         return None
 
 
-# One note a line; the table within the page (a minimum of 14em made the tracking table 1140 px wide in its 1120 px
-# column: a reviewer saw the notes cut mid-word, 2026-12-02).
-NOTES_STYLE = "max-width:26em;min-width:10em;overflow-wrap:anywhere"
+# One note a line; the table within the page, its column 1400 px wide (in a 1120 px column a minimum of 14em cut the
+# notes mid-word and 10em made each real clip's row 1,000 px tall: two reviewers, 2026-12-02).
+NOTES_STYLE = "max-width:30em;min-width:20em;overflow-wrap:anywhere"
 # Frames-stage warnings that :func:`frame_notes` says in its own words (video.probe's sentences).
 _NOTED = ("trimmed clip", "variable frame rate", "rotate the picture")
 

@@ -52,7 +52,7 @@ PAGE_CSS = """
 html { font-size: 15px; }
 body { margin: 0; color: var(--ink); background: #fff;
   font-family: "Source Sans Pro", "Segoe UI", "Helvetica Neue", Arial, "DejaVu Sans", sans-serif; line-height: 1.45; }
-main { max-width: 1120px; margin: 0 auto; padding: 24px 28px 60px; }
+main { max-width: 1400px; margin: 0 auto; padding: 24px 28px 60px; }
 h1 { font-size: 1.7rem; margin: 0.2em 0 0.3em; }
 h2 { font-size: 1.3rem; margin: 1.8em 0 0.5em; padding-bottom: 0.2em; border-bottom: 2px solid var(--ink); }
 h3 { font-size: 1.05rem; margin: 0.4em 0 0.5em; }

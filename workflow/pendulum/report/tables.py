@@ -7,6 +7,7 @@ written by :mod:`pendulum.report.format`.
 from __future__ import annotations
 
 import math
+from collections import Counter
 
 from pendulum.fit.records import (
     RIG_DEFAULTS,
@@ -206,24 +207,33 @@ class TableSections(ReportData):
 
     def estimated_geometry_text(self, rig: str, key: str) -> str:
         """The pivot (± standard errors) or vertical a rig's angle records used when config gave none."""
-        used = {
-            str(self.docs[(t, "angles")].get(key)) for t in self.rig_trials(rig) if is_ok(self.docs.get((t, "angles")))
+        by_trial = {
+            t: str(self.docs[(t, "angles")].get(key))
+            for t in self.rig_trials(rig)
+            if is_ok(self.docs.get((t, "angles"))) and self.docs[(t, "angles")].get(key) is not None
         }
-        if len(used - {"None"}) > 1:  # its trials do not share one pivot: each its own (their angles' notes say why)
-            return "not one for all trials: a trial whose path is off the rig's circle has its own (its notes say so)"
+        counts = Counter(by_trial.values()).most_common()
+        suffix = ""
+        if len(counts) > 1:  # its trials do not all use one pivot (their angles' notes say why)
+            if counts[0][1] < 2 or counts[0][1] == counts[1][1]:
+                return (
+                    "not one for all trials: a trial whose path is off the rig's circle has its own (its notes say so)"
+                )
+            others = len(by_trial) - counts[0][1]  # the rig's pooled one, and a few trials their own
+            suffix = f"; {others} other trial(s) their own (their notes say why)"
         for trial in self.rig_trials(rig):
             angles = self.docs.get((trial, "angles"))
-            if not is_ok(angles) or angles.get(key) is None:
+            if trial not in by_trial or (counts and by_trial[trial] != counts[0][0]):
                 continue
             if key == "vertical_deg":
-                return f"{fmt(angles[key], 3)} (estimated from the swings)"
+                return f"{fmt(angles[key], 3)} (estimated from the swings{suffix})"
             covariance = angles.get("pivot_covariance_px2")
             if covariance is None:
-                return ", ".join(fmt(x, 5) for x in angles[key]) + " (the trial's own)"
+                return ", ".join(fmt(x, 5) for x in angles[key]) + f" (the trial's own{suffix})"
             sigmas = [math.sqrt(max(float(covariance[i][i]), 0.0)) for i in (0, 1)]
             return (
                 ", ".join(f"{fmt(x, 5)} ± {fmt(s, 2)}" for x, s in zip(angles[key], sigmas, strict=True))
-                + " (estimated from the tracked paths)"
+                + f" (estimated from the tracked paths{suffix})"
             )
         return "not given: estimated from the tracked paths"
 
