@@ -618,3 +618,22 @@ def test_table1_gives_the_pivot_most_trials_share_and_counts_the_others(document
     assert text.startswith("640.30 ± 0.010, 70.590 ± 0.024") and "2 other trial(s) their own" in text, text
     documents.rig_trials = lambda rig: ["d0", "apple", "clock"]  # no pivot that most share
     assert documents.estimated_geometry_text("rig", "pivot_px").startswith("not one for all trials")
+
+
+def test_a_term_that_trades_against_another_is_called_indistinguishable_not_unsupported(documents):
+    """The apple clip in air, 22° to 18°: linear damping at its bound and −1.000 correlated with C_dA, the RMS the
+    same with and without it; Table 7 said "not supported" where the record cannot tell the two laws apart (a
+    reviewer, 2026-12-02). A term merely at its bound, with no such trade, stays "not supported"."""
+    rows = {r["term"]: r for r in documents.term_evidence_rows("rig", documents.best.get("rig"))}
+    assert rows and all(not r["verdict"].startswith("indistinguishable") for r in rows.values())
+    from pendulum.model.effects import TERMS
+
+    term = next(iter(rows))
+    parameter = TERMS[term].parameter
+    joint = documents.joint[(rows[term]["variant"], "rig")]
+    joint["warnings"] = [f"drag_area_m2 and {parameter} are -1.000 correlated: the record hardly separates them"]
+    verdict = documents.term_evidence_rows("rig", documents.best.get("rig"))[0]["verdict"]
+    assert verdict.startswith("indistinguishable on these records: its coefficient trades against drag_area_m2")
+    assert "a wider range of amplitudes would separate them" in verdict
+    joint["warnings"] = [f"drag_area_m2 and {parameter} are -0.900 correlated: the record hardly separates them"]
+    assert not documents.term_evidence_rows("rig", None)[0]["verdict"].startswith("indistinguishable")

@@ -8,6 +8,8 @@ weighs the evidence for each added term.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from pendulum.model.effects import TERMS
@@ -26,6 +28,21 @@ from pendulum.report.format import (
     td,
 )
 from pendulum.tracking.timing import slip_counts
+
+TRADED = re.compile(r"(\w+) and (\w+) are (-?[0-9.]+) correlated")
+TRADED_LIMIT = 0.99  # |correlation| of two coefficients in a joint fit at which the records cannot tell them apart
+
+
+def _traded_against(name: str, warnings: list[str]) -> tuple[str, float] | None:
+    """The coefficient that ``name`` trades against in a fit (its warning "a and b are r correlated", |r| ≥
+    :data:`TRADED_LIMIT`), and r; None. The apple clip in air (22° to 18°): linear damping at its bound, −1.000
+    correlated with C_dA, was called "not supported" where the record cannot tell the two laws apart (2026-12-02)."""
+    for warning in warnings:
+        found = TRADED.search(warning)
+        if found and name in found.group(1, 2) and abs(float(found.group(3))) >= TRADED_LIMIT:
+            other = found.group(2) if found.group(1) == name else found.group(1)
+            return other, float(found.group(3))
+    return None
 
 
 class ComparisonSections(ReportData):
@@ -354,8 +371,14 @@ class ComparisonSections(ReportData):
             same = child.get("samples_digest") == base.get("samples_digest")
             d_aic, d_bic = base["aic"] - child["aic"], base["bic"] - child["bic"]
             rms_ratio = base["rms_deg"] / child["rms_deg"] if child["rms_deg"] else float("inf")
+            rival = _traded_against(name, child.get("warnings") or [])
             if not same:
                 verdict = "not comparable: the two fits used different samples"
+            elif rival:
+                verdict = (
+                    f"indistinguishable on these records: its coefficient trades against {rival[0]} (correlation "
+                    f"{fmt(rival[1], 3)}); a wider range of amplitudes would separate them"
+                )
             elif entry.get("at_bound"):
                 verdict = "not supported: the coefficient stays at its bound"
             elif entry.get("identifiable") is False:
