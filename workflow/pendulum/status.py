@@ -184,6 +184,13 @@ def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, s
     }
 
 
+def usable_percent(flags: dict) -> float | None:
+    """The share (%) of a track's frames that are ``ok``, of those not held by hand (the tracks JSON's ``flags``,
+    as the tracks log counts them); None without such frames."""
+    free = sum(flags.values()) - flags.get("held", 0)
+    return 100.0 * flags.get("ok", 0) / free if free > 0 else None
+
+
 def _measured(documents: list[tuple[str, str, dict]]) -> dict:
     """The usable share of a trial's frames (its tracks document) and its record's period (its angles document)."""
     found = {"ok_frames_pct": None, "period_s": None}
@@ -191,9 +198,8 @@ def _measured(documents: list[tuple[str, str, dict]]) -> dict:
         if is_failed(document):
             continue
         if stage == "tracks" and document.get("flags"):
-            flags = document["flags"]
-            free = sum(flags.values()) - flags.get("held", 0)  # as the tracks log: frames not held by hand
-            found["ok_frames_pct"] = round(100.0 * flags.get("ok", 0) / free, 2) if free > 0 else None
+            share = usable_percent(document["flags"])
+            found["ok_frames_pct"] = None if share is None else round(share, 2)
         elif stage == "angles" and isinstance(document.get("period_s"), (int, float)):
             found["period_s"] = round(float(document["period_s"]), 6)
     return found

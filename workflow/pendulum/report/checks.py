@@ -19,6 +19,7 @@ from pendulum.report.format import (
     td,
     with_minus_sign,
 )
+from pendulum.status import usable_percent
 from pendulum.tracking.timing import slip_sentence
 
 
@@ -360,8 +361,7 @@ class CheckSections(ReportData):
             elif is_ok(tracks):
                 flags = tracks.get("flags") or {}
                 bad = {k: n for k, n in sorted(flags.items()) if k != "ok" and n}
-                free = sum(flags.values()) - flags.get("held", 0)  # as the tracks log: frames not held by hand
-                share = f" ({100 * flags.get('ok', 0) / free:.1f} %)" if free > 0 else ""
+                share = "" if (usable := usable_percent(flags)) is None else f" ({usable:.1f} %)"
                 flag_cell = td(f"ok {flags.get('ok', 0)}{share}" + "".join(f", {esc(k)} {n}" for k, n in bad.items()))
             else:
                 flag_cell = failure_cell(tracks, said)
