@@ -240,3 +240,16 @@ def test_today_s_drag_coefficient_is_the_fits_where_trials_state_different_front
     cd = entries["drag_coefficient"]["value"]
     assert cd == pytest.approx(entries["drag_area_m2"]["value"] / (0.5 * sum(areas)))
     assert document["today"]["drag_coefficient"]["value"] == pytest.approx(cd, rel=1e-9)
+
+
+def test_a_design_on_a_model_that_misses_the_records_says_its_predictions_wait_on_the_missing_effect(small_group):
+    """The apple in air (2026-12-02): 'release from −45°: C_d ±0.16 → ±0.08' stood as the next step where
+    discovery's final model left the residual 76× the noise floor; the document now says so, and not otherwise."""
+    options = DesignOptions(coefficients=("drag_area_m2",), releases_deg=(20.0,), recommend=1)
+    verdict = "unexplained: the residual (0.23° RMS) is 76× the noise floor and not white, and no candidate removes it"
+    document, _ = design_group(small_group, {}, FitSettings(), options, misfit=verdict)
+    assert document["model_misfit"].startswith(
+        "discovery's final model does not fit these records: the residual (0.23° RMS) is 76× the noise floor"
+    )
+    assert "find what it misses before filming" in document["model_misfit"]
+    assert design_group(small_group, {}, FitSettings(), options)[0]["model_misfit"] is None

@@ -637,3 +637,39 @@ def test_a_term_that_trades_against_another_is_called_indistinguishable_not_unsu
     assert "a wider range of amplitudes would separate them" in verdict
     joint["warnings"] = [f"drag_area_m2 and {parameter} are -0.900 correlated: the record hardly separates them"]
     assert not documents.term_evidence_rows("rig", None)[0]["verdict"].startswith("indistinguishable")
+
+
+def test_a_tie_between_variants_and_an_unresolved_coefficient_are_said_in_the_summary(documents):
+    """The apple in its own air rig (2026-12-02): linear damping ended at 0 with the RMS unchanged, so the summary's
+    "chosen by ΔAIC 2" was only the parameter penalty, and linear damping traded against C_dA (−1.000); m_a 0.00037
+    kg [0, 0.0011] stood in bold as a recommended measurement, its width the arm length's tolerance. A richer variant
+    that fits better is no tie."""
+    quadratic, linear = documents.joint[("quadratic", "rig")], documents.joint[("linear", "rig")]
+    quadratic["parameters"]["drag_area_m2"] = _entry(0.0055, 0.0006)
+    quadratic["parameters"]["added_mass_kg"] = {
+        **_entry(0.00037, 0.00073),
+        "ci95": [0.0, 0.0011],
+        "stderr_statistical": 5.6e-5,
+        "stderr_systematic": 3.7e-4,
+        "error_budget": {"length_m": -3.6e-4, "mass_kg": 1.2e-6, "pivot_px (axis 2)": -7.4e-5},
+    }
+    linear["parameters"]["linear_damping_nm_s"] = _entry(0.0, 0.012, at_bound=True)
+    linear["warnings"] = [
+        "drag_area_m2 and linear_damping_nm_s are -1.000 correlated: the record hardly separates them"
+    ]
+    documents.best["rig"] = {
+        **documents.best["rig"],
+        "variant": "quadratic",
+        "delta_aic": {"quadratic": 0.0, "linear": 2.0},
+        "bic_best": "quadratic",
+    }
+    text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.summary_box()))
+    assert "their added terms (linear damping) end at their bound of 0" in text and "the variants tie" in text
+    assert "These records do not tell linear damping from quadratic drag (their coefficients correlate −1.00" in text
+    assert "<b>0.00037</b>" not in documents.summary_box() and "[0.00000, 0.00110] (reaches 0)" in text
+    assert "Added mass is not resolved from 0: its 95 % interval reaches 0" in text
+    assert "(largest: the arm length), which more trials do not reduce" in text
+    linear["rms_deg"] = quadratic["rms_deg"] / 1.5  # the richer variant fits better: no tie
+    linear["warnings"] = []
+    text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.summary_box()))
+    assert "tie" not in text and "do not tell" not in text

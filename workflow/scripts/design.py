@@ -25,9 +25,15 @@ def work():
     options = DesignOptions.from_config(sm.params.design)
     stated = stated_by_rig(sm.params.trial_rigs)
     document, rows = design_group(
-        fit, discovery["parameters"], settings, options, discovery.get("indistinguishable"), stated
+        fit,
+        discovery["parameters"],
+        settings,
+        options,
+        discovery.get("indistinguishable"),
+        stated,
+        misfit=discovery["verdict"] if discovery.get("unexplained") else None,
     )
-    for warning in document["warnings"]:
+    for warning in [document["model_misfit"]] * bool(document["model_misfit"]) + document["warnings"]:
         log.warning("group %s: %s", name, warning)
     for item in document["recommendations"] + document["separating"]:
         log.info("group %s: %s", name, item["sentence"])

@@ -231,11 +231,14 @@ def design_group(
     options: DesignOptions,
     indistinguishable: list[dict] | None = None,
     stated_tolerances: dict | None = None,
+    misfit: str | None = None,
 ) -> tuple[dict, list[dict]]:
     """The design document and its table rows (one per candidate trial and coefficient).
 
     ``parameters``: the reported coefficient entries of this model (value, stderr_systematic, error_budget),
-    as discovery's ``parameters`` for its final model.
+    as discovery's ``parameters`` for its final model. ``misfit``: discovery's verdict where its final model
+    leaves structure (``unexplained``): the predictions assume the model right, so the document says they
+    wait on the missing effect.
     """
     d = Designer(fit, parameters, settings, options, stated_tolerances)
     rows = []
@@ -306,6 +309,12 @@ def design_group(
         "to_target": {c: _to_target(d, c) for c in d.targets},
         "separating": separations(d, indistinguishable or []),
         "warnings": d.warnings,
+        "model_misfit": (
+            f"discovery's final model does not fit these records: {misfit.removeprefix('unexplained: ')}. These "
+            "predictions assume it right: find what it misses before filming for narrower intervals"
+            if misfit
+            else None
+        ),
         "method": (
             "sandwich covariance (trials independent, AR(p) noise) with one more simulated trial per candidate; "
             "the systematic part carried unchanged; the model assumed right"

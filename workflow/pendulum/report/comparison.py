@@ -12,7 +12,8 @@ import re
 
 import numpy as np
 
-from pendulum.model.effects import TERMS
+from pendulum.design.tolerances import input_words
+from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report.format import (
     COEFFICIENTS,
@@ -43,6 +44,28 @@ def _traded_against(name: str, warnings: list[str]) -> tuple[str, float] | None:
             other = found.group(2) if found.group(1) == name else found.group(1)
             return other, float(found.group(3))
     return None
+
+
+def reaches_bound(entry: dict) -> bool:
+    """Whether a coefficient's 95 % interval reaches its lower bound although the estimate is off it: the records
+    and rig values do not resolve it from that bound (the apple in air: m_a 0.00037 kg, interval [0, 0.0011])."""
+    low, bound = (entry.get("ci95") or [None])[0], entry.get("lower_bound")
+    return not entry.get("at_bound") and is_finite(low) and is_finite(bound) and float(low) <= float(bound)
+
+
+def unresolved_sentence(label: str, entry: dict) -> str:
+    """Why a coefficient is not resolved from its bound, naming the largest input where the rig values'
+    tolerances dominate its uncertainty (more trials do not help then)."""
+    bound = fmt(entry["lower_bound"], 3)
+    text = f"{label[:1].upper()}{label[1:]} is not resolved from {bound}: its 95 % interval reaches {bound}"
+    budget = entry.get("error_budget") or {}
+    if budget and (entry.get("stderr_systematic") or 0) > (entry.get("stderr_statistical") or 0):
+        largest = max(budget, key=lambda k: abs(budget[k]))
+        text += (
+            f"; most of its uncertainty is the rig values' (largest: {input_words(largest)}), which more trials "
+            "do not reduce (What to film next)"
+        )
+    return text + "."
 
 
 class ComparisonSections(ReportData):
@@ -105,6 +128,11 @@ class ComparisonSections(ReportData):
                         f'<td class="num unreliable" style="{UNRELIABLE_STYLE}"><s>{esc(qualifier)}</s> '
                         f"{garbage_badge(joint_problems[0])}</td>",
                     ]
+                elif reaches_bound(entry):  # not a measurement to recommend: no bold
+                    row += [
+                        td(esc(value), "num"),
+                        td(f"{esc(qualifier)} (reaches {fmt(entry['lower_bound'], 3)})", "num"),
+                    ]
                 else:
                     row += [td(f"<b>{esc(value)}</b>", "num"), td(esc(qualifier), "num")]
                 if truths:
@@ -115,6 +143,7 @@ class ComparisonSections(ReportData):
             delta = "; ".join(f"{esc(v)} +{fmt(best['delta_aic'].get(v), 3)}" for v in others if v in best["delta_aic"])
             bic_note = "BIC agrees" if best["bic_best"] == variant else f"BIC prefers {esc(best['bic_best'])}"
             basis = f"Chosen by the lowest {esc(best['basis'])}" + (f" (ΔAIC: {delta}; {bic_note})." if delta else ".")
+            basis += self._choice_note(rig, variant, best)
             warnings = self._summary_warnings(rig, variant, joint, best)
             warn_html = (
                 '<ul class="warnings">' + "".join(f"<li>{w}</li>" for w in warnings) + "</ul>"
@@ -138,6 +167,47 @@ class ComparisonSections(ReportData):
                 f"<p><b>Warnings that matter:</b></p>{warn_html}</section>"
             )
         return "".join(boxes) or '<p class="warn">No trials: nothing to report.</p>'
+
+    def _choice_note(self, rig: str, variant: str, best: dict) -> str:
+        """What the choice rests on where the richer variants fit no better (every added coefficient at its bound,
+        the RMS within 0.1 %): their ΔAIC is only their parameter penalty, so the variants tie and the simplest is
+        given; and where an added term trades against one of the chosen variant's (Table 5), the records cannot
+        tell those laws apart. The apple in air (2026-12-02): "chosen by ΔAIC 2 and 4" said neither."""
+        chosen = self.joint.get((variant, rig)) or {}
+        richer = [
+            v
+            for v in self.order
+            if set(self.variants[variant]) < set(self.variants[v]) and is_ok(self.joint.get((v, rig)))
+        ]
+        if not richer or not is_finite(chosen.get("rms_deg")) or not chosen["rms_deg"]:
+            return ""
+        out = ""
+        added = {t for v in richer for t in set(self.variants[v]) - set(self.variants[variant])}
+        tie = all(
+            abs(self.joint[(v, rig)]["rms_deg"] / chosen["rms_deg"] - 1) < 1e-3
+            and all(
+                (self.joint[(v, rig)]["parameters"].get(TERMS[t].parameter) or {}).get("at_bound")
+                for t in set(self.variants[v]) - set(self.variants[variant])
+            )
+            for v in richer
+        )
+        if tie:
+            terms = ", ".join(esc(TERM_LABELS.get(t, t)) for t in sorted(added, key=list(TERMS).index))
+            out += (
+                f" The richer variants fit no better: their added terms ({terms}) end at their bound of 0 and the RMS "
+                "is unchanged, so their ΔAIC is only the penalty for their extra parameters: the variants tie, and "
+                "the simplest is given."
+            )
+        for e in self.term_evidence_rows(rig, best):
+            rival = term_for_parameter(e["rival"][0]) if e.get("rival") else None
+            if rival and rival.name in self.variants[variant]:
+                out += (
+                    f" These records do not tell {esc(TERM_LABELS.get(e['term'], e['term']))} from "
+                    f"{esc(TERM_LABELS.get(rival.name, rival.name))} (their coefficients correlate "
+                    f"{fmt(e['rival'][1], 3)}, Table 5): the chosen coefficients express the swing's whole damping "
+                    "in the chosen law; releases over a wider range of amplitudes would separate the two."
+                )
+        return out
 
     def _verdict_sentence(self, rig: str, variant: str) -> str:
         joint = self.joint.get((variant, rig), {})
@@ -234,7 +304,9 @@ class ComparisonSections(ReportData):
         if not best["comparable"]:
             out.append("The variants' joint fits used different samples: their AIC values are not strictly comparable.")
         for name, entry in joint.get("parameters", {}).items():
-            if entry.get("at_bound"):
+            if reaches_bound(entry):
+                out.append(esc(unresolved_sentence(COEFFICIENTS.get(name, ("", name))[1], entry)))
+            elif entry.get("at_bound"):
                 out.append(
                     f"{esc(COEFFICIENTS.get(name, ('', name))[1])} is at its lower bound: "
                     "an upper limit, not a measurement."
@@ -399,6 +471,7 @@ class ComparisonSections(ReportData):
                     "rms_ratio": rms_ratio,
                     "entry": entry,
                     "verdict": verdict,
+                    "rival": rival if same else None,
                 }
             )
         return rows

@@ -143,6 +143,11 @@ class DesignSections(ReportData):
                 head + f"<p>For discovery’s final model ({esc(model)}), fitted to {len(document.get('trials', []))} "
                 "trial(s): the 95 % half-width each coefficient would have with one more trial, released at rest "
                 "from the angle on the x-axis (the model assumed right; the tolerances’ part carried unchanged).</p>"
+                + (
+                    f'<p class="warn">{design_text(document["model_misfit"])}</p>'
+                    if document.get("model_misfit")
+                    else ""
+                )
                 + f'<div class="discovery-verdict design-next"><b>Next:</b><ol>{items}</ol></div>'
                 + today_table(document, self.table_caption)
             )
