@@ -151,6 +151,10 @@ def test_a_truncated_and_a_fake_video_cost_nothing_else(small_build):
     assert "2 of 3 trial(s) failed" in (work / "logs/status/check.log").read_text()
     assert not list((work / "results").rglob(".*.tmp*")), "a temporary file was left behind"
     assert "Shell command: None" not in small_build.output
+    # the failed trials once, one line each, after Snakemake's own error lines (the Snakefile's onerror)
+    tail = small_build.output[small_build.output.index("Exiting because a job execution failed") :]
+    assert small_build.output.count("2 of 3 trial(s) failed") == 1 and "2 of 3 trial(s) failed;" in tail
+    assert "\n  - fake, at tracks: " in tail or "\n  - fake, at frames: " in tail, tail
     # a rerun does not retry what failed for a reason that has not changed, and still says it failed
     results = digest(work / "results")
     again = run(["-c2"], work, check=False)

@@ -96,7 +96,8 @@ def test_a_trial_whose_fit_failed_keeps_its_usable_frames_and_period_in_the_stat
     table = status_table([row, lost])
     assert list(table.columns[5:7]) == ["ok_frames_pct", "period_s"]
     text = failure_summary(table)
-    assert text.startswith("2 of 2 trial(s) failed (1 of them after their angle records were made: their usable")
+    assert text.startswith("2 of 2 trial(s) failed; the report says why, trial by trial:\n  - apple, at fit (every")
+    assert "\n  1 of them failed after its angle record was made: its usable frames and period are in" in text
 
 
 def test_trial_status_names_the_stage_where_the_failure_arose():
@@ -116,8 +117,10 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
     assert list(table.stage) == ["", "fit:linear", "geometry"]
     assert table.loc[1, "log"] == "logs/f/b.log"
     text = failure_summary(table)
-    assert text.startswith("2 of 3 trial(s) failed") and "b (fit:linear: record too short)" in text
-    assert text.endswith("report.html (built from the other trials).")
+    lines = text.splitlines()  # one line per failed trial, readable above Snakemake's own error
+    assert lines[0] == "2 of 3 trial(s) failed; the report and the other 1 trial(s)' results were built:"
+    assert lines[1:3] == ["  - b, at fit:linear: record too short", "  - c, at geometry: no usable track"]
+    assert lines[-1].startswith("See results/status/trials.csv") and lines[-1].endswith("report.html.")
     refused = {
         "status": "failed",
         "failed_stage": "fit",
@@ -128,7 +131,7 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
         "fit (every variant)"
     )
     every = failure_summary(table[table.status != "ok"])  # no other trial to build from: the report says why
-    assert every.startswith("2 of 2 trial(s) failed") and every.endswith("report.html (it says why, trial by trial).")
+    assert every.startswith("2 of 2 trial(s) failed; the report says why, trial by trial:")
     assert failure_summary(table[table.status == "ok"]) is None
 
 

@@ -210,17 +210,25 @@ def status_table(rows: list[dict]) -> pd.DataFrame:
 
 
 def failure_summary(table: pd.DataFrame) -> str | None:
-    """One paragraph naming every failed trial and why, or None when all succeeded."""
+    """Every failed trial and why, one line each, for the terminal and the check's log; None when all succeeded.
+
+    One line per trial so that the reason of each can be read where Snakemake's own error follows it (a
+    paragraph of 4,000 characters was printed twice there, 2026-12-02)."""
     bad = table[table.status != "ok"]
     if bad.empty:
         return None
-    items = "; ".join(f"{r.trial} ({r.stage}: {r.reason})" for r in bad.itertuples())
-    built = "built from the other trials" if len(bad) < len(table) else "it says why, trial by trial"
-    recorded = _recorded(bad)
-    return (
-        f"{len(bad)} of {len(table)} trial(s) failed{recorded}: {items}. See results/status/trials.csv and "
-        f"results/report/report.html ({built})."
+    built = (
+        f"the report and the other {len(table) - len(bad)} trial(s)' results were built"
+        if len(bad) < len(table)
+        else "the report says why, trial by trial"
     )
+    lines = [f"{len(bad)} of {len(table)} trial(s) failed; {built}:"]
+    lines += [f"  - {r.trial}, at {r.stage}: {r.reason}" for r in bad.itertuples()]
+    recorded = _recorded(bad)
+    if recorded:
+        lines.append(f"  {recorded}")
+    lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
+    return "\n".join(lines)
 
 
 def _recorded(bad: pd.DataFrame) -> str:
@@ -230,6 +238,9 @@ def _recorded(bad: pd.DataFrame) -> str:
     n = int(pd.to_numeric(bad.period_s, errors="coerce").notna().sum())
     if not n:
         return ""
+    if n == 1:
+        return "1 of them failed after its angle record was made: its usable frames and period are in the status table."
     return (
-        f" ({n} of them after their angle records were made: their usable frames and periods are in the status table)"
+        f"{n} of them failed after their angle records were made: their usable frames and periods are in the "
+        "status table."
     )

@@ -1,4 +1,9 @@
-"""Snakemake adapter: the workflow's last step; fails (so Snakemake exits non-zero) when any trial failed."""
+"""Snakemake adapter: the workflow's last step; fails (so Snakemake exits non-zero) when any trial failed.
+
+The failures are logged once (its log and the terminal); the Snakefile's ``onerror`` repeats them after
+Snakemake's own error lines, where a user reads last."""
+
+import logging
 
 import pandas as pd
 
@@ -8,10 +13,11 @@ from pendulum.status import failure_summary
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "check_trials")
+log.handlers = [h for h in log.handlers if isinstance(h, logging.FileHandler)]  # the terminal: onerror's
 table = pd.read_csv(sm.input.table, keep_default_na=False)
 problem = failure_summary(table)
 if problem:
     log.error("%s", problem)
-    raise SystemExit(problem)
+    raise SystemExit(1)
 log.info("all %d trial(s) ok", len(table))
 write_text(f"all {len(table)} trial(s) ok\n", sm.output.done)
