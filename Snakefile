@@ -1,8 +1,11 @@
 """Free-decay pendulum identification: raw videos → frames → tracks → angles → fits."""
 
+import time
+
 from snakemake.utils import min_version
 
 min_version("9.27")
+RUN_STARTED_S = time.time()  # onerror reads the check's log only if this run wrote it
 
 
 configfile: "config.yaml"
@@ -43,3 +46,16 @@ rule all:
     input:
         all_targets(),
         report_targets(),
+
+
+# After Snakemake's own error lines, where a user reads last: the trials that failed, one line each.
+from pendulum.status import failures_logged  # noqa: E402
+
+
+onerror:
+    failed = failures_logged("logs/status/check.log", RUN_STARTED_S)
+    if failed:
+        print(
+            f"\nTrials that failed (logs/status/check.log):\n{failed}",
+            file=sys.stderr,
+        )

@@ -304,3 +304,20 @@ def test_a_failure_image_holds_the_whole_message():
         assert (image[:, -8:] == 60).all()  # no line runs off the right edge
     assert rows_with_text[1] > rows_with_text[0]  # narrower: more lines, a taller image
     assert failure_image("short", 960).shape == (200, 960)  # a short message keeps the old size
+
+
+def test_the_failures_this_run_logged_are_read_back_for_the_last_lines_of_the_terminal(tmp_path):
+    """The Snakefile's onerror prints them after Snakemake's own error lines; a log of an earlier run, or one
+    without the check's ERROR entry (the run failed elsewhere), prints nothing."""
+    import time
+
+    from pendulum.status import failures_logged
+
+    log = tmp_path / "check.log"
+    text = "1 of 2 trial(s) failed; the report and the other 1 trial(s)' results were built:\n  - b, at tracks: bad"
+    log.write_text(f"2026-12-02 11:27:40,468 ERROR {text}\n")
+    assert failures_logged(log, since_s=time.time() - 60) == text
+    assert failures_logged(log, since_s=time.time() + 60) is None  # written before this run
+    assert failures_logged(tmp_path / "missing.log", since_s=0) is None
+    log.write_text("2026-12-02 11:27:40,468 INFO all 2 trial(s) ok\n")
+    assert failures_logged(log, since_s=0) is None

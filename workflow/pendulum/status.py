@@ -11,7 +11,9 @@ and list them; the workflow's last rule exits non-zero when any trial failed.
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -244,3 +246,14 @@ def _recorded(bad: pd.DataFrame) -> str:
         f"{n} of them failed after their angle records were made: their usable frames and periods are in the "
         "status table."
     )
+
+
+def failures_logged(log_path, since_s: float) -> str | None:
+    """The failed trials as ``check_trials`` logged them (its log's ERROR entry, one line per trial), where the
+    log was written at or after ``since_s`` (this run); None otherwise (the run failed somewhere else). The
+    Snakefile's ``onerror`` prints it after Snakemake's own error lines, where a user reads last."""
+    path = Path(log_path)
+    if not path.exists() or path.stat().st_mtime < since_s:
+        return None
+    found = re.search(r"^\S+ \S+ ERROR (.*)", path.read_text(), flags=re.M | re.S)
+    return found.group(1).rstrip() if found else None

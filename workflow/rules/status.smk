@@ -1,9 +1,3 @@
-import re
-import sys
-import time
-from pathlib import Path
-
-
 rule status_table:
     """One row per trial: ok, or the stage that failed and why (read by the report)."""
     input:
@@ -45,25 +39,3 @@ rule check_trials:
         runtime=5,
     script:
         "../scripts/check_trials.py"
-
-
-RUN_STARTED_S = time.time()  # onerror reads the check's log only if this run wrote it
-
-
-def repeat_failed_trials():
-    """After Snakemake's own error lines, where a user reads last: the failed trials as ``check_trials`` logged
-    them in this run (one line each), not only its traceback. Silent where something else failed.
-    """
-    path = Path("logs/status/check.log")
-    if not path.exists() or path.stat().st_mtime < RUN_STARTED_S:
-        return
-    found = re.search(r"^\S+ \S+ ERROR (.*)", path.read_text(), flags=re.M | re.S)
-    if found:
-        print(
-            f"\nTrials that failed (logs/status/check.log):\n{found.group(1).rstrip()}",
-            file=sys.stderr,
-        )
-
-
-onerror:
-    repeat_failed_trials()
