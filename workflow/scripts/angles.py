@@ -90,6 +90,10 @@ def work():
             pivot_covariance_px2=pivot_cov,
         )
         info.notes = notes + info.notes
+    if (info.second_harmonic or {}).get("present"):
+        warning = info.second_harmonic["verdict"]
+        log.warning("trial %s: %s", trial, warning)
+        warnings.append(warning)
     log.info("trial %s: %s", trial, info)
     write_csv(table, sm.output.angles)
     document = {"trial": trial, "rig": settings["rig_name"], "status": "ok", **info.to_dict()}

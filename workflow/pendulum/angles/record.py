@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.geometry import circular_mean_rad, image_angle_rad, wrapped_rad
+from pendulum.angles.harmonics import second_harmonic
 from pendulum.angles.swings import (
     crossing_period,
     detect_release,
@@ -55,6 +56,8 @@ class AngleRecordInfo:
     # θ at the record's first turning point (its first sample where it starts just past one): the swing's
     # amplitude and side, as a release angle, where no release is in view
     first_extremum_deg: float | None = None
+    # the record's second harmonic, which a planar swing seen square-on does not have (harmonics.second_harmonic)
+    second_harmonic: dict | None = None
     notes: list = field(default_factory=list)  # what was done about imperfect input (sorted, dropped rows, …)
 
     def to_dict(self):
@@ -145,6 +148,10 @@ def angle_record(
     period = crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
     if period is not None:
         info.period_s, info.period_stderr_s, info.period_cycles = period
+        usable = (table.flag == "ok").to_numpy()
+        info.second_harmonic = second_harmonic(
+            table.time_s.to_numpy(float)[usable], table.theta_rad.to_numpy(float)[usable], period[0], info.noise_deg
+        )
     extrema = swing_extrema(table.theta_rad.to_numpy(float))
     if extrema.size:
         first = float(table.theta_deg.iloc[int(extrema[0])])

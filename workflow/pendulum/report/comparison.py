@@ -241,7 +241,8 @@ class ComparisonSections(ReportData):
 
     def _tracking_note(self, trial: str) -> str:
         """A trial's path and timing findings in one clause ('' if none): a creeping camera (corrected), a path off
-        one circle (carried by the angles), frames lost or repeated under even stamps (times put right)."""
+        one circle (carried by the angles), a second harmonic in its angles (perspective), frames lost or repeated
+        under even stamps (times put right)."""
         tracks = self.docs.get((trial, "tracks")) or {}
         if not is_ok(tracks):
             return ""
@@ -254,6 +255,12 @@ class ComparisonSections(ReportData):
             parts.append(
                 f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
                 f"({fmt(path['unexplained_angle_deg'], 2)}°), which the angles carry"
+            )
+        harmonic = (self.docs.get((trial, "angles")) or {}).get("second_harmonic") or {}
+        if harmonic.get("present"):
+            parts.append(
+                f"its angles carry a second harmonic of {fmt(harmonic['amplitude_deg'], 2)}° (perspective: its "
+                "distance from the camera changes with the swing), which the fits carry"
             )
         lost, repeated, other = slip_counts(tracks.get("timing") or {})
         if lost or repeated or other:

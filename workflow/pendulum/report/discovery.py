@@ -235,17 +235,27 @@ def residual_check_table(document: dict, caption=_PLAIN) -> str:
     )
 
 
-def endings_html(document: dict) -> str:
-    """The honest endings: unexplained structure, indistinguishable groups, or nothing missing."""
+def endings_html(document: dict, harmonics: dict | None = None) -> str:
+    """The honest endings: unexplained structure, indistinguishable groups, or nothing missing. ``harmonics``:
+    trial → the second harmonic its angle record carries (present only), named where structure is left."""
     out = []
     check = document["residual_check"]
     if document["unexplained"]:
+        seen = "; ".join(f"{esc(t)} {fmt(h['amplitude_deg'], 2)}°" for t, h in (harmonics or {}).items())
         out.append(
             '<p class="warn discovery-ending">Unexplained: after the final model the residual is '
             f"{fmt(check['rms_over_noise'], 2)}× the noise floor ({deg(check['noise_floor_rad'])}°) and not white "
             f"(Ljung–Box p = {p_text(check['whiteness']['p_value'])}). No candidate in the library removes this "
             "structure, so none is named for it: something outside the library is at work (a disturbance, a drifting "
-            "zero, wrong rig values?).</p>"
+            "zero, wrong rig values?)."
+            + (
+                f" Part of it is in the angle records themselves: they carry a second harmonic ({seen}), which no "
+                "damping term makes and perspective does where the body's distance from the camera changes with the "
+                "swing (Tracking quality)."
+                if seen
+                else ""
+            )
+            + "</p>"
         )
     for group in document["indistinguishable"]:
         names = " or ".join(TERMS[e].label if e in TERMS else e for e in group["effects"])
@@ -304,7 +314,9 @@ def excluded_html(document: dict) -> str:
 # The section
 
 
-def group_html(document, residuals, extinction, table_caption=_PLAIN, figure_caption=_PLAIN, truth=None) -> str:
+def group_html(
+    document, residuals, extinction, table_caption=_PLAIN, figure_caption=_PLAIN, truth=None, harmonics=None
+) -> str:
     """One group's discovery: verdict, steps, candidates, figures, endings, coefficients, trials left out."""
     group = esc(document.get("group", ""))
     rigs = document.get("rigs", [])
@@ -323,7 +335,7 @@ def group_html(document, residuals, extinction, table_caption=_PLAIN, figure_cap
         f"({esc(baseline)}) fitted jointly to "
         f"{len(document.get('trials', []))} trial(s), the candidates ({esc(candidates)}) are added one at a time by "
         "refitting; each chosen term is then refitted out of the final model and must still pass (backward step).</p>",
-        endings_html(document),
+        endings_html(document, harmonics),
         steps_table(document, table_caption) if document["steps"] else "<p>No effect passed: no step was taken.</p>",
         candidates_table(document, table_caption),
         figures_html(document, residuals, extinction, figure_caption),
@@ -359,5 +371,12 @@ class DiscoverySections(ReportData):
             document.setdefault("group", group)
             truth = partial(self._truth_text, document.get("trials") or []) if self.truth else None
             residuals, extinction = read_table(paths["residuals"]), read_table(paths["extinction"])
-            out.append(group_html(document, residuals, extinction, self.table_caption, self.figure_caption, truth))
+            harmonics = {
+                t: h
+                for t in document.get("trials") or []
+                if (h := (self.docs.get((t, "angles")) or {}).get("second_harmonic") or {}).get("present")
+            }
+            out.append(
+                group_html(document, residuals, extinction, self.table_caption, self.figure_caption, truth, harmonics)
+            )
         return "".join(out)
