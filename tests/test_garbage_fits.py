@@ -166,6 +166,10 @@ def test_a_period_the_rig_values_cannot_give_is_named():
     assert fastest == pytest.approx(3.238, abs=1e-3)
     message = rig_period_problem(record, 2.06, 0.0)
     assert message and "2.06 s" in message and "3.238 s" in message and "not this pendulum's" in message
+    # the values it was given, and the length a simple pendulum of this period has (g T²/4π² = 1.054 m: the
+    # apple clip's sidecar length, a reviewer asked for it, 2026-12-02)
+    assert "(length_m 0.76, mass_kg 3.53, displaced_volume_m3 0.0025, fluid_density_kg_m3 1000)" in message
+    assert "a simple pendulum of this period is 1.05 m long" in message
     assert rig_period_problem(record, 3.3, 0.0) is None
 
 

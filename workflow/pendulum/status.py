@@ -225,27 +225,19 @@ def failure_summary(table: pd.DataFrame) -> str | None:
         else "the report says why, trial by trial"
     )
     lines = [f"{len(bad)} of {len(table)} trial(s) failed; {built}:"]
-    lines += [f"  - {r.trial}, at {r.stage}: {r.reason}" for r in bad.itertuples()]
-    recorded = _recorded(bad)
-    if recorded:
-        lines.append(f"  {recorded}")
+    lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
     lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
     return "\n".join(lines)
 
 
-def _recorded(bad: pd.DataFrame) -> str:
-    """Of failed trials, how many have their angle records (a later stage failed: the fit, its curve)."""
-    if "period_s" not in bad:
+def _recorded(row) -> str:
+    """For a trial that failed after its angle record was made (a fit the rig's values refuse): what stands."""
+    period = pd.to_numeric(getattr(row, "period_s", None), errors="coerce")
+    if pd.isna(period):
         return ""
-    n = int(pd.to_numeric(bad.period_s, errors="coerce").notna().sum())
-    if not n:
-        return ""
-    if n == 1:
-        return "1 of them failed after its angle record was made: its usable frames and period are in the status table."
-    return (
-        f"{n} of them failed after their angle records were made: their usable frames and periods are in the "
-        "status table."
-    )
+    usable = pd.to_numeric(getattr(row, "ok_frames_pct", None), errors="coerce")
+    frames = "" if pd.isna(usable) else f"{usable:.4g} % of frames usable, "
+    return f" (its track and angle record stand: {frames}period {period:.4g} s as swung)"
 
 
 def failures_logged(log_path, since_s: float) -> str | None:

@@ -201,11 +201,14 @@ def rig_period_problem(
     measured = f"small-amplitude period {period_s:.4g} s"
     if swing_period_s is not None and math.isfinite(swing_period_s):
         measured = f"period {swing_period_s:.4g} s as swung ({period_s:.4g} s at small amplitude)"
+    rig = record.rig
+    simple = rig.gravity_m_s2 * period_s**2 / (4 * math.pi**2)  # a simple pendulum of this period: L = g T₀²/4π²
     return (
         f"trial {record.trial}: its {measured} is shorter than its rig values allow "
-        f"({fastest:.4g} s at small amplitude with the least added mass): its values (length_m, mass_kg, "
-        "displaced_volume_m3, fluid_density_kg_m3) are not this pendulum's; give the trial's rig in config or its "
-        "sidecar"
+        f"({fastest:.4g} s at small amplitude with the least added mass): its values (length_m {rig.length_m:.4g}, "
+        f"mass_kg {rig.mass_kg:.4g}, displaced_volume_m3 {rig.displaced_volume_m3:.4g}, fluid_density_kg_m3 "
+        f"{rig.fluid_density_kg_m3:.4g}) are not this pendulum's (a simple pendulum of this period is "
+        f"{simple:.3g} m long); give the trial's rig in config or its sidecar"
     )
 
 

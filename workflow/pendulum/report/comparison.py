@@ -141,9 +141,11 @@ class ComparisonSections(ReportData):
             table = table_html(header, rows, caption="", table_id=f"recommended-{rig}")
             others = [v for v in self.order if v != variant and (v, rig) in self.joint and is_ok(self.joint[(v, rig)])]
             delta = "; ".join(f"{esc(v)} +{fmt(best['delta_aic'].get(v), 3)}" for v in others if v in best["delta_aic"])
+            tie, choice = self._choice_note(rig, variant, best)
             bic_note = "BIC agrees" if best["bic_best"] == variant else f"BIC prefers {esc(best['bic_best'])}"
-            basis = f"Chosen by the lowest {esc(best['basis'])}" + (f" (ΔAIC: {delta}; {bic_note})." if delta else ".")
-            basis += self._choice_note(rig, variant, best)
+            bic_note = "" if tie else f"; {bic_note}"  # a tie: BIC's difference is only the penalty too
+            basis = f"Chosen by the lowest {esc(best['basis'])}" + (f" (ΔAIC: {delta}{bic_note})." if delta else ".")
+            basis += choice
             warnings = self._summary_warnings(rig, variant, joint, best)
             warn_html = (
                 '<ul class="warnings">' + "".join(f"<li>{w}</li>" for w in warnings) + "</ul>"
@@ -168,11 +170,11 @@ class ComparisonSections(ReportData):
             )
         return "".join(boxes) or '<p class="warn">No trials: nothing to report.</p>'
 
-    def _choice_note(self, rig: str, variant: str, best: dict) -> str:
+    def _choice_note(self, rig: str, variant: str, best: dict) -> tuple[bool, str]:
         """What the choice rests on where the richer variants fit no better (every added coefficient at its bound,
         the RMS within 0.1 %): their ΔAIC is only their parameter penalty, so the variants tie and the simplest is
         given; and where an added term trades against one of the chosen variant's (Table 5), the records cannot
-        tell those laws apart. The apple in air (2026-12-02): "chosen by ΔAIC 2 and 4" said neither."""
+        tell those laws apart. The apple in air (2026-12-02): "chosen by ΔAIC 2 and 4" said neither. (tie, text)"""
         chosen = self.joint.get((variant, rig)) or {}
         richer = [
             v
@@ -180,7 +182,7 @@ class ComparisonSections(ReportData):
             if set(self.variants[variant]) < set(self.variants[v]) and is_ok(self.joint.get((v, rig)))
         ]
         if not richer or not is_finite(chosen.get("rms_deg")) or not chosen["rms_deg"]:
-            return ""
+            return False, ""
         out = ""
         added = {t for v in richer for t in set(self.variants[v]) - set(self.variants[variant])}
         tie = all(
@@ -195,19 +197,20 @@ class ComparisonSections(ReportData):
             terms = ", ".join(esc(TERM_LABELS.get(t, t)) for t in sorted(added, key=list(TERMS).index))
             out += (
                 f" The richer variants fit no better: their added terms ({terms}) end at their bound of 0 and the RMS "
-                "is unchanged, so their ΔAIC is only the penalty for their extra parameters: the variants tie, and "
-                "the simplest is given."
+                "is unchanged, so their higher AIC and BIC are only the penalty for their extra parameters, not "
+                "evidence for the chosen law: the variants tie, and the simplest is given."
             )
         for e in self.term_evidence_rows(rig, best):
             rival = term_for_parameter(e["rival"][0]) if e.get("rival") else None
             if rival and rival.name in self.variants[variant]:
                 out += (
-                    f" These records do not tell {esc(TERM_LABELS.get(e['term'], e['term']))} from "
-                    f"{esc(TERM_LABELS.get(rival.name, rival.name))} (their coefficients correlate "
-                    f"{fmt(e['rival'][1], 3)}, Table 5): the chosen coefficients express the swing's whole damping "
-                    "in the chosen law; releases over a wider range of amplitudes would separate the two."
+                    f" These records cannot tell {esc(TERM_LABELS.get(e['term'], e['term']))} from "
+                    f"{esc(TERM_LABELS.get(rival.name, rival.name))} (Table 5: the two trade one for the other, "
+                    f"correlation {fmt(e['rival'][1], 3)}): the coefficients above give the swing's whole damping as "
+                    f"if it were all {esc(TERM_LABELS.get(rival.name, rival.name))}; releases over a wider range of "
+                    "amplitudes would separate the two laws."
                 )
-        return out
+        return tie, out
 
     def _verdict_sentence(self, rig: str, variant: str) -> str:
         joint = self.joint.get((variant, rig), {})
