@@ -253,3 +253,19 @@ def test_a_design_on_a_model_that_misses_the_records_says_its_predictions_wait_o
     )
     assert "find what it misses before filming" in document["model_misfit"]
     assert design_group(small_group, {}, FitSettings(), options)[0]["model_misfit"] is None
+
+
+def test_a_release_as_good_from_either_side_is_said_so(small_group):
+    """The apple in air (2026-12-02): 'release from −60°' where +60° gives the same intervals (a reviewer: the
+    sign was a tie-break, and another build said −45°). A symmetric pendulum learns alike from either side: the
+    sentence says ± with "either side"."""
+    options = DesignOptions(coefficients=("drag_area_m2",), releases_deg=(20.0, 60.0), recommend=1)
+    document, rows = design_group(small_group, {}, FitSettings(), options)
+    first = document["recommendations"][0]
+    by_side = {
+        r["release_deg"]: r["halfwidth95_predicted"]
+        for r in rows
+        if r["coefficient"] == "drag_area_m2" and abs(r["release_deg"]) == abs(first["release_deg"])
+    }
+    assert len(by_side) == 2 and min(by_side.values()) >= 0.995 * max(by_side.values()), by_side
+    assert f"release from ±{abs(first['release_deg']):g}° (either side)" in first["sentence"], first

@@ -577,8 +577,11 @@ def test_the_summary_says_what_the_videos_records_carry(documents):
     }
     box = documents.summary_box()
     assert "<b>t20</b>: the camera crept by 13 px (corrected)" in box
-    assert "off one circle by 0.44 px RMS (0.045°), which the angles carry" in box
-    assert "1 frame(s) lost, 1 repeated, 1 slip(s) of the clock by part of a frame under even time stamps" in box
+    assert "off one circle by 0.44 px RMS (0.045°; not corrected, it stays in the angles)" in box
+    assert (
+        "1 frame(s) lost, 1 repeated, 1 slip(s) of the clock by part of a frame while the time stamps in the file"
+        in box
+    )
     # a trial the recommended joint fit leaves out (failed, refused) is not among the records its numbers rest on
     # (a reviewer's run, 2026-12-02: seven failed clips' notes listed under the coefficients of five others)
     for joint in documents.joint.values():
@@ -670,6 +673,14 @@ def test_a_tie_between_variants_and_an_unresolved_coefficient_are_said_in_the_su
     assert "<b>0.00037</b>" not in documents.summary_box() and "[0.00000, 0.00110] (reaches 0)" in text
     assert "Added mass is not resolved from 0: its 95 % interval reaches 0" in text
     assert "(largest: the arm length), which more trials do not reduce" in text
+    # the arm length's tolerance nobody stated: said, with where to state it (a reviewer with L = 1.05 m got m_a
+    # 0.00088 kg [0.00015, 0.00161] on the default 0.2 %, with no word); stated, not said
+    assert "Added mass's interval rests mostly on the arm length's tolerance, the default share of its value" in text
+    assert "rigs.rig.tolerances in config.yaml" in text
+    documents.rigs["rig"]["tolerances"] = {"length_m": 0.002}
+    documents.trials["t20"]["tolerances"] = {"length_m": 0.002}
+    documents.trials["bad"]["tolerances"] = {"length_m": 0.002}
+    assert "default share" not in html_module.unescape(documents.summary_box())
     linear["rms_deg"] = quadratic["rms_deg"] / 1.5  # the richer variant fits better: no tie
     linear["warnings"] = []
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.summary_box()))

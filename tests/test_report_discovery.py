@@ -195,6 +195,14 @@ def test_unexplained_structure_is_said_with_the_residual_check_and_nothing_is_na
     assert "20.5 &gt; 7.36" in html and "3.10 ≤ 7.36" in html and "not significant" in html
     assert html.count('<span class="warn">structure left</span>') == 2  # baseline and final
     assert html.count("<figure") == 3 and 'alt="discovery residual autocorrelation, group g"' in html
+    assert "Part of it is measured" not in html and "Something outside the library is at work" in html
+    # a second harmonic measured in a trial's angle record (the real apple, 2026-12-02) comes first, the guesses
+    # after it (a reviewer: the ending pointed at a drifting zero where the tool had measured the perspective)
+    harmonic = {"apple": {"present": True, "amplitude_deg": 0.1996}}
+    html = D.group_html(doc, _residuals(["quadratic_drag"]), _extinction(["quadratic_drag"]), harmonics=harmonic)
+    text = html_module.unescape(html)
+    measured = text.index("Part of it is measured in the angle records themselves: they hold a second harmonic (apple")
+    assert measured < text.index("Beyond that, something outside the library is at work")
 
 
 def test_indistinguishable_effects_are_named_as_a_group_with_the_experiment_that_separates_them():

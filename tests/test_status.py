@@ -323,3 +323,20 @@ def test_the_failures_this_run_logged_are_read_back_for_the_last_lines_of_the_te
     assert failures_logged(tmp_path / "missing.log", since_s=0) is None
     log.write_text("2026-12-02 11:27:40,468 INFO all 2 trial(s) ok\n")
     assert failures_logged(log, since_s=0) is None
+
+
+def test_a_rigs_geometry_is_kept_when_a_trial_it_did_not_rest_on_leaves_for_its_own_rig():
+    """A reviewer's apple (2026-12-02) failed in the demo's rig (another pendulum: left out of its pooled pivot),
+    then got its own rig by a sidecar: the demo rig's geometry was estimated again and its 5 angle records and 15
+    fits rebuilt, byte for byte the same. Kept now; estimated again where a trial its pivot rests on leaves or a
+    trial it read is gone."""
+    from pendulum.trials import kept_geometry_trials
+
+    demo = ["d1", "d2", "d3"]
+    document = {"input_trials": [*demo, "apple"], "trials": [*demo, "apple"], "rejected_trials": {"apple": "off"}}
+    videos = {*demo, "apple"}
+    assert kept_geometry_trials(document, demo, videos) == sorted([*demo, "apple"])  # apple now in its own rig
+    assert kept_geometry_trials(document, [*demo, "apple", "new"], videos | {"new"}) == sorted([*demo, "apple"])
+    assert kept_geometry_trials(document, demo, set(demo)) == demo  # the apple's video deleted: its track is gone
+    assert kept_geometry_trials(document, ["d1", "d2"], videos) == ["d1", "d2"]  # a trial it rests on left
+    assert kept_geometry_trials(None, demo, videos) == demo

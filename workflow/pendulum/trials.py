@@ -490,3 +490,22 @@ def pooled_trials(config: dict, trials: dict[str, Trial], rig: str) -> list[str]
     if not pooled:
         pooled = sorted(n for n in videos if not trial_settings(config, trials[n])["own_pivot"])
     return pooled
+
+
+def kept_geometry_trials(document: dict | None, current: list[str], video_trials) -> list[str]:
+    """The trials a rig's kept geometry (its JSON ``document``) stays estimated from; ``current`` where it must be
+    estimated again.
+
+    Kept while every trial its pivot rests on (``trials`` less ``rejected_trials``) is still one of the rig's
+    (``current``) and every trial
+    it read (``input_trials``) still exists (``video_trials``), also one that has since left for another rig: a
+    clip that failed or was left out of the pooled pivot (another pendulum) and is then given its own rig by a
+    sidecar changes nothing the rig's geometry rests on, so its other trials are not rebuilt (a reviewer's apple
+    rebuilt 7 angle records and 21 fits, byte for byte the same, 2026-12-02)."""
+    kept = (document or {}).get("input_trials")
+    if not kept:
+        return current
+    used = set(document.get("trials") or kept) - set(document.get("rejected_trials") or {})
+    if not used <= set(current) or not set(kept) <= set(video_trials):
+        return current
+    return sorted(kept)

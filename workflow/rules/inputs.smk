@@ -49,7 +49,8 @@ def geometry_trials(wildcards):
 
     Once estimated, a rig's geometry is kept: the trials it was estimated from
     stay its inputs, so adding a video does not re-estimate it (nor rebuild every
-    other trial's angles and fits). `--config reestimate_geometry=true` pools
+    other trial's angles and fits), nor does giving one it did not rest on its
+    own rig (pendulum.trials.kept_geometry_trials). `--config reestimate_geometry=true` pools
     every current trial of the rig instead (a deliberate re-estimate).
     """
     current = pooled_trials(config, TRIALS, wildcards.rig)
@@ -57,12 +58,10 @@ def geometry_trials(wildcards):
     if config.get("reestimate_geometry") or not path.is_file():
         return current
     try:
-        kept = json.loads(path.read_text()).get("input_trials")
+        document = json.loads(path.read_text())
     except (OSError, ValueError):
         return current
-    if not kept or not set(kept) <= set(current):
-        return current
-    return sorted(kept)
+    return kept_geometry_trials(document, current, VIDEO_TRIALS)
 
 
 def geometry_inputs(wildcards):

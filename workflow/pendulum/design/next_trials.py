@@ -41,6 +41,7 @@ from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import SimulationDiverged
 from pendulum.model.rig import Rig
 
+MIRROR_TIE = 0.005  # a release from the other side whose score is this close: either side is said
 DEFAULT_RELEASES_DEG = (5.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0, 75.0)
 ROW_COLUMNS = [
     "rig",
@@ -263,20 +264,28 @@ def design_group(
             row["rank"] = rank
     recommendations, info = [], d.info
     for _ in range(options.recommend if d.targets else 0):
-        before = d.widths(info)
+        before, before_info = d.widths(info), info
         cand, after, widths = d.best(info, d.targets)
         if _score(before, d.targets) - _score(widths, d.targets) < MIN_GAIN * _widest(before, d.targets):
             break  # no candidate shrinks what the targets' widths are made of: their tolerances
         info = after
         widest = max(d.targets, key=lambda c: _reducible(before[c]))
         again = any((r["rig"], r["release_deg"]) == (cand.rig, cand.release_deg) for r in recommendations)
+        sentence = _sentence(widest, before[widest], widths[widest], cand) + (" (again)" if again else "")
+        mirror = Candidate(cand.rig, -cand.release_deg, cand.hypothetical)
+        if mirror in d.sensitivities:  # the other side as good: the sign is no advice (a reviewer, 2026-12-02)
+            other = _score(d.widths(d.added(before_info, mirror)), d.targets)
+            if abs(other - _score(widths, d.targets)) <= MIRROR_TIE * _score(widths, d.targets):
+                sentence = sentence.replace(
+                    f"from {cand.release_deg:+g}°", f"from ±{abs(cand.release_deg):g}° (either side)"
+                )
         recommendations.append(
             {
                 "rig": cand.rig,
                 "described_rig": cand.hypothetical,
                 "release_deg": cand.release_deg,
                 "predicted": {c: widths[c]["halfwidth95"] for c in d.targets},
-                "sentence": _sentence(widest, before[widest], widths[widest], cand) + (" (again)" if again else ""),
+                "sentence": sentence,
             }
         )
     if d.targets and not recommendations:

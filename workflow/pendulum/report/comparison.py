@@ -12,7 +12,7 @@ import re
 
 import numpy as np
 
-from pendulum.design.tolerances import input_words
+from pendulum.design.tolerances import input_words, split_key
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report.format import (
@@ -68,6 +68,23 @@ def unresolved_sentence(label: str, entry: dict) -> str:
     return text + "."
 
 
+def default_tolerance_sentence(label: str, entry: dict, stated: dict, rig: str) -> str:
+    """Where a coefficient's interval rests mostly on a rig value whose tolerance nobody stated (the default
+    share of its value), a sentence saying so ('' otherwise): the apple in air with L = 1.05 m gave m_a
+    0.00088 kg [0.00015, 0.00161] on the arm length's default 0.2 % (a reviewer, 2026-12-02)."""
+    budget = {k: v for k, v in (entry.get("error_budget") or {}).items() if not k.startswith("pivot")}
+    if not budget or not (entry.get("stderr_systematic") or 0) > (entry.get("stderr_statistical") or 0):
+        return ""
+    largest = max(budget, key=lambda k: abs(budget[k]))
+    if split_key(largest)[0] in stated:
+        return ""
+    return (
+        f" {label[:1].upper()}{label[1:]}'s interval rests mostly on {input_words(largest)}'s tolerance, the "
+        f"default share of its value, not one stated for the rig: state yours (rigs.{rig}.tolerances in "
+        "config.yaml, or tolerances in the sidecar that gives the value)."
+    )
+
+
 class ComparisonSections(ReportData):
     """The summary box (recommended coefficients per rig) and the model comparison with term-by-term evidence."""
 
@@ -118,6 +135,9 @@ class ComparisonSections(ReportData):
             header = ["coefficient", "estimate", "95 % interval"] + (["truth (synthetic)"] if truths else [])
             rows = []
             joint_problems = record_problems(joint)
+            # a model that misses the record by far more than its noise: the best of the variants tried, not a
+            # recommendation (its coefficients absorb what it misses; their intervals do not cover that): no bold
+            misfit = any("misses a systematic effect" in w for w in joint.get("warnings") or [])
             for name, entry in joint.get("parameters", {}).items():
                 symbol, label, unit = COEFFICIENTS.get(name, (esc(name), name, ""))
                 value, qualifier = estimate_parts(entry)
@@ -134,7 +154,7 @@ class ComparisonSections(ReportData):
                         td(f"{esc(qualifier)} (reaches {fmt(entry['lower_bound'], 3)})", "num"),
                     ]
                 else:
-                    row += [td(f"<b>{esc(value)}</b>", "num"), td(esc(qualifier), "num")]
+                    row += [td(esc(value) if misfit else f"<b>{esc(value)}</b>", "num"), td(esc(qualifier), "num")]
                 if truths:
                     row.append(td(esc(self._truth_text(trials, name)), "num"))
                 rows.append(row)
@@ -152,9 +172,6 @@ class ComparisonSections(ReportData):
                 if warnings
                 else "<p>No warnings.</p>"
             )
-            # a model that misses the record by far more than its noise: the best of the variants tried, not a
-            # recommendation (its coefficients absorb what it misses; their intervals do not cover that)
-            misfit = any("misses a systematic effect" in w for w in joint.get("warnings") or [])
             title = (
                 "Best of the variants tried, none fits within the record's noise"
                 if misfit
@@ -245,7 +262,7 @@ class ComparisonSections(ReportData):
     def _tracking_note(self, trial: str) -> str:
         """A trial's path and timing findings in one clause ('' if none): a creeping camera (corrected), a path off
         one circle (carried by the angles), a second harmonic in its angles (perspective), frames lost or repeated
-        under even stamps (times put right)."""
+        under even stamps (times corrected)."""
         tracks = self.docs.get((trial, "tracks")) or {}
         if not is_ok(tracks):
             return ""
@@ -257,19 +274,23 @@ class ComparisonSections(ReportData):
         if path.get("departs") and is_finite(path.get("unexplained_angle_deg")):
             parts.append(
                 f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
-                f"({fmt(path['unexplained_angle_deg'], 2)}°), which the angles carry"
+                f"({fmt(path['unexplained_angle_deg'], 2)}°; not corrected, it stays in the angles)"
             )
         harmonic = (self.docs.get((trial, "angles")) or {}).get("second_harmonic") or {}
         if harmonic.get("present"):
             parts.append(
-                f"its angles carry a second harmonic of {fmt(harmonic['amplitude_deg'], 2)}° (perspective: its "
-                "distance from the camera changes with the swing), which the fits carry"
+                f"its angles hold a second harmonic of {fmt(harmonic['amplitude_deg'], 2)}° (perspective: its "
+                "distance from the camera changes with the swing; not corrected, it stays in the fits' residuals: "
+                "film square-on to the swing plane, from farther away)"
             )
         lost, repeated, other = slip_counts(tracks.get("timing") or {})
         if lost or repeated or other:
             counts = [f"{lost} frame(s) lost"] * bool(lost) + [f"{repeated} repeated"] * bool(repeated)
             counts += [f"{other} slip(s) of the clock by part of a frame"] * bool(other)
-            parts.append(f"{', '.join(counts)} under even time stamps (times put right)")
+            parts.append(
+                f"{', '.join(counts)} while the time stamps in the file stayed even (times corrected from the motion; "
+                "near a turning point the motion cannot check the correction)"
+            )
         return ", ".join(parts)
 
     def _summary_warnings(self, rig: str, variant: str, joint: dict, best: dict) -> list[str]:
@@ -313,9 +334,11 @@ class ComparisonSections(ReportData):
             out.append(f"Left out of the joint fits: {items}.")
         if not best["comparable"]:
             out.append("The variants' joint fits used different samples: their AIC values are not strictly comparable.")
+        stated = self.rig_tolerances_used(rig)[0] if hasattr(self, "rig_tolerances_used") else {}
         for name, entry in joint.get("parameters", {}).items():
+            unstated = default_tolerance_sentence(COEFFICIENTS.get(name, ("", name))[1], entry, stated, rig)
             if reaches_bound(entry):
-                out.append(esc(unresolved_sentence(COEFFICIENTS.get(name, ("", name))[1], entry)))
+                out.append(esc(unresolved_sentence(COEFFICIENTS.get(name, ("", name))[1], entry)) + esc(unstated))
             elif entry.get("at_bound"):
                 out.append(
                     f"{esc(COEFFICIENTS.get(name, ('', name))[1])} is at its lower bound: "
@@ -323,6 +346,8 @@ class ComparisonSections(ReportData):
                 )
             elif entry.get("identifiable") is False:
                 out.append(f"{esc(COEFFICIENTS.get(name, ('', name))[1])} is not identifiable from these records.")
+            elif unstated:
+                out.append(esc(unstated.strip()))
         if (joint.get("consistency") or {}).get("verdict") == "inconsistent":
             out.append(
                 "The per-trial estimates disagree beyond their intervals: the joint interval is widened by S, "

@@ -242,20 +242,21 @@ def endings_html(document: dict, harmonics: dict | None = None) -> str:
     check = document["residual_check"]
     if document["unexplained"]:
         seen = "; ".join(f"{esc(t)} {fmt(h['amplitude_deg'], 2)}°" for t, h in (harmonics or {}).items())
+        found = (  # what the records themselves are measured to carry comes first, the guesses after
+            f" Part of it is measured in the angle records themselves: they hold a second harmonic ({seen}), which "
+            "no damping term makes and perspective does where the body's distance from the camera changes with the "
+            "swing (Tracking quality: film square-on to the swing plane, from farther away)."
+            if seen
+            else ""
+        )
         out.append(
             '<p class="warn discovery-ending">Unexplained: after the final model the residual is '
             f"{fmt(check['rms_over_noise'], 2)}× the noise floor ({deg(check['noise_floor_rad'])}°) and not white "
             f"(Ljung–Box p = {p_text(check['whiteness']['p_value'])}). No candidate in the library removes this "
-            "structure, so none is named for it: something outside the library is at work (a disturbance, a drifting "
-            "zero, wrong rig values?)."
-            + (
-                f" Part of it is in the angle records themselves: they carry a second harmonic ({seen}), which no "
-                "damping term makes and perspective does where the body's distance from the camera changes with the "
-                "swing (Tracking quality)."
-                if seen
-                else ""
-            )
-            + "</p>"
+            f"structure, so none is named for it.{found} "
+            + ("Beyond that, something" if seen else "Something")
+            + " outside the library is at work: a disturbance, a drifting zero, frame times the motion could not "
+            "check, wrong rig values?</p>"
         )
     for group in document["indistinguishable"]:
         names = " or ".join(TERMS[e].label if e in TERMS else e for e in group["effects"])
