@@ -287,6 +287,9 @@ def test_a_rig_whose_values_cannot_give_its_trials_periods_says_so_in_the_summar
     assert "No joint fit succeeded" in box
     # the periods as swung (what the tracking table and a stopwatch give), not the small-amplitude ones
     assert "cannot give the swing of 2 of its 2 trial(s): their periods 1.674–2.081 s as swung" in box, box
+    # and the length a simple pendulum of such a period has (g T₀²/4π², from the small-amplitude periods 1.654 and
+    # 2.061 s): what a user needs to write the sidecar (a reviewer, 2026-12-02)
+    assert "(a simple pendulum of that period is 0.68–1.06 m long)" in box, box
     assert (
         "3.238 s at the least" in box
         and "<code>rig</code>" in box

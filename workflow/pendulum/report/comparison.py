@@ -105,10 +105,13 @@ class ComparisonSections(ReportData):
             if len(periods) == 1
             else f"their periods {min(periods):.4g}–{max(periods):.4g} s"
         )
+        lengths = [9.81 * e["period_s"] ** 2 / (4 * np.pi**2) for e in found.values()]  # simple: L = g T₀²/4π²
+        simple = f"{min(lengths):.3g}" if len(lengths) == 1 else f"{min(lengths):.3g}–{max(lengths):.3g}"
         return (
             f" The rig's values cannot give the swing of {len(found)} of its {len(trials)} trial(s): "
             f"{span} as swung, where these values allow {fastest:.4g} s at the least (at small amplitude); "
-            "they are another pendulum's. Give each pendulum its own rig in the trials' sidecars (<code>rig</code>, "
+            f"they are another pendulum's (a simple pendulum of that period is {simple} m long). "
+            "Give each pendulum its own rig in the trials' sidecars (<code>rig</code>, "
             "<code>mass_kg</code>, <code>length_m</code>, <code>frontal_area_m2</code>, "
             "<code>displaced_volume_m3</code> and <code>fluid_density_kg_m3</code>: 1.2 in air, where water's 1000 "
             "is the default; docs/your-data.md); their tracks and angle records stand (Tracking quality)."
