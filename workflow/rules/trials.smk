@@ -17,6 +17,7 @@ from pendulum.trials import (  # noqa: E402
     RIG_KEYS,
     add_sidecar_rigs,
     discover_trials,
+    kept_geometry_trials,
     needs_rig_geometry,
     pooled_trials,
     rig_name,
