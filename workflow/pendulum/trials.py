@@ -497,11 +497,10 @@ def kept_geometry_trials(document: dict | None, current: list[str], video_trials
     estimated again.
 
     Kept while every trial its pivot rests on (``trials`` less ``rejected_trials``) is still one of the rig's
-    (``current``) and every trial
-    it read (``input_trials``) still exists (``video_trials``), also one that has since left for another rig: a
-    clip that failed or was left out of the pooled pivot (another pendulum) and is then given its own rig by a
-    sidecar changes nothing the rig's geometry rests on, so its other trials are not rebuilt (a reviewer's apple
-    rebuilt 7 angle records and 21 fits, byte for byte the same, 2026-12-02)."""
+    (``current``) and every trial it read (``input_trials``) still exists (``video_trials``), also one that has
+    since left for another rig: a clip that failed or was left out of the pooled pivot (another pendulum) and is
+    then given its own rig by a sidecar changes nothing the rig's geometry rests on, so its other trials are not
+    rebuilt (a reviewer's apple rebuilt 7 angle records and 21 fits, byte for byte the same, 2026-12-02)."""
     kept = (document or {}).get("input_trials")
     if not kept:
         return current

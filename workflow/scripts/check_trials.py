@@ -1,7 +1,7 @@
 """Snakemake adapter: the workflow's last step; fails (so Snakemake exits non-zero) when any trial failed.
 
-The failures are logged once (its log and the terminal); the Snakefile's ``onerror`` repeats them after
-Snakemake's own error lines, where a user reads last."""
+The failures go to its log only; the Snakefile's ``onerror`` prints them from there after Snakemake's own
+error lines, where a user reads last (once, not twice above the traceback)."""
 
 import logging
 
@@ -13,7 +13,7 @@ from pendulum.status import failure_summary
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "check_trials")
-log.handlers = [h for h in log.handlers if isinstance(h, logging.FileHandler)]  # the terminal: onerror's
+log.handlers = [h for h in log.handlers if isinstance(h, logging.FileHandler)]  # the terminal gets them from onerror
 table = pd.read_csv(sm.input.table, keep_default_na=False)
 problem = failure_summary(table)
 if problem:

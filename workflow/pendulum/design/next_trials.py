@@ -34,7 +34,7 @@ from pendulum.design.candidates import (
     with_trial,
 )
 from pendulum.design.separation import separations
-from pendulum.design.tolerances import input_words, measurement_advice
+from pendulum.design.tolerances import input_words, largest_input, measurement_advice
 from pendulum.fit.group import GroupFit, GroupProblem, ordered, start_values
 from pendulum.fit.uncertainty import shared_frontal_area
 from pendulum.model.effects import ADDED_MASS, TERMS
@@ -110,14 +110,6 @@ def design_table(rows: list[dict]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=ROW_COLUMNS)
 
 
-def _largest_input(entry: dict) -> tuple[str, float]:
-    budget = entry.get("error_budget") or {}
-    if not budget:
-        return "", 0.0
-    key = max(budget, key=lambda k: abs(budget[k]))
-    return key, abs(float(budget[key]))
-
-
 MIN_GAIN = 0.01  # a recommended trial narrows the widest target interval by at least this share
 
 
@@ -139,10 +131,11 @@ def _rig_values(rig: Rig) -> dict:
     return {name: getattr(rig, name) for name in rig.__dataclass_fields__}
 
 
-def _sentence(name: str, today_entry: dict, after: dict, cand: Candidate) -> str:
+def _sentence(name: str, today_entry: dict, after: dict, cand: Candidate, either_side: bool = False) -> str:
     where = f"on the described rig {cand.rig}" if cand.hypothetical else f"on rig {cand.rig}"
+    angle = f"±{abs(cand.release_deg):g}° (either side)" if either_side else f"{cand.release_deg:+g}°"
     return (
-        f"release from {cand.release_deg:+g}° {where}: {coefficient_words(name)} ±{_fmt(today_entry['halfwidth95'])}"
+        f"release from {angle} {where}: {coefficient_words(name)} ±{_fmt(today_entry['halfwidth95'])}"
         f" → ±{_fmt(after['halfwidth95'])} (95 %)"
     )
 
@@ -271,14 +264,13 @@ def design_group(
         info = after
         widest = max(d.targets, key=lambda c: _reducible(before[c]))
         again = any((r["rig"], r["release_deg"]) == (cand.rig, cand.release_deg) for r in recommendations)
-        sentence = _sentence(widest, before[widest], widths[widest], cand) + (" (again)" if again else "")
         mirror = Candidate(cand.rig, -cand.release_deg, cand.hypothetical)
-        if mirror in d.sensitivities:  # the other side as good: the sign is no advice (a reviewer, 2026-12-02)
-            other = _score(d.widths(d.added(before_info, mirror)), d.targets)
-            if abs(other - _score(widths, d.targets)) <= MIRROR_TIE * _score(widths, d.targets):
-                sentence = sentence.replace(
-                    f"from {cand.release_deg:+g}°", f"from ±{abs(cand.release_deg):g}° (either side)"
-                )
+        score = _score(widths, d.targets)  # the other side as good: the sign is no advice (a reviewer, 2026-12-02)
+        either = (
+            mirror in d.sensitivities
+            and abs(_score(d.widths(d.added(before_info, mirror)), d.targets) - score) <= MIRROR_TIE * score
+        )
+        sentence = _sentence(widest, before[widest], widths[widest], cand, either) + (" (again)" if again else "")
         recommendations.append(
             {
                 "rig": cand.rig,
@@ -289,7 +281,7 @@ def design_group(
             }
         )
     if d.targets and not recommendations:
-        limits = sorted({input_words(_largest_input(d.parameters.get(c, {}))[0]) for c in d.targets} - {""})
+        limits = sorted({input_words(largest_input(d.parameters.get(c, {}))[0]) for c in d.targets} - {""})
         recommendations.append(
             {
                 "rig": None,

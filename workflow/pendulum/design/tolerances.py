@@ -34,6 +34,18 @@ def split_key(key: str) -> tuple[str, str | None]:
     return base, (rig.rstrip("]") or None)
 
 
+def largest_input(entry: dict, rig_values_only: bool = False) -> tuple[str, float]:
+    """The error-budget input that moves a coefficient most, and by how much per 1σ (``("", 0.0)`` without a
+    budget); ``rig_values_only``: of the rig values' tolerances (not the estimated pivot)."""
+    budget = {
+        k: v for k, v in (entry.get("error_budget") or {}).items() if not (rig_values_only and k.startswith("pivot"))
+    }
+    if not budget:
+        return "", 0.0
+    key = max(budget, key=lambda k: abs(budget[k]))
+    return key, abs(float(budget[key]))
+
+
 def input_words(key: str) -> str:
     """An error-budget input in words (``pivot_px (axis 1)`` → "the pivot position")."""
     base, rig = split_key(key)

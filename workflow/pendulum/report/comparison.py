@@ -12,7 +12,7 @@ import re
 
 import numpy as np
 
-from pendulum.design.tolerances import input_words, split_key
+from pendulum.design.tolerances import input_words, largest_input, split_key
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report.format import (
@@ -58,9 +58,8 @@ def unresolved_sentence(label: str, entry: dict) -> str:
     tolerances dominate its uncertainty (more trials do not help then)."""
     bound = fmt(entry["lower_bound"], 3)
     text = f"{label[:1].upper()}{label[1:]} is not resolved from {bound}: its 95 % interval reaches {bound}"
-    budget = entry.get("error_budget") or {}
-    if budget and (entry.get("stderr_systematic") or 0) > (entry.get("stderr_statistical") or 0):
-        largest = max(budget, key=lambda k: abs(budget[k]))
+    largest = largest_input(entry)[0]
+    if largest and (entry.get("stderr_systematic") or 0) > (entry.get("stderr_statistical") or 0):
         text += (
             f"; most of its uncertainty is the rig values' (largest: {input_words(largest)}), which more trials "
             "do not reduce (What to film next)"
@@ -72,10 +71,9 @@ def default_tolerance_sentence(label: str, entry: dict, stated: dict, rig: str) 
     """Where a coefficient's interval rests mostly on a rig value whose tolerance nobody stated (the default
     share of its value), a sentence saying so ('' otherwise): the apple in air with L = 1.05 m gave m_a
     0.00088 kg [0.00015, 0.00161] on the arm length's default 0.2 % (a reviewer, 2026-12-02)."""
-    budget = {k: v for k, v in (entry.get("error_budget") or {}).items() if not k.startswith("pivot")}
-    if not budget or not (entry.get("stderr_systematic") or 0) > (entry.get("stderr_statistical") or 0):
+    largest = largest_input(entry, rig_values_only=True)[0]
+    if not largest or not (entry.get("stderr_systematic") or 0) > (entry.get("stderr_statistical") or 0):
         return ""
-    largest = max(budget, key=lambda k: abs(budget[k]))
     if split_key(largest)[0] in stated:
         return ""
     return (
