@@ -49,7 +49,7 @@ rule all:
 
 
 # After Snakemake's own error lines, where a user reads last: the trials that failed, one line each.
-from pendulum.status import failures_logged  # noqa: E402
+from pendulum.outcomes import failures_logged  # noqa: E402
 
 
 onerror:

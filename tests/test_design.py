@@ -81,6 +81,23 @@ def test_a_tolerance_that_dominates_is_named_and_more_trials_do_not_help(small_g
     assert "the displaced volume" in document["recommendations"][0]["sentence"]
 
 
+def test_fewer_trials_than_asked_for_say_why(small_group):
+    """`recommend: 3` gave the apple one trial and no word why (a reviewer, 2026-12-02): after it, a further trial
+    narrows the interval by less than 1 %, the rest being the frontal area's tolerance. Said; with no tolerance,
+    all three are given."""
+    value = small_group.x[small_group.problem.labels.index("drag_area_m2")]
+    options = DesignOptions(coefficients=("drag_area_m2",), releases_deg=(20.0, 60.0), recommend=3)
+    budget = {"drag_area_m2": {"stderr_systematic": 0.02 * value, "error_budget": {"frontal_area_m2": 0.02 * value}}}
+    document, _ = design_group(small_group, budget, FitSettings(), options)
+    assert len(document["recommendations"]) == 1 and document["recommendations"][0]["release_deg"] is not None
+    assert document["fewer_recommended"] == (
+        "1 of the 3 trials asked for (design.recommend): a further trial would narrow the drag area C_d·A by less "
+        "than 1 %; the rest of its interval is set by the rig values' tolerances (largest: the frontal area)"
+    )
+    document, _ = design_group(small_group, {}, FitSettings(), options)
+    assert len(document["recommendations"]) == 3 and document["fewer_recommended"] is None
+
+
 def test_a_repeated_trial_adds_its_information(small_group):
     """One more trial like one of today's two shrinks every coefficient's statistical half-width (ratio < 1),
     but as one trial of three, not to below 1/√3 of today's."""

@@ -262,7 +262,11 @@ def test_outside_git_a_freeze_is_refused_unless_allowed_and_then_dirty(tmp_path,
     assert doc["git"]["commit"] is None and doc["dirty"] is True and doc["frozen_at_utc"] == "2024-05-06T07:08:09Z"
     assert "outside a git work tree" in (folder / "DIRTY").read_text()
     assert doc["environment_lock_differences"][0]["package"] == "numpy"
-    assert doc["trials"] == {"ok": ["a"], "failed": [{"trial": "b", "stage": "tracks", "reason": "no marker"}]}
+    assert doc["trials"] == {
+        "ok": ["a"],
+        "failed": [{"trial": "b", "stage": "tracks", "reason": "no marker"}],
+        "skipped": [],
+    }
     assert hashlib.sha256((folder / MANIFEST).read_bytes()).hexdigest() == manifest_sha256
     assert sha256sum_check(folder, MANIFEST).returncode == 0
     with pytest.raises(FreezeError, match="already exists"):

@@ -114,6 +114,19 @@ def test_editing_a_sidecar_rig_value_refits_that_trial_without_retracking(demo_p
     assert per_trial == {("fit_trial", "demo_p05")}
 
 
+def test_a_trial_skipped_by_its_sidecar_runs_no_job(demo_project):
+    """`skip: <why>` in a sidecar (a reviewer, 2026-12-02: the star, refused on every run, kept the run red and
+    could only be moved out of data/raw): no job of that trial; the status table and the aggregates again."""
+    sidecar = demo_project / "data/raw/demo_p05.yaml"
+    sidecar.write_text('skip: "the marker fell off at 3 s"\n')
+    try:
+        jobs = plan(demo_project)
+    finally:
+        sidecar.unlink()
+    assert not [job for job in jobs if job[1] == "demo_p05"], jobs
+    assert ("status_table", None) in jobs and ("check_trials", None) in jobs
+
+
 @pytest.mark.parametrize(
     "module,first_stage,untouched",
     [

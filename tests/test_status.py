@@ -9,17 +9,23 @@ import pytest
 
 from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot, trial_geometry
 from pendulum.fit.uncertainty import jacobian_rank_warnings
+from pendulum.freeze import trial_outcomes
+from pendulum.outcomes import (
+    failure_summary,
+    misfit_trials,
+    skipped_status,
+    status_table,
+    trial_status,
+)
 from pendulum.status import (
     UpstreamFailed,
     describe,
     failed,
     failure_image,
-    failure_summary,
     require_ok,
     run_stage,
-    status_table,
-    trial_status,
 )
+from pendulum.trials import Trial, split_skipped
 
 LOG = logging.getLogger("test_status")
 
@@ -100,6 +106,79 @@ def test_a_trial_whose_fit_failed_keeps_its_usable_frames_and_period_in_the_stat
     stand = "(its track and angle record stand: 99.84 % of frames usable, period 2.078 s as swung): trial apple"
     assert f"  - apple, at fit (every variant) {stand}" in text
     assert "  - star, at tracks: not a pendulum" in text
+
+
+def test_a_trial_that_succeeded_carries_its_warnings_and_a_model_that_misses_it_is_named():
+    """The real apple in its own air rig (a reviewer, 2026-12-02): trials.csv said `ok` while every variant's fit
+    missed the record 78x its noise and its angle record carried a second harmonic; only the fits' summary said."""
+    misses = (
+        "trial apple: residual RMS 0.235° is 78× the record's noise (0.003°) and smooth: the model misses a "
+        "systematic effect"
+    )
+    harmonic = "the angle record carries a second harmonic of 0.2°"
+    documents = [
+        ("frames", "f.log", {"status": "ok", "warnings": []}),
+        ("tracks", "t.log", {"status": "ok", "flags": {"ok": 99, "duplicate": 1}, "body": {"warning": "smaller"}}),
+        ("angles", "a.log", {"status": "ok", "period_s": 2.078, "warnings": [harmonic]}),
+        ("fit:friction", "x.log", {"status": "ok", "warnings": ["friction_torque_nm is at its lower bound", misses]}),
+        ("fit:quadratic", "q.log", {"status": "ok", "warnings": [misses]}),
+    ]
+    row = trial_status("apple", "data/raw/apple.mov", "air", documents)
+    assert row["status"] == "ok" and row["n_warnings"] == 4
+    assert row["warnings"].split(" | ") == [
+        "tracks: smaller",
+        f"angles: {harmonic}",
+        f"fit (every variant): {misses}",  # first among the fits' warnings
+        "fit:friction: friction_torque_nm is at its lower bound",
+    ]
+    fine = [
+        (s, log, {**d, "warnings": d.get("warnings", [])[:1] if s == "fit:friction" else []}) for s, log, d in documents
+    ]
+    one = [d for d in documents if d[0] != "fit:friction"]  # a single variant: it is every variant
+    rows = [row, trial_status("fine", "f", "air", fine), trial_status("one", "o", "air", one)]
+    rows.append(trial_status("lost", "l", "air", [("tracks", "t.log", failed("tracks", "x")), *documents[2:]]))
+    each = [  # every variant misses, each by its own figures (the demo's quadratic and linear variants: 215x, 91x)
+        ("fit:linear", "l.log", {"status": "ok", "warnings": [misses.replace("78×", "91×")]}),
+        ("fit:quadratic", "q.log", {"status": "ok", "warnings": ["drag at its bound", misses.replace("78×", "215×")]}),
+    ]
+    rows.append(trial_status("each", "e", "air", [*documents[:3], *each]))
+    rows.append(
+        trial_status("half", "h", "air", [*documents[:3], each[0], ("fit:quadratic", "q.log", {"status": "ok"})])
+    )
+    table = status_table(rows)
+    assert table.loc[table.trial == "fine", "n_warnings"].item() == 2  # the silhouette and the bound
+    said = table.set_index("trial").warnings["each"].split(" | ")
+    assert said[2] == (
+        "fit (every variant): each of the 2 misses the record (91–215× its noise): the model misses a systematic "
+        "effect; the coefficients are probably wrong"
+    )
+    assert said[3].startswith("fit:linear: trial apple: residual RMS 0.235° is 91×") and len(said) == 6
+    assert misfit_trials(table) == ["apple", "each", "one"]  # not `half` (one variant fits); a failed trial is failed
+
+
+def test_a_trial_skipped_by_its_sidecar_is_listed_with_why_and_fails_nothing(tmp_path):
+    trials = {
+        "star": Trial("star", "video", "data/raw/star.mov", {"skip": " spins on its thread "}, "data/raw/star.yaml"),
+        "apple": Trial("apple", "video", "data/raw/apple.mov", {"rig": "air"}, "data/raw/apple.yaml"),
+        "demo": Trial("demo", "video", "data/raw/demo.mp4"),
+    }
+    kept, skipped = split_skipped(trials)
+    assert sorted(kept) == ["apple", "demo"]
+    assert skipped == {
+        "star": {"source": "data/raw/star.mov", "reason": "skipped by data/raw/star.yaml: spins on its thread"}
+    }
+    ok = trial_status("demo", "data/raw/demo.mp4", "rig", [("angles", "a.log", {"status": "ok"})])
+    lost = trial_status("bad", "data/raw/bad.mp4", "rig", [("tracks", "t.log", failed("tracks", "not a video"))])
+    star = skipped_status("star", **skipped["star"])
+    table = status_table([ok, star])
+    assert list(table.status) == ["ok", "skipped"] and failure_summary(table) is None and misfit_trials(table) == []
+    text = failure_summary(status_table([ok, lost, star]))
+    assert text.startswith("1 of 2 trial(s) failed; the report and the other 1 trial(s)' results were built:")
+    path = tmp_path / "trials.csv"
+    status_table([ok, lost, star]).to_csv(path, index=False)
+    outcomes = trial_outcomes(path)  # what a frozen folder's provenance says
+    assert outcomes["ok"] == ["demo"] and [f["trial"] for f in outcomes["failed"]] == ["bad"]
+    assert outcomes["skipped"] == [{"trial": "star", "reason": skipped["star"]["reason"]}]
 
 
 def test_trial_status_names_the_stage_where_the_failure_arose():
@@ -313,7 +392,7 @@ def test_the_failures_this_run_logged_are_read_back_for_the_last_lines_of_the_te
     without the check's ERROR entry (the run failed elsewhere), prints nothing."""
     import time
 
-    from pendulum.status import failures_logged
+    from pendulum.outcomes import failures_logged
 
     log = tmp_path / "check.log"
     text = "1 of 2 trial(s) failed; the report and the other 1 trial(s)' results were built:\n  - b, at tracks: bad"

@@ -131,7 +131,8 @@ def lock_differences(lock_text: str, installed: list[str]) -> list[dict]:
 
 
 def trial_outcomes(status_table: str | Path | None) -> dict:
-    """Trials ok and failed (with stage and reason) from results/status/trials.csv, when frozen."""
+    """Trials ok, failed (with stage and reason) and skipped by their sidecars (with why), from
+    results/status/trials.csv, when frozen."""
     if status_table is None or not Path(status_table).is_file():
         return {}
     with open(status_table, newline="", encoding="utf-8") as f:
@@ -141,8 +142,9 @@ def trial_outcomes(status_table: str | Path | None) -> dict:
         "failed": [
             {"trial": r["trial"], "stage": r.get("stage", ""), "reason": r.get("reason", "")}
             for r in rows
-            if r.get("status") != "ok"
+            if r.get("status") not in ("ok", "skipped")
         ],
+        "skipped": [{"trial": r["trial"], "reason": r.get("reason", "")} for r in rows if r.get("status") == "skipped"],
     }
 
 

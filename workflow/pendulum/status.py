@@ -5,23 +5,19 @@ per-trial stage ends with its declared outputs on disk: the real ones, or
 empty tables and a JSON document ``{"status": "failed", "failed_stage": ...,
 "error": <one sentence>}``. Later stages pass an upstream failure on unchanged;
 aggregates (rig geometry, joint fits, summary, report) leave failed trials out
-and list them; the workflow's last rule exits non-zero when any trial failed.
+and list them; the workflow's last rule exits non-zero when any trial failed
+(:mod:`pendulum.outcomes`: the status table).
 """
 
 from __future__ import annotations
 
 import logging
-import re
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from pendulum.io import write_failure
-
-STAGE_ORDER = ("frames", "tracks", "geometry", "angles", "fit", "curve")
-STATUS_COLUMNS = ["trial", "source", "rig", "status", "stage", "ok_frames_pct", "period_s", "reason", "log"]
 
 
 class UpstreamFailed(Exception):
@@ -136,116 +132,3 @@ def failure_image(
     for i, text in enumerate([header] + lines):
         cv2.putText(image, text, (16, 30 + 26 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 235, 1, cv2.LINE_AA)
     return image
-
-
-def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, str, dict]]) -> dict:
-    """One row of the status table from a trial's stage documents.
-
-    ``documents``: (stage, log path, JSON document) in pipeline order; a stage
-    may be qualified (``fit:quadratic``). The trial failed at the first failed
-    document, in the stage named there (an upstream failure passed on keeps its
-    origin, e.g. ``geometry`` for an angle record without a pivot). Where every document of a qualified stage
-    failed with one error (every variant's fit refused for the rig's values), the stage is named so:
-    ``fit (every variant)``. Where the track and the angle record were made (also when a later stage failed:
-    another rig's values refuse the fit, the record stands), ``ok_frames_pct`` is the share of the frames not held
-    by hand that are usable and ``period_s`` the record's period as swung (the tracks and angles JSON's); else
-    None.
-    """
-    measured = _measured(documents)
-    for stage, log_path, document in documents:
-        if is_failed(document):
-            origin = document.get("failed_stage", stage)
-            named = stage if origin == stage.split(":")[0] else origin
-            base = stage.split(":")[0]
-            family = [d for s, _, d in documents if s.split(":")[0] == base] if ":" in stage else []
-            if (
-                named == stage
-                and len(family) > 1
-                and all(is_failed(d) and d.get("error") == document.get("error") for d in family)
-            ):
-                named = f"{base} (every variant)"
-            return {
-                "trial": trial,
-                "source": source,
-                "rig": rig,
-                "status": "failed",
-                "stage": named,
-                **measured,
-                "reason": document.get("error", ""),
-                "log": log_path,
-            }
-    return {
-        "trial": trial,
-        "source": source,
-        "rig": rig,
-        "status": "ok",
-        "stage": "",
-        **measured,
-        "reason": "",
-        "log": "",
-    }
-
-
-def usable_percent(flags: dict) -> float | None:
-    """The share (%) of a track's frames that are ``ok``, of those not held by hand (the tracks JSON's ``flags``,
-    as the tracks log counts them); None without such frames."""
-    free = sum(flags.values()) - flags.get("held", 0)
-    return 100.0 * flags.get("ok", 0) / free if free > 0 else None
-
-
-def _measured(documents: list[tuple[str, str, dict]]) -> dict:
-    """The usable share of a trial's frames (its tracks document) and its record's period (its angles document)."""
-    found = {"ok_frames_pct": None, "period_s": None}
-    for stage, _, document in documents:
-        if is_failed(document):
-            continue
-        if stage == "tracks" and document.get("flags"):
-            share = usable_percent(document["flags"])
-            found["ok_frames_pct"] = None if share is None else round(share, 2)
-        elif stage == "angles" and isinstance(document.get("period_s"), (int, float)):
-            found["period_s"] = round(float(document["period_s"]), 6)
-    return found
-
-
-def status_table(rows: list[dict]) -> pd.DataFrame:
-    return pd.DataFrame(rows, columns=STATUS_COLUMNS).sort_values("trial", kind="stable").reset_index(drop=True)
-
-
-def failure_summary(table: pd.DataFrame) -> str | None:
-    """Every failed trial and why, one line each, for the terminal and the check's log; None when all succeeded.
-
-    One line per trial so that the reason of each can be read where Snakemake's own error follows it (a
-    paragraph of 4,000 characters was printed twice there, 2026-12-02)."""
-    bad = table[table.status != "ok"]
-    if bad.empty:
-        return None
-    built = (
-        f"the report and the other {len(table) - len(bad)} trial(s)' results were built"
-        if len(bad) < len(table)
-        else "the report says why, trial by trial"
-    )
-    lines = [f"{len(bad)} of {len(table)} trial(s) failed; {built}:"]
-    lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
-    lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
-    return "\n".join(lines)
-
-
-def _recorded(row) -> str:
-    """For a trial that failed after its angle record was made (a fit the rig's values refuse): what stands."""
-    period = pd.to_numeric(getattr(row, "period_s", None), errors="coerce")
-    if pd.isna(period):
-        return ""
-    usable = pd.to_numeric(getattr(row, "ok_frames_pct", None), errors="coerce")
-    frames = "" if pd.isna(usable) else f"{usable:.4g} % of frames usable, "
-    return f" (its track and angle record stand: {frames}period {period:.4g} s as swung)"
-
-
-def failures_logged(log_path, since_s: float) -> str | None:
-    """The failed trials as ``check_trials`` logged them (its log's ERROR entry, one line per trial), where the
-    log was written at or after ``since_s`` (this run); None otherwise (the run failed somewhere else). The
-    Snakefile's ``onerror`` prints it after Snakemake's own error lines, where a user reads last."""
-    path = Path(log_path)
-    if not path.exists() or path.stat().st_mtime < since_s:
-        return None
-    found = re.search(r"^\S+ \S+ ERROR (.*)", path.read_text(), flags=re.M | re.S)
-    return found.group(1).rstrip() if found else None

@@ -362,6 +362,17 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
     return trials
 
 
+def split_skipped(trials: dict[str, Trial]) -> tuple[dict[str, Trial], dict[str, dict]]:
+    """The trials to build, and those whose sidecar says ``skip: <why>`` (name → ``source``, ``reason``): no job
+    runs for them; the status table and the report list them as skipped, and they fail nothing."""
+    skipped = {
+        name: {"source": t.path, "reason": f"skipped by {t.sidecar_path}: {str(t.sidecar['skip']).strip()}"}
+        for name, t in trials.items()
+        if t.sidecar.get("skip")
+    }
+    return {name: t for name, t in trials.items() if name not in skipped}, skipped
+
+
 def read_sidecar(path: str | Path) -> dict:
     """A trial's sidecar YAML, validated; every problem raises :class:`ConfigError` naming the file."""
     path = Path(path)

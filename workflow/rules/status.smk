@@ -15,6 +15,7 @@ rule status_table:
         runtime=5,
     params:
         trials=status_trials(),
+        skipped=SKIPPED,
     script:
         "../scripts/status_table.py"
 

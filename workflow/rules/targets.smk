@@ -14,8 +14,10 @@ def all_targets():
         if config["frames"]["keep_images"]:
             targets.append(f"results/frames/{name}/images")
     targets += [f"results/angles/{name}.csv" for name in sorted(TRIALS)]
+    if TRIALS or SKIPPED:  # every trial skipped: the status table says so
+        targets.append("results/status/trials.csv")
     if TRIALS:
-        targets += ["results/status/trials.csv", "results/status/all_trials_ok.txt"]
+        targets.append("results/status/all_trials_ok.txt")
     for variant in sorted(config["variants"]):
         for name in sorted(TRIALS):
             targets += [

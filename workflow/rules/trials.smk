@@ -22,6 +22,7 @@ from pendulum.trials import (  # noqa: E402
     pooled_trials,
     rig_name,
     rig_trials,
+    split_skipped,
     trial_settings,
     validate_config,
 )
@@ -35,7 +36,8 @@ validate_config(
     config, source="the configuration (config.yaml and any --configfile/--config)"
 )
 
-TRIALS = discover_trials(config["raw_dir"])
+# a sidecar's `skip: <why>` leaves its trial out of every job (listed as skipped, failing nothing)
+TRIALS, SKIPPED = split_skipped(discover_trials(config["raw_dir"]))
 # rigs defined in sidecars join config["rigs"]
 SIDECAR_RIGS = add_sidecar_rigs(config, TRIALS)
 VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")

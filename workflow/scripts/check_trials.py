@@ -4,20 +4,34 @@ The failures go to its log only; the Snakefile's ``onerror`` prints them from th
 error lines, where a user reads last (once, not twice above the traceback)."""
 
 import logging
+import sys
 
 import pandas as pd
 
 import _setup  # noqa: F401
 from pendulum.io import script_logger, write_text
-from pendulum.status import failure_summary
+from pendulum.outcomes import failure_summary, misfit_trials
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "check_trials")
 log.handlers = [h for h in log.handlers if isinstance(h, logging.FileHandler)]  # the terminal gets them from onerror
 table = pd.read_csv(sm.input.table, keep_default_na=False)
 problem = failure_summary(table)
+wrong = misfit_trials(table)
+if wrong:  # built and ok, but no variant fits: said at the end of a run that succeeded too
+    note = (
+        f"{len(wrong)} trial(s) ok whose every model variant misses the record far beyond its noise (coefficients "
+        f"probably wrong; their warnings in results/status/trials.csv): {', '.join(wrong)}"
+    )
+    log.warning("%s", note)
+    if not problem:
+        print(note, file=sys.stderr)
 if problem:
     log.error("%s", problem)
     raise SystemExit(1)
-log.info("all %d trial(s) ok", len(table))
-write_text(f"all {len(table)} trial(s) ok\n", sm.output.done)
+skipped = table[table.status == "skipped"]
+done = f"all {len(table) - len(skipped)} trial(s) ok" + (
+    f", {len(skipped)} skipped by their sidecars" if len(skipped) else ""
+)
+log.info("%s", done)
+write_text(done + "\n", sm.output.done)

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import _setup  # noqa: F401
 from pendulum.io import script_logger, write_csv
-from pendulum.status import status_table, trial_status
+from pendulum.outcomes import skipped_status, status_table, trial_status
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "status")
@@ -13,7 +13,8 @@ rows = []
 for trial, info in sm.params.trials.items():
     documents = [(stage, log_path, json.loads(Path(path).read_text())) for stage, path, log_path in info["documents"]]
     rows.append(trial_status(trial, info["source"], info["rig"], documents))
+rows += [skipped_status(trial, info["source"], info["reason"]) for trial, info in sm.params.skipped.items()]
 table = status_table(rows)
 for row in table.itertuples():
-    (log.info if row.status == "ok" else log.error)("%s: %s %s %s", row.trial, row.status, row.stage, row.reason)
+    (log.error if row.status == "failed" else log.info)("%s: %s %s %s", row.trial, row.status, row.stage, row.reason)
 write_csv(table, sm.output.table)

@@ -280,8 +280,20 @@ def design_group(
                 "sentence": sentence,
             }
         )
+    limits = sorted({input_words(largest_input(d.parameters.get(c, {}))[0]) for c in d.targets} - {""})
+    fewer = None
+    if d.targets and 0 < len(recommendations) < options.recommend:  # asked for more: say why not
+        fewer = (
+            f"{len(recommendations)} of the {options.recommend} trials asked for (design.recommend): a further "
+            "trial would narrow "
+            + " or ".join(coefficient_words(c) for c in d.targets)
+            + " by less than 1 %; "
+            + ("the rest of its interval is" if len(d.targets) == 1 else "the rest of their intervals is")
+            + " set by the rig values' tolerances (largest: "
+            + ", ".join(limits)
+            + ")"
+        )
     if d.targets and not recommendations:
-        limits = sorted({input_words(largest_input(d.parameters.get(c, {}))[0]) for c in d.targets} - {""})
         recommendations.append(
             {
                 "rig": None,
@@ -307,6 +319,7 @@ def design_group(
         "target_relative_halfwidth95": options.target_relative_halfwidth,
         "today": d.now,
         "recommendations": recommendations,
+        "fewer_recommended": fewer,
         "to_target": {c: _to_target(d, c) for c in d.targets},
         "separating": separations(d, indistinguishable or []),
         "warnings": d.warnings,

@@ -1,12 +1,14 @@
-"""The sections a reader checks the results by: header, truth, tracking quality, failed trials, provenance."""
+"""The sections a reader checks the results by: header, truth, tracking quality, provenance."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from pendulum.outcomes import usable_percent
 from pendulum.report.data import ReportData, failure_text, is_ok, problem_text, record_problems, true_value
 from pendulum.report.format import (
     COEFFICIENTS,
+    as_number,
     decimals_for,
     esc,
     estimate_cell,
@@ -19,17 +21,7 @@ from pendulum.report.format import (
     td,
     with_minus_sign,
 )
-from pendulum.status import usable_percent
 from pendulum.tracking.timing import slip_sentence
-
-
-def _number(value) -> float | None:
-    """A status table's cell as a number (None where empty: the trial failed before that was measured)."""
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return None
-
 
 # One note a line; the table within the page, its column 1400 px wide (in a 1120 px column a minimum of 14em cut the
 # notes mid-word and 10em made each real clip's row 1,000 px tall: two reviewers, 2026-12-02).
@@ -211,7 +203,7 @@ class CheckSections(ReportData):
         )
         failed = self.failed_trials()
         n_failed = len(failed)
-        n_recorded = sum(is_finite(_number(v)) for v in (failed["period_s"] if "period_s" in failed else []))
+        n_recorded = sum(is_finite(as_number(v)) for v in (failed["period_s"] if "period_s" in failed else []))
         n_garbage = sum(bool(self.trial_problems(t)) for t in self.trials)
         return (
             "<header><h1>Free-decay pendulum: added mass and drag coefficient</h1>"
@@ -463,53 +455,6 @@ class CheckSections(ReportData):
             )
             out += f'<div class="sheets">{items}</div><p class="figcaption">{caption}</p>'
         return out
-
-    def failures_section(self) -> str:
-        """Failed or skipped trials with the stage, the reason and the log to read."""
-        failed = self.failed_trials()
-        n = len(self.trials)
-        if failed.empty:
-            return (
-                f"<p>All {n} trial(s) succeeded at every stage (<code>results/status/trials.csv</code>).</p>"
-                + self.renamed_note()
-            )
-        measured = {"ok_frames_pct", "period_s"} <= set(failed.columns)
-        rows = []
-        for r in failed.itertuples():
-            cells = [td(esc(str(r.trial))), td(esc(str(r.stage)))]
-            if measured:  # the track and angle record of a trial that failed later (its fit) stand
-                cells += [
-                    td(esc(fmt(_number(r.ok_frames_pct), 4)), "num"),
-                    td(esc(fmt(_number(r.period_s), 6)), "num"),
-                ]
-            rows.append(cells + [td(esc(str(r.reason))), td(f"<code>{esc(str(r.log))}</code>")])
-        caption = self.table_caption(
-            f"{len(failed)} of {n} trial(s) failed and are missing from the fits' tables and the joint fits above: "
-            "the stage where each failed, "
-            + (
-                "the share of its frames usable and its period as swung where its angle record was made, "
-                if measured
-                else ""
-            )
-            + "the reason and the log to read."
-        )
-        header = ["trial", "stage"] + (["usable frames (%)", "period (s)"] if measured else []) + ["reason", "log"]
-        return table_html(header, rows, caption=caption, table_id="failed-table") + self.renamed_note()
-
-    def renamed_note(self) -> str:
-        """The files whose names are not their trials' names (spaces, brackets, accents made ``_``)."""
-        renamed = []
-        for trial, info in sorted(self.trials.items()):
-            source = str((info or {}).get("source") or "")
-            stem = source.rsplit("/", 1)[-1].rsplit(".", 1)[0]
-            if source and stem != trial:
-                renamed.append(f"<code>{esc(source.rsplit('/', 1)[-1])}</code> → <code>{esc(trial)}</code>")
-        if not renamed:
-            return ""
-        return (
-            "<p>Trials named after files whose names hold spaces, brackets or other signs (each run of them is "
-            "<code>_</code> in a trial's name and its results' file names): " + "; ".join(renamed) + ".</p>"
-        )
 
     def provenance_section(self) -> str:
         """Commit, configuration digest, fit settings and package versions."""

@@ -311,7 +311,7 @@ class ReportData:
         """Failed trials (status table when present, else from the documents)."""
         if self.status is not None and not self.status.empty:
             table = self.status.fillna("")
-            return table[table.status != "ok"].sort_values("trial").reset_index(drop=True)
+            return table[table.status == "failed"].sort_values("trial").reset_index(drop=True)
         rows = []
         for t in sorted(self.trials):
             for stage in ("frames", "tracks", "angles"):

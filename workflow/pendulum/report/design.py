@@ -140,6 +140,7 @@ class DesignSections(ReportData):
             items += "".join(f"<li>{design_text(r['sentence'])}</li>" for r in document.get("separating", []))
             model = document.get("model") or " + ".join(document.get("model_terms", []))
             next_label = "Next, if the model were right:" if document.get("model_misfit") else "Next:"
+            fewer = f"<p>{design_text(document['fewer_recommended'])}</p>" if document.get("fewer_recommended") else ""
             out.append(
                 head + f"<p>For discovery’s final model ({esc(model)}), fitted to {len(document.get('trials', []))} "
                 "trial(s): the 95 % half-width each coefficient would have with one more trial, released at rest "
@@ -149,7 +150,7 @@ class DesignSections(ReportData):
                     if document.get("model_misfit")
                     else ""
                 )
-                + f'<div class="discovery-verdict design-next"><b>{next_label}</b><ol>{items}</ol></div>'
+                + f'<div class="discovery-verdict design-next"><b>{next_label}</b><ol>{items}</ol>{fewer}</div>'
                 + today_table(document, self.table_caption)
             )
             if document.get("warnings"):

@@ -70,6 +70,15 @@ def is_finite(value) -> bool:
         return False
 
 
+def as_number(value) -> float | None:
+    """A table cell as a number (None where empty or not a number: e.g. a status table's period of a trial that
+    failed before it was measured)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
+
+
 def with_minus_sign(text: str) -> str:
     return text.replace("-", MINUS)
 

@@ -27,13 +27,22 @@ from pendulum.report.design import DesignSections
 from pendulum.report.discovery import DiscoverySections
 from pendulum.report.figures import FigureSections
 from pendulum.report.format import esc
+from pendulum.report.status import StatusSections
 from pendulum.report.tables import TableSections
 
 # ---------------------------------------------------------------------------
 # The report
 
 
-class Report(ComparisonSections, TableSections, FigureSections, DiscoverySections, DesignSections, CheckSections):
+class Report(
+    ComparisonSections,
+    TableSections,
+    FigureSections,
+    DiscoverySections,
+    DesignSections,
+    CheckSections,
+    StatusSections,
+):
     """The report's sections as HTML, one method per notebook cell; its fields and look-ups: ``ReportData``."""
 
 

@@ -171,8 +171,14 @@ class TableSections(ReportData):
             note = f"Per-trial overrides (sidecars): {items}."
         else:
             note = "No per-trial overrides: every trial uses its rig's values."
-        trials_by_rig = "; ".join(f"{esc(r)}: {', '.join(esc(t) for t in self.rig_trials(r))}" for r in rigs)
-        note += f" Trials per rig — {trials_by_rig}."
+        bad = self.failed_trials()
+        failed = dict(zip(bad.trial, bad.stage, strict=True))  # named on their rig, not measured there
+
+        def member(t: str) -> str:
+            return esc(t) + (f" (failed at {esc(str(failed[t]))}: not in its fits)" if t in failed else "")
+
+        trials_by_rig = "; ".join(f"{esc(r)}: {', '.join(member(t) for t in self.rig_trials(r))}" for r in rigs)
+        note += f" Trials per rig (each trial's sidecar names its rig; without one, the default) — {trials_by_rig}."
         note += camera_rig_note({r: self.rigs[r] for r in rigs})
         caption = self.table_caption(
             "Rig values used (measured, not fitted) with their 1σ tolerances; a tolerance not stated in the "

@@ -1,0 +1,207 @@
+"""Each trial's outcome, where a user reads it: the status table (results/status/trials.csv), the terminal's
+last lines, the report's list of failed, skipped and probably-wrong trials.
+
+Kept apart from :mod:`pendulum.status` (the stages' failure documents, which every stage imports): editing
+how outcomes are tabulated reruns only the status table, the check and the report, not every stage.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pandas as pd
+
+from pendulum.status import is_failed
+
+STATUS_COLUMNS = [
+    "trial",
+    "source",
+    "rig",
+    "status",
+    "stage",
+    "ok_frames_pct",
+    "period_s",
+    "reason",
+    "log",
+    "n_warnings",
+    "warnings",
+]
+MISFIT_MARK = "misses a systematic effect"  # the fits' warning that the model is wrong for the record
+EVERY_VARIANT = "fit (every variant): "
+
+
+def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, str, dict]]) -> dict:
+    """One row of the status table from a trial's stage documents.
+
+    ``documents``: (stage, log path, JSON document) in pipeline order; a stage
+    may be qualified (``fit:quadratic``). The trial failed at the first failed
+    document, in the stage named there (an upstream failure passed on keeps its
+    origin, e.g. ``geometry`` for an angle record without a pivot). Where every document of a qualified stage
+    failed with one error (every variant's fit refused for the rig's values), the stage is named so:
+    ``fit (every variant)``. Where the track and the angle record were made (also when a later stage failed:
+    another rig's values refuse the fit, the record stands), ``ok_frames_pct`` is the share of the frames not held
+    by hand that are usable and ``period_s`` the record's period as swung (the tracks and angles JSON's); else
+    None.
+    """
+    measured = {**_measured(documents), **_warned(documents)}
+    for stage, log_path, document in documents:
+        if is_failed(document):
+            origin = document.get("failed_stage", stage)
+            named = stage if origin == stage.split(":")[0] else origin
+            base = stage.split(":")[0]
+            family = [d for s, _, d in documents if s.split(":")[0] == base] if ":" in stage else []
+            if (
+                named == stage
+                and len(family) > 1
+                and all(is_failed(d) and d.get("error") == document.get("error") for d in family)
+            ):
+                named = f"{base} (every variant)"
+            return {
+                "trial": trial,
+                "source": source,
+                "rig": rig,
+                "status": "failed",
+                "stage": named,
+                **measured,
+                "reason": document.get("error", ""),
+                "log": log_path,
+            }
+    return {
+        "trial": trial,
+        "source": source,
+        "rig": rig,
+        "status": "ok",
+        "stage": "",
+        **measured,
+        "reason": "",
+        "log": "",
+    }
+
+
+def skipped_status(trial: str, source: str, reason: str) -> dict:
+    """The status row of a trial its sidecar skips (``skip: <why>``): no stage ran, nothing failed."""
+    row = dict.fromkeys(STATUS_COLUMNS, "")
+    row.update(trial=trial, source=source, status="skipped", reason=reason, n_warnings=0)
+    row.update(ok_frames_pct=None, period_s=None)
+    return row
+
+
+def usable_percent(flags: dict) -> float | None:
+    """The share (%) of a track's frames that are ``ok``, of those not held by hand (the tracks JSON's ``flags``,
+    as the tracks log counts them); None without such frames."""
+    free = sum(flags.values()) - flags.get("held", 0)
+    return 100.0 * flags.get("ok", 0) / free if free > 0 else None
+
+
+def _measured(documents: list[tuple[str, str, dict]]) -> dict:
+    """The usable share of a trial's frames (its tracks document) and its record's period (its angles document)."""
+    found = {"ok_frames_pct": None, "period_s": None}
+    for stage, _, document in documents:
+        if is_failed(document):
+            continue
+        if stage == "tracks" and document.get("flags"):
+            share = usable_percent(document["flags"])
+            found["ok_frames_pct"] = None if share is None else round(share, 2)
+        elif stage == "angles" and isinstance(document.get("period_s"), (int, float)):
+            found["period_s"] = round(float(document["period_s"]), 6)
+    return found
+
+
+def trial_warnings(documents: list[tuple[str, str, dict]]) -> list[str]:
+    """Every distinct warning of a trial's stage documents that succeeded, as ``stage: warning``, in pipeline order:
+    the video's (frames), the body's silhouette (tracks), the angle record's and each fit's. A warning every
+    variant's fit gives is said once, as ``fit (every variant)``; where every variant misses the record (each in
+    its own words), that is said first among the fits' warnings (:func:`misfit_trials`)."""
+    found: dict[str, list[str]] = {}
+    for stage, _, document in documents:
+        if is_failed(document):
+            continue
+        texts = list(document.get("warnings") or [])
+        if stage == "tracks" and (document.get("body") or {}).get("warning"):
+            texts.append(document["body"]["warning"])
+        for text in texts:
+            found.setdefault(text, []).append(stage)
+    fits = [s for s, _, d in documents if s.startswith("fit:") and not is_failed(d)]
+    order = {stage: k for k, (stage, _, _) in enumerate(documents)}
+    first_fit = min((order[s] for s in fits), default=len(documents)) - 0.5
+    lines = []
+    for text, stages in found.items():
+        if fits and sorted(stages) == sorted(fits):
+            lines.append((first_fit, f"{EVERY_VARIANT}{text}"))
+        else:
+            lines += [(order[stage], f"{stage}: {text}") for stage in dict.fromkeys(stages)]
+    missed = [w for text, stages in found.items() if MISFIT_MARK in text for w in [text] * len(stages)]
+    said = any(line.startswith(EVERY_VARIANT) and MISFIT_MARK in line for _, line in lines)
+    if fits and len(missed) == len(fits) and not said:  # each variant misses, with its own figures
+        ratios = sorted(float(m) for w in missed for m in re.findall(r"(\d+(?:\.\d+)?)× the record's noise", w))
+        spread = f" ({ratios[0]:.0f}–{ratios[-1]:.0f}× its noise)" if ratios else ""
+        lines.append(
+            (
+                first_fit - 0.1,
+                f"{EVERY_VARIANT}each of the {len(fits)} misses the record{spread}: the model "
+                f"{MISFIT_MARK}; the coefficients are probably wrong",
+            )
+        )
+    return [line for _, line in sorted(lines, key=lambda item: item[0])]
+
+
+def _warned(documents: list[tuple[str, str, dict]]) -> dict:
+    warnings = trial_warnings(documents)
+    return {"n_warnings": len(warnings), "warnings": " | ".join(warnings)}
+
+
+def misfit_trials(table: pd.DataFrame) -> list[str]:
+    """Trials that succeeded but whose every fitted variant misses its record (results probably wrong)."""
+    if "warnings" not in table.columns:
+        return []
+    return [
+        str(r.trial)
+        for r in table[table.status == "ok"].itertuples()
+        if any(w.startswith(EVERY_VARIANT) and MISFIT_MARK in w for w in str(r.warnings).split(" | "))
+    ]
+
+
+def status_table(rows: list[dict]) -> pd.DataFrame:
+    return pd.DataFrame(rows, columns=STATUS_COLUMNS).sort_values("trial", kind="stable").reset_index(drop=True)
+
+
+def failure_summary(table: pd.DataFrame) -> str | None:
+    """Every failed trial and why, one line each, for the terminal and the check's log; None when all succeeded.
+
+    One line per trial so that the reason of each can be read where Snakemake's own error follows it (a
+    paragraph of 4,000 characters was printed twice there, 2026-12-02)."""
+    run = table[table.status != "skipped"]  # a trial skipped by its sidecar ran nothing and fails nothing
+    bad = run[run.status == "failed"]
+    if bad.empty:
+        return None
+    built = (
+        f"the report and the other {len(run) - len(bad)} trial(s)' results were built"
+        if len(bad) < len(run)
+        else "the report says why, trial by trial"
+    )
+    lines = [f"{len(bad)} of {len(run)} trial(s) failed; {built}:"]
+    lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
+    lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
+    return "\n".join(lines)
+
+
+def _recorded(row) -> str:
+    """For a trial that failed after its angle record was made (a fit the rig's values refuse): what stands."""
+    period = pd.to_numeric(getattr(row, "period_s", None), errors="coerce")
+    if pd.isna(period):
+        return ""
+    usable = pd.to_numeric(getattr(row, "ok_frames_pct", None), errors="coerce")
+    frames = "" if pd.isna(usable) else f"{usable:.4g} % of frames usable, "
+    return f" (its track and angle record stand: {frames}period {period:.4g} s as swung)"
+
+
+def failures_logged(log_path, since_s: float) -> str | None:
+    """The failed trials as ``check_trials`` logged them (its log's ERROR entry, one line per trial), where the
+    log was written at or after ``since_s`` (this run); None otherwise (the run failed somewhere else). The
+    Snakefile's ``onerror`` prints it after Snakemake's own error lines, where a user reads last."""
+    path = Path(log_path)
+    if not path.exists() or path.stat().st_mtime < since_s:
+        return None
+    found = re.search(r"^\S+ \S+ ERROR (.*)", path.read_text(), flags=re.M | re.S)
+    return found.group(1).rstrip() if found else None
