@@ -2,12 +2,14 @@
 
 import logging
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot, trial_geometry
+from pendulum.fit.checks import misfit_warning
 from pendulum.fit.uncertainty import jacobian_rank_warnings
 from pendulum.freeze import trial_outcomes
 from pendulum.outcomes import (
@@ -150,10 +152,17 @@ def test_a_trial_that_succeeded_carries_its_warnings_and_a_model_that_misses_it_
     said = table.set_index("trial").warnings["each"].split(" | ")
     assert said[2] == (
         "fit (every variant): each of the 2 misses the record (91–215× its noise): the model misses a systematic "
-        "effect; the coefficients are probably wrong"
+        "effect; it may bias the coefficients, and their intervals do not cover it"
     )
     assert said[3].startswith("fit:linear: trial apple: residual RMS 0.235° is 91×") and len(said) == 6
     assert misfit_trials(table) == ["apple", "each", "one"]  # not `half` (one variant fits); a failed trial is failed
+    # the fits' own words (pendulum.fit.checks), not a copy of them, are what the table looks for
+    t = np.arange(600) / 60.0
+    theta = np.radians(20) * np.cos(2 * np.pi * t / 2.078) + np.random.default_rng(1).normal(0, 5e-5, t.size)
+    record = SimpleNamespace(trial="apple", time_s=t, theta_rad=theta)
+    (said,) = misfit_warning(record, np.radians(0.2) * np.sin(2 * np.pi * t / 2.078))
+    real = [("angles", "a.log", {"status": "ok"}), ("fit:quadratic", "q.log", {"status": "ok", "warnings": [said]})]
+    assert misfit_trials(status_table([trial_status("apple", "a", "air", real)])) == ["apple"]
 
 
 def test_a_trial_skipped_by_its_sidecar_is_listed_with_why_and_fails_nothing(tmp_path):

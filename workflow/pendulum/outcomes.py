@@ -140,7 +140,7 @@ def trial_warnings(documents: list[tuple[str, str, dict]]) -> list[str]:
             (
                 first_fit - 0.1,
                 f"{EVERY_VARIANT}each of the {len(fits)} misses the record{spread}: the model "
-                f"{MISFIT_MARK}; the coefficients are probably wrong",
+                f"{MISFIT_MARK}; it may bias the coefficients, and their intervals do not cover it",
             )
         )
     return [line for _, line in sorted(lines, key=lambda item: item[0])]
@@ -152,7 +152,7 @@ def _warned(documents: list[tuple[str, str, dict]]) -> dict:
 
 
 def misfit_trials(table: pd.DataFrame) -> list[str]:
-    """Trials that succeeded but whose every fitted variant misses its record (results probably wrong)."""
+    """Trials that succeeded but whose every fitted variant misses its record (coefficients that may be biased)."""
     if "warnings" not in table.columns:
         return []
     return [

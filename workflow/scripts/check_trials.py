@@ -20,8 +20,9 @@ problem = failure_summary(table)
 wrong = misfit_trials(table)
 if wrong:  # built and ok, but no variant fits: said at the end of a run that succeeded too
     note = (
-        f"{len(wrong)} trial(s) ok whose every model variant misses the record far beyond its noise (coefficients "
-        f"probably wrong; their warnings in results/status/trials.csv): {', '.join(wrong)}"
+        f"{len(wrong)} trial(s) ok whose every model variant misses the record far beyond its noise (what it "
+        "misses may bias the coefficients, and their intervals do not cover it; the warnings in "
+        f"results/status/trials.csv): {', '.join(wrong)}"
     )
     log.warning("%s", note)
     if not problem:

@@ -64,15 +64,15 @@ class StatusSections(ReportData):
         return f"<p>Skipped by their sidecars (<code>skip:</code>; nothing was run for them):</p><ul>{items}</ul>"
 
     def misfit_note(self) -> str:
-        """The trials that succeeded but whose every variant misses the record: their results are probably wrong."""
+        """The trials that succeeded but whose every variant misses the record: their coefficients may be biased."""
         wrong = misfit_trials(self.status) if self.status is not None else []
         if not wrong:
             return ""
         return (
-            f"<p>Succeeded, but every model variant misses the record far beyond its noise (its "
-            f"<code>warnings</code> in <code>results/status/trials.csv</code>), so the coefficients are "
-            f"probably wrong: {', '.join(f'<code>{esc(t)}</code>' for t in wrong)}. Table 2 gives each residual "
-            "against the record's noise; discovery names what is missing where it can.</p>"
+            f"<p>Succeeded, but every model variant misses the record far beyond its noise (the "
+            f"<code>warnings</code> in <code>results/status/trials.csv</code>): what the models miss may bias the "
+            f"coefficients, and their intervals do not cover it: {', '.join(f'<code>{esc(t)}</code>' for t in wrong)}. "
+            "Table 2 gives each residual against the record's noise; discovery names what is missing where it can.</p>"
         )
 
     def renamed_note(self) -> str:
