@@ -243,6 +243,22 @@ def test_a_trial_refused_at_the_fit_shows_its_usable_frames_and_period_among_the
     assert "trial(s): its period 2.078 s as swung" in box
 
 
+def test_the_failed_trials_section_lists_the_skipped_and_those_no_variant_fits(documents):
+    """A star skipped by its sidecar and an apple that every variant misses (the status table's columns as the
+    workflow writes them): both said under *Failed or skipped trials*, neither counted as failed."""
+    from pendulum.outcomes import skipped_status, status_table
+
+    misses = "fit (every variant): trial t20: residual RMS 0.235° is 78× … the model misses a systematic effect; …"
+    ok = dict.fromkeys(["source", "rig", "stage", "reason", "log"], "")
+    rows = [{**ok, "trial": "t20", "status": "ok", "n_warnings": 1, "warnings": misses}]
+    rows.append(skipped_status("star", "data/raw/star.mov", "skipped by data/raw/star.yaml: spins on its thread"))
+    documents.status = status_table(rows)
+    failures = documents.failures_section()
+    assert failures.startswith("<p>All ") and "succeeded at every stage" in failures
+    assert "<li><code>star</code>: skipped by data/raw/star.yaml: spins on its thread</li>" in failures
+    assert "<p><code>t20</code>: succeeded, but every model variant misses the record far beyond" in failures
+
+
 def test_the_summary_does_not_recommend_a_fit_that_misses_its_records(documents):
     """A best variant whose joint fit misses its records by far more than their noise is the best tried, not a
     recommendation (the real apple clip's quadratic fit: 78× the noise, titled "Recommended" before)."""

@@ -69,10 +69,10 @@ class StatusSections(ReportData):
         if not wrong:
             return ""
         return (
-            f"<p>Succeeded, but every model variant misses the record far beyond its noise (the "
-            f"<code>warnings</code> in <code>results/status/trials.csv</code>): what the models miss may bias the "
-            f"coefficients, and their intervals do not cover it: {', '.join(f'<code>{esc(t)}</code>' for t in wrong)}. "
-            "Table 2 gives each residual against the record's noise; discovery names what is missing where it can.</p>"
+            f"<p>{', '.join(f'<code>{esc(t)}</code>' for t in wrong)}: succeeded, but every model variant misses "
+            "the record far beyond its noise (the <code>warnings</code> in <code>results/status/trials.csv</code>): "
+            "what the models miss may bias the coefficients, and their intervals do not cover it. Table 2 gives "
+            "each residual against the record's noise; discovery names what is missing where it can.</p>"
         )
 
     def renamed_note(self) -> str:
