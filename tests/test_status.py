@@ -170,9 +170,12 @@ def test_a_trial_skipped_by_its_sidecar_is_listed_with_why_and_fails_nothing(tmp
         "star": Trial("star", "video", "data/raw/star.mov", {"skip": " spins on its thread "}, "data/raw/star.yaml"),
         "apple": Trial("apple", "video", "data/raw/apple.mov", {"rig": "air"}, "data/raw/apple.yaml"),
         "demo": Trial("demo", "video", "data/raw/demo.mp4"),
+        "late": Trial("late", "video", "data/raw/late.mp4", {"skip": False}, "data/raw/late.yaml"),
+        "bare": Trial("bare", "video", "data/raw/bare.mp4", {"skip": True}, "data/raw/bare.yaml"),
     }
     kept, skipped = split_skipped(trials)
-    assert sorted(kept) == ["apple", "demo"]
+    assert sorted(kept) == ["apple", "demo", "late"]
+    assert skipped.pop("bare")["reason"] == "skipped by data/raw/bare.yaml (no reason given)"
     assert skipped == {
         "star": {"source": "data/raw/star.mov", "reason": "skipped by data/raw/star.yaml: spins on its thread"}
     }

@@ -363,12 +363,16 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
 
 
 def split_skipped(trials: dict[str, Trial]) -> tuple[dict[str, Trial], dict[str, dict]]:
-    """The trials to build, and those whose sidecar says ``skip: <why>`` (name → ``source``, ``reason``): no job
-    runs for them; the status table and the report list them as skipped, and they fail nothing."""
+    """The trials to build, and those whose sidecar says ``skip: <why>`` (or ``true``), name → ``source``,
+    ``reason``: no job runs for them; the status table and the report list them as skipped; they fail nothing."""
     skipped = {
-        name: {"source": t.path, "reason": f"skipped by {t.sidecar_path}: {str(t.sidecar['skip']).strip()}"}
+        name: {
+            "source": t.path,
+            "reason": f"skipped by {t.sidecar_path}"
+            + (f": {t.sidecar['skip'].strip()}" if isinstance(t.sidecar["skip"], str) else " (no reason given)"),
+        }
         for name, t in trials.items()
-        if t.sidecar.get("skip")
+        if t.sidecar.get("skip")  # a reason, or true
     }
     return {name: t for name, t in trials.items() if name not in skipped}, skipped
 
