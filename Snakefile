@@ -48,14 +48,14 @@ rule all:
         report_targets(),
 
 
-# After Snakemake's own error lines, where a user reads last: the trials that failed, one line each.
-from pendulum.outcomes import failures_logged  # noqa: E402
+# After Snakemake's own lines, where a user reads last: the trials no variant fits, then the trials that failed
+# (one line each) or how many were ok and skipped, as the last job (check_trials) logged them in this run.
+from pendulum.outcomes import print_outcome  # noqa: E402
+
+
+onsuccess:
+    print_outcome("logs/status/check.log", RUN_STARTED_S)
 
 
 onerror:
-    failed = failures_logged("logs/status/check.log", RUN_STARTED_S)
-    if failed:
-        print(
-            f"\nTrials that failed (logs/status/check.log):\n{failed}",
-            file=sys.stderr,
-        )
+    print_outcome("logs/status/check.log", RUN_STARTED_S)

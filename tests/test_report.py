@@ -257,6 +257,8 @@ def test_the_failed_trials_section_lists_the_skipped_and_those_no_variant_fits(d
     assert failures.startswith("<p>All ") and "succeeded at every stage" in failures
     assert "<li><code>star</code>: skipped by data/raw/star.yaml: spins on its thread</li>" in failures
     assert "<p><code>t20</code>: succeeded, but every model variant misses the record far beyond" in failures
+    header = documents.header()
+    assert ', <span class="warn">1 trial(s) that no variant fits</span>, 1 skipped by their sidecars.' in header
 
 
 def test_the_summary_does_not_recommend_a_fit_that_misses_its_records(documents):

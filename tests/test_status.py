@@ -27,7 +27,7 @@ from pendulum.status import (
     require_ok,
     run_stage,
 )
-from pendulum.trials import Trial, split_skipped
+from pendulum.trials import ConfigError, Trial, split_skipped
 
 LOG = logging.getLogger("test_status")
 
@@ -128,9 +128,9 @@ def test_a_trial_that_succeeded_carries_its_warnings_and_a_model_that_misses_it_
     row = trial_status("apple", "data/raw/apple.mov", "air", documents)
     assert row["status"] == "ok" and row["n_warnings"] == 4
     assert row["warnings"].split(" | ") == [
+        f"fit (every variant): {misses}",  # first: what a reader of the table must not miss
         "tracks: smaller",
         f"angles: {harmonic}",
-        f"fit (every variant): {misses}",  # first among the fits' warnings
         "fit:friction: friction_torque_nm is at its lower bound",
     ]
     fine = [
@@ -150,11 +150,11 @@ def test_a_trial_that_succeeded_carries_its_warnings_and_a_model_that_misses_it_
     table = status_table(rows)
     assert table.loc[table.trial == "fine", "n_warnings"].item() == 2  # the silhouette and the bound
     said = table.set_index("trial").warnings["each"].split(" | ")
-    assert said[2] == (
+    assert said[0] == (
         "fit (every variant): each of the 2 misses the record (91–215× its noise): the model misses a systematic "
         "effect; it may bias the coefficients, and their intervals do not cover it"
     )
-    assert said[3].startswith("fit:linear: trial apple: residual RMS 0.235° is 91×") and len(said) == 6
+    assert said[3].startswith("fit:linear: trial apple: residual RMS 0.235° is 91×") and len(said) == 6, said
     assert misfit_trials(table) == ["apple", "each", "one"]  # not `half` (one variant fits); a failed trial is failed
     # the fits' own words (pendulum.fit.checks), not a copy of them, are what the table looks for
     t = np.arange(600) / 60.0
@@ -176,6 +176,9 @@ def test_a_trial_skipped_by_its_sidecar_is_listed_with_why_and_fails_nothing(tmp
     kept, skipped = split_skipped(trials)
     assert sorted(kept) == ["apple", "demo", "late"]
     assert skipped.pop("bare")["reason"] == "skipped by data/raw/bare.yaml (no reason given)"
+    blank = Trial("blank", "video", "data/raw/blank.mp4", {"skip": "  "}, "data/raw/blank.yaml")
+    with pytest.raises(ConfigError, match=r"^data/raw/blank.yaml: skip is blank; write why"):
+        split_skipped({"blank": blank})
     assert skipped == {
         "star": {"source": "data/raw/star.mov", "reason": "skipped by data/raw/star.yaml: spins on its thread"}
     }
@@ -399,21 +402,25 @@ def test_a_failure_image_holds_the_whole_message():
     assert failure_image("short", 960).shape == (200, 960)  # a short message keeps the old size
 
 
-def test_the_failures_this_run_logged_are_read_back_for_the_last_lines_of_the_terminal(tmp_path):
-    """The Snakefile's onerror prints them after Snakemake's own error lines; a log of an earlier run, or one
-    without the check's ERROR entry (the run failed elsewhere), prints nothing."""
+def test_what_the_check_logged_this_run_is_read_back_for_the_last_lines_of_the_terminal(tmp_path, capsys):
+    """The Snakefile's onsuccess and onerror print it after Snakemake's own lines: the trials no variant fits, then
+    the failed ones or the count ok and skipped (a reviewer, 2026-12-02: after a successful run the apple's note
+    stood 60 lines up, behind the last job's listing, and 'all 6 ok, 1 skipped' only in the log). A log of an
+    earlier run prints nothing."""
     import time
 
-    from pendulum.outcomes import failures_logged
+    from pendulum.outcomes import outcome_logged, print_outcome
 
     log = tmp_path / "check.log"
     text = "1 of 2 trial(s) failed; the report and the other 1 trial(s)' results were built:\n  - b, at tracks: bad"
-    log.write_text(f"2026-12-02 11:27:40,468 ERROR {text}\n")
-    assert failures_logged(log, since_s=time.time() - 60) == text
-    assert failures_logged(log, since_s=time.time() + 60) is None  # written before this run
-    assert failures_logged(tmp_path / "missing.log", since_s=0) is None
-    log.write_text("2026-12-02 11:27:40,468 INFO all 2 trial(s) ok\n")
-    assert failures_logged(log, since_s=0) is None
+    misfit = "1 trial(s) ok whose every model variant misses the record far beyond its noise (…): apple"
+    log.write_text(f"2026-12-02 11:27:40,466 WARNING {misfit}\n2026-12-02 11:27:40,468 ERROR {text}\n")
+    assert outcome_logged(log, since_s=time.time() - 60) == f"{misfit}\n{text}"
+    assert outcome_logged(log, since_s=time.time() + 60) is None  # written before this run
+    assert outcome_logged(tmp_path / "missing.log", since_s=0) is None
+    log.write_text("2026-12-02 11:27:40,468 INFO all 2 trial(s) ok, 1 skipped by their sidecars\n")
+    print_outcome(log, since_s=0)
+    assert capsys.readouterr().err.endswith(":\nall 2 trial(s) ok, 1 skipped by their sidecars\n")
 
 
 def test_a_rigs_geometry_is_kept_when_a_trial_it_did_not_rest_on_leaves_for_its_own_rig():

@@ -49,6 +49,15 @@ def test_budget_predicts_the_shift_of_a_refit_with_a_wrong_rig_value(key):
         assert actual == pytest.approx(predicted, rel=0.1, abs=0.05 * fit["parameters"][name]["stderr_statistical"])
 
 
+def test_a_gas_s_density_not_stated_takes_a_gas_s_tolerance():
+    """Air's density at a room's 20 °C ± 5 K and 1 atm ± 2 kPa: about ±2 %, not fresh water's ±0.2 % (a reviewer's
+    apple in air, 2026-12-02: 'ρ 1.2 ± 0.0024 (0.20 %, default)'); a stated one stays as stated."""
+    air = dict(RIG, fluid_density_kg_m3=1.2)
+    assert rig_tolerances(air)["fluid_density_kg_m3"] == pytest.approx(0.024)
+    assert rig_tolerances(RIG)["fluid_density_kg_m3"] == pytest.approx(0.002 * RIG["fluid_density_kg_m3"])
+    assert rig_tolerances(air, {"fluid_density_kg_m3": 0.005})["fluid_density_kg_m3"] == 0.005
+
+
 def test_frontal_area_enters_only_the_drag_coefficient():
     fit = fit_trials([load_record(table(20, seed=12), "a", RIG, SETTINGS, tolerances={})], TERMS, SETTINGS)
     params = fit["parameters"]

@@ -8,6 +8,7 @@ how outcomes are tabulated reruns only the status table, the check and the repor
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import pandas as pd
@@ -111,8 +112,8 @@ def _measured(documents: list[tuple[str, str, dict]]) -> dict:
 def trial_warnings(documents: list[tuple[str, str, dict]]) -> list[str]:
     """Every distinct warning of a trial's stage documents that succeeded, as ``stage: warning``, in pipeline order:
     the video's (frames), the body's silhouette (tracks), the angle record's and each fit's. A warning every
-    variant's fit gives is said once, as ``fit (every variant)``; where every variant misses the record (each in
-    its own words), that is said first among the fits' warnings (:func:`misfit_trials`)."""
+    variant's fit gives is said once, as ``fit (every variant)``; that every variant misses the record (each in
+    its own words: said once too) comes first of all (:func:`misfit_trials`)."""
     found: dict[str, list[str]] = {}
     for stage, _, document in documents:
         if is_failed(document):
@@ -143,7 +144,9 @@ def trial_warnings(documents: list[tuple[str, str, dict]]) -> list[str]:
                 f"{MISFIT_MARK}; it may bias the coefficients, and their intervals do not cover it",
             )
         )
-    return [line for _, line in sorted(lines, key=lambda item: item[0])]
+    ordered = [line for _, line in sorted(lines, key=lambda item: item[0])]
+    wrong = [line for line in ordered if line.startswith(EVERY_VARIANT) and MISFIT_MARK in line]
+    return wrong + [line for line in ordered if line not in wrong]  # what matters most, first
 
 
 def _warned(documents: list[tuple[str, str, dict]]) -> dict:
@@ -196,12 +199,21 @@ def _recorded(row) -> str:
     return f" (its track and angle record stand: {frames}period {period:.4g} s as swung)"
 
 
-def failures_logged(log_path, since_s: float) -> str | None:
-    """The failed trials as ``check_trials`` logged them (its log's ERROR entry, one line per trial), where the
-    log was written at or after ``since_s`` (this run); None otherwise (the run failed somewhere else). The
-    Snakefile's ``onerror`` prints it after Snakemake's own error lines, where a user reads last."""
+def print_outcome(log_path, since_s: float) -> None:
+    """The Snakefile's ``onsuccess`` and ``onerror``: :func:`outcome_logged` printed last, under a heading."""
+    said = outcome_logged(log_path, since_s)
+    if said:
+        print(f"\nTrials ({Path(log_path).as_posix()}):\n{said}", file=sys.stderr)
+
+
+def outcome_logged(log_path, since_s: float) -> str | None:
+    """What ``check_trials`` logged in this run (its log written at or after ``since_s``), its entries' messages in
+    order: the trials no variant fits (WARNING), then the failed trials one per line (ERROR) or the count of those
+    ok and skipped (INFO); None where the log is older (the run ended before the check). The Snakefile's
+    ``onsuccess`` and ``onerror`` print it after Snakemake's own lines, where a user reads last."""
     path = Path(log_path)
     if not path.exists() or path.stat().st_mtime < since_s:
         return None
-    found = re.search(r"^\S+ \S+ ERROR (.*)", path.read_text(), flags=re.M | re.S)
-    return found.group(1).rstrip() if found else None
+    entries = re.split(r"^\S+ \S+ (?:DEBUG|INFO|WARNING|ERROR) ", path.read_text(), flags=re.M)
+    said = [entry.rstrip() for entry in entries if entry.strip()]
+    return "\n".join(said) or None

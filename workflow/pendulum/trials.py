@@ -365,6 +365,12 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
 def split_skipped(trials: dict[str, Trial]) -> tuple[dict[str, Trial], dict[str, dict]]:
     """The trials to build, and those whose sidecar says ``skip: <why>`` (or ``true``), name → ``source``,
     ``reason``: no job runs for them; the status table and the report list them as skipped; they fail nothing."""
+    for t in trials.values():
+        if isinstance(t.sidecar.get("skip"), str) and not t.sidecar["skip"].strip():
+            raise ConfigError(
+                f'{t.sidecar_path}: skip is blank; write why the trial is left out (skip: "the marker '
+                'fell off"), or true'
+            )
     skipped = {
         name: {
             "source": t.path,

@@ -1,10 +1,10 @@
 """Snakemake adapter: the workflow's last step; fails (so Snakemake exits non-zero) when any trial failed.
 
-The failures go to its log only; the Snakefile's ``onerror`` prints them from there after Snakemake's own
-error lines, where a user reads last (once, not twice above the traceback)."""
+The failures, the trials no variant fits and the count of those ok and skipped go to its log only; the
+Snakefile's ``onsuccess`` and ``onerror`` print them from there after Snakemake's own lines, where a user reads
+last (once, not twice above the traceback; not 60 lines up behind the final job's listing)."""
 
 import logging
-import sys
 
 import pandas as pd
 
@@ -14,19 +14,17 @@ from pendulum.outcomes import failure_summary, misfit_trials
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "check_trials")
-log.handlers = [h for h in log.handlers if isinstance(h, logging.FileHandler)]  # the terminal gets them from onerror
+log.handlers = [h for h in log.handlers if isinstance(h, logging.FileHandler)]  # the terminal: onsuccess/onerror
 table = pd.read_csv(sm.input.table, keep_default_na=False)
 problem = failure_summary(table)
 wrong = misfit_trials(table)
-if wrong:  # built and ok, but no variant fits: said at the end of a run that succeeded too
+if wrong:  # built and ok, but no variant fits: said at the end of a run that succeeded too (Snakefile)
     note = (
         f"{len(wrong)} trial(s) ok whose every model variant misses the record far beyond its noise (what it "
         "misses may bias the coefficients, and their intervals do not cover it; the warnings in "
         f"results/status/trials.csv): {', '.join(wrong)}"
     )
     log.warning("%s", note)
-    if not problem:
-        print(note, file=sys.stderr)
 if problem:
     log.error("%s", problem)
     raise SystemExit(1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pendulum.outcomes import usable_percent
+from pendulum.outcomes import misfit_trials, usable_percent
 from pendulum.report.data import ReportData, failure_text, is_ok, problem_text, record_problems, true_value
 from pendulum.report.format import (
     COEFFICIENTS,
@@ -205,12 +205,17 @@ class CheckSections(ReportData):
         n_failed = len(failed)
         n_recorded = sum(is_finite(as_number(v)) for v in (failed["period_s"] if "period_s" in failed else []))
         n_garbage = sum(bool(self.trial_problems(t)) for t in self.trials)
+        status = self.status if self.status is not None and "status" in self.status else None
+        n_skipped = int((status.status == "skipped").sum()) if status is not None else 0
+        n_misfit = len(misfit_trials(status)) if status is not None else 0
         return (
             "<header><h1>Free-decay pendulum: added mass and drag coefficient</h1>"
             f'<p class="subtitle">{len(self.trials)} trial(s) on {len(self.rig_names)} rig(s), '
             f"{len(self.variants)} model variant(s) fitted side by side"
             + (f', <span class="warn">{n_failed} trial(s) failed</span>' if n_failed else "")
             + (f" ({n_recorded} of them after their angle records were made)" if n_recorded else "")
+            + (f', <span class="warn">{n_misfit} trial(s) that no variant fits</span>' if n_misfit else "")
+            + (f", {n_skipped} skipped by their sidecars" if n_skipped else "")
             + (
                 f', <span class="warn">{n_garbage} trial(s) on unreliable records</span> {garbage_badge()}'
                 if n_garbage

@@ -34,7 +34,8 @@ class StatusSections(ReportData):
                 ]
             rows.append(cells + [td(esc(str(r.reason))), td(f"<code>{esc(str(r.log))}</code>")])
         caption = self.table_caption(
-            f"{len(failed)} of {n} trial(s) failed and are missing from the fits' tables and the joint fits above: "
+            f"{len(failed)} of {n} trial(s) failed and are left out of the fits (Tables 2 and 3 mark them failed) and "
+            "the joint fits above: "
             "the stage where each failed, "
             + (
                 "the share of its frames usable and its period as swung where its angle record was made, "
