@@ -1,5 +1,5 @@
 """Each trial's outcome, where a user reads it: the status table (results/status/trials.csv), the terminal's
-last lines, the report's list of failed, skipped and probably-wrong trials.
+last lines, the report's list of failed and skipped trials and those no model variant fits.
 
 Kept apart from :mod:`pendulum.status` (the stages' failure documents, which every stage imports): editing
 how outcomes are tabulated reruns only the status table, the check and the report, not every stage.
