@@ -421,8 +421,9 @@ def rig_name(config: dict, trial: Trial) -> str:
     name = trial.sidecar.get("rig", config["default_rig"])
     if name not in config["rigs"]:
         raise ConfigError(
-            f"{trial.sidecar_path}: rig {name!r} is not one of rigs {sorted(config['rigs'])} in config.yaml; "
-            f"define it there, or give its {', '.join(REQUIRED_RIG_KEYS)} in this sidecar"
+            f"{trial.sidecar_path}: rig {name!r} is not one of rigs {sorted(config['rigs'])} (config.yaml's, and those "
+            f"the sidecars of trials not skipped define); define it there, or give its "
+            f"{', '.join(REQUIRED_RIG_KEYS)} in this sidecar"
         )
     return name
 
