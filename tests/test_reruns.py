@@ -121,10 +121,16 @@ def test_a_trial_skipped_by_its_sidecar_runs_no_job(demo_project):
     sidecar.write_text('skip: "the marker fell off at 3 s"\n')
     try:
         jobs = plan(demo_project)
+        # a skipped trial's sidecar that defines a rig still defines it for the trials that name it
+        sidecar.write_text("skip: true\nrig: tank_b\nmass_kg: 3.5\nlength_m: 0.76\nfrontal_area_m2: 0.032\n")
+        (demo_project / "data/raw/demo_p20.yaml").write_text("rig: tank_b\n")
+        moved = plan(demo_project)
     finally:
         sidecar.unlink()
+        (demo_project / "data/raw/demo_p20.yaml").unlink(missing_ok=True)
     assert not [job for job in jobs if job[1] == "demo_p05"], jobs
     assert ("status_table", None) in jobs and ("check_trials", None) in jobs
+    assert ("rig_geometry", "tank_b") in moved and not [job for job in moved if job[1] == "demo_p05"], moved
 
 
 @pytest.mark.parametrize(

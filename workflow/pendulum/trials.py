@@ -422,7 +422,7 @@ def rig_name(config: dict, trial: Trial) -> str:
     if name not in config["rigs"]:
         raise ConfigError(
             f"{trial.sidecar_path}: rig {name!r} is not one of rigs {sorted(config['rigs'])} (config.yaml's, and those "
-            f"the sidecars of trials not skipped define); define it there, or give its "
+            f"the sidecars define); define it there, or give its "
             f"{', '.join(REQUIRED_RIG_KEYS)} in this sidecar"
         )
     return name

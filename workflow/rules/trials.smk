@@ -37,9 +37,10 @@ validate_config(
 )
 
 # a sidecar's `skip: <why>` leaves its trial out of every job (listed as skipped, failing nothing)
-TRIALS, SKIPPED = split_skipped(discover_trials(config["raw_dir"]))
-# rigs defined in sidecars join config["rigs"]
-SIDECAR_RIGS = add_sidecar_rigs(config, TRIALS)
+FOUND = discover_trials(config["raw_dir"])
+TRIALS, SKIPPED = split_skipped(FOUND)
+# rigs defined in sidecars join config["rigs"] (a skipped trial's sidecar too: its rig may be the others')
+SIDECAR_RIGS = add_sidecar_rigs(config, FOUND)
 VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
 # each trial's merged settings (config, rig, sidecar; a bad sidecar stops the run here) and each rig's
 # trials, computed once: the input functions and params of a thousand trials' jobs read them
