@@ -14,6 +14,7 @@ import numpy as np
 
 from pendulum.design.tolerances import input_words, largest_input, split_key
 from pendulum.model.effects import TERMS, term_for_parameter
+from pendulum.outcomes import MISFIT_MARK
 from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report.format import (
     COEFFICIENTS,
@@ -138,7 +139,7 @@ class ComparisonSections(ReportData):
             joint_problems = record_problems(joint)
             # a model that misses the record by far more than its noise: the best of the variants tried, not a
             # recommendation (its coefficients absorb what it misses; their intervals do not cover that): no bold
-            misfit = any("misses a systematic effect" in w for w in joint.get("warnings") or [])
+            misfit = any(MISFIT_MARK in w for w in joint.get("warnings") or [])
             for name, entry in joint.get("parameters", {}).items():
                 symbol, label, unit = COEFFICIENTS.get(name, (esc(name), name, ""))
                 value, qualifier = estimate_parts(entry)

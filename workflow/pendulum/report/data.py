@@ -17,6 +17,7 @@ import pandas as pd
 import yaml
 
 from pendulum.model.effects import ADDED_MASS, TERMS
+from pendulum.outcomes import MISFIT_MARK
 from pendulum.report.format import MARKERS, PALETTE, TERM_LABELS, fmt, is_finite, with_minus_sign
 
 # ---------------------------------------------------------------------------
@@ -155,7 +156,7 @@ def short_warning(text: str) -> str:
     """A fit warning in two or three words (Table 3's warning column)."""
     lowered = text.lower()
     for key, short in (
-        ("misses a systematic effect", "misfit"),
+        (MISFIT_MARK, "misfit"),
         ("lower bound", "at bound"),
         ("not identifiable", "not identifiable"),
         ("not converge", "not converged"),
