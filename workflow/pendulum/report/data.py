@@ -311,7 +311,7 @@ class ReportData:
     def failed_trials(self) -> pd.DataFrame:
         """Failed trials (status table when present, else from the documents)."""
         if self.status is not None and not self.status.empty:
-            table = self.status.fillna("")
+            table = self.status.astype(object).fillna("")
             return table[table.status == "failed"].sort_values("trial").reset_index(drop=True)
         rows = []
         for t in sorted(self.trials):

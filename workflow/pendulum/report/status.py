@@ -56,7 +56,7 @@ class StatusSections(ReportData):
         """The trials whose sidecars say ``skip: <why>``: no job ran for them."""
         if self.status is None or self.status.empty or "status" not in self.status.columns:
             return ""
-        skipped = self.status[self.status.status == "skipped"].fillna("")
+        skipped = self.status[self.status.status == "skipped"].astype(object).fillna("")
         if skipped.empty:
             return ""
         items = "".join(

@@ -63,9 +63,9 @@ from pendulum.tracking.spots import (
     full_scene,
     local_contrast,
     marker_free_background,
-    quantile_backgrounds,
     refine_spot,
     sample_frames,
+    scene_quantiles,
     surround_is_scene,
 )
 
@@ -224,7 +224,7 @@ def _blob_rows(stack: np.ndarray, scale: int) -> tuple[np.ndarray, float, dict[f
     blobs ``(sample, sign, x, y, r, s)``. Each sample's DoG pyramid is built once and serves every
     background (:func:`pendulum.tracking.spots.dog_pyramid`)."""
     n = len(stack)
-    background = np.median(stack, axis=0).astype(np.float32)
+    background, low, high = scene_quantiles(stack, BACKGROUND_QUANTILE)
     some = stack[:: max(1, n // 10), ::4, ::4].astype(np.float32) - background[None, ::4, ::4]
     noise = 1.4826 * float(np.median(np.abs(some)))
     threshold = max(2.0, 1.5 * noise)
@@ -232,7 +232,6 @@ def _blob_rows(stack: np.ndarray, scale: int) -> tuple[np.ndarray, float, dict[f
     # (a dark spot: a high one). A marker that swings little, or comes to rest, covers its pixels in
     # most samples: the median would hold it and hide it; the quantiles do while it is elsewhere in at
     # least that share of them.
-    low, high = quantile_backgrounds(stack, BACKGROUND_QUANTILE)
     searches = {
         0.5: [(dog_pyramid(background), (1, -1))],
         BACKGROUND_QUANTILE: [(dog_pyramid(low), (1,)), (dog_pyramid(high), (-1,))],

@@ -41,21 +41,23 @@ def sample_frames(path, max_samples: int, max_full: int, max_frames: int):
     return small, full, scale, first
 
 
-def _peak_offset(response: np.ndarray, y: int, x: int, sign: int) -> tuple[float, float]:
-    """Sub-sample offset of a peak of ``sign`` × ``response`` at (x, y): the vertex of the parabola through it
-    and its two neighbours, per axis, δ = (f₋ − f₊) / (2 (f₋ − 2 f₀ + f₊)), within ±0.5 (0 at the border).
+def _peak_offsets(response: np.ndarray, ys: np.ndarray, xs: np.ndarray, sign: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sub-sample offsets of peaks of ``sign`` × ``response`` at (xs, ys): per axis, the vertex of the parabola
+    through each peak and its two neighbours, δ = (f₋ − f₊) / (2 (f₋ − 2 f₀ + f₊)), within ±0.5 (0 at the border
+    or where the three do not curve down).
 
     On a coarse pyramid level a sample is 4–8 px of the frame: without it, the blobs of a large marker on a
     small swing lie on a grid, and a circle through them cannot show the arc's 2 px sagitta."""
     h, w = response.shape
+    inside = (ys > 0) & (ys < h - 1) & (xs > 0) & (xs < w - 1)
+    y, x = np.where(inside, ys, 1), np.where(inside, xs, 1)
     offsets = []
     for dy, dx in ((0, 1), (1, 0)):
-        if not (0 < y < h - 1 and 0 < x < w - 1):
-            offsets.append(0.0)
-            continue
-        lo, mid, hi = (sign * float(response[y + k * dy, x + k * dx]) for k in (-1, 0, 1))
+        lo, mid, hi = (sign * response[y + k * dy, x + k * dx].astype(np.float64) for k in (-1, 0, 1))
         curvature = lo - 2.0 * mid + hi
-        offsets.append(float(np.clip(0.5 * (lo - hi) / curvature, -0.5, 0.5)) if curvature < 0 else 0.0)
+        bent = inside & (curvature < 0)
+        vertex = np.divide(0.5 * (lo - hi), curvature, out=np.zeros_like(curvature), where=bent)
+        offsets.append(np.clip(vertex, -0.5, 0.5))
     return offsets[0], offsets[1]
 
 
@@ -82,12 +84,13 @@ def dog_blobs(fg, scale: int, threshold: float, per_sign: int, signs: tuple[int,
     found = []
     kernel = np.ones((3, 3), np.uint8)
     for level, dogs in enumerate(levels):
-        top, low = dogs[0], dogs[0]
-        for dog in dogs[1:]:
-            top, low = cv2.max(top, dog), cv2.min(low, dog)
         f = scale * (1 << level)
-        for sign in signs:
-            best = top if sign > 0 else cv2.multiply(low, -1.0)
+        for sign in signs:  # the strongest response over the level's scales, of this sign
+            best = dogs[0]
+            for dog in dogs[1:]:
+                best = cv2.max(best, dog) if sign > 0 else cv2.min(best, dog)
+            if sign < 0:
+                best = cv2.multiply(best, -1.0)
             peaks = (best >= cv2.dilate(best, kernel)) & (best > threshold)
             points = cv2.findNonZero(peaks.view(np.uint8))  # (x, y) row by row, as np.nonzero
             if points is None:
@@ -99,18 +102,21 @@ def dog_blobs(fg, scale: int, threshold: float, per_sign: int, signs: tuple[int,
                 ys, xs = ys[keep], xs[keep]
             responses = np.stack([d[ys, xs] for d in dogs])
             which = np.argmax(sign * responses, axis=0)
-            for yy, xx, k in zip(ys.tolist(), xs.tolist(), which.tolist(), strict=True):
-                sigma = PYRAMID_SIGMAS[k] * 1.22
-                dx, dy = _peak_offset(dogs[k], yy, xx, sign)
-                found.append(
-                    (
-                        sign,
-                        (xx + dx + 0.5) * f - 0.5,
-                        (yy + dy + 0.5) * f - 0.5,
-                        RADIUS_PER_SIGMA * sigma * f,
-                        float(best[yy, xx]),
-                    )
+            dx, dy = np.zeros(ys.size), np.zeros(ys.size)
+            for k in np.unique(which).tolist():  # each peak placed on the DoG level it responds most to
+                at = which == k
+                dx[at], dy[at] = _peak_offsets(dogs[k], ys[at], xs[at], sign)
+            sigma = np.asarray(PYRAMID_SIGMAS)[which] * 1.22
+            found.extend(
+                zip(
+                    [sign] * ys.size,
+                    ((xs + dx + 0.5) * f - 0.5).tolist(),
+                    ((ys + dy + 0.5) * f - 0.5).tolist(),
+                    (RADIUS_PER_SIGMA * sigma * f).tolist(),
+                    best[ys, xs].astype(np.float64).tolist(),
+                    strict=True,
                 )
+            )
     # One blob per place: the strongest response suppresses weaker ones within its radius (any scale).
     found.sort(key=lambda b: -b[4])
     kept: list = []
@@ -128,13 +134,16 @@ def foreground_pyramid(frame: list[list[np.ndarray]], reference: list[list[np.nd
     return [[cv2.subtract(a, b) for a, b in zip(fa, fb, strict=True)] for fa, fb in zip(frame, reference, strict=True)]
 
 
-def quantile_backgrounds(stack: np.ndarray, quantile: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per-pixel ``quantile`` and 1 − ``quantile`` of the (n, h, w) samples (float32)."""
+def scene_quantiles(stack: np.ndarray, quantile: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-pixel median, ``quantile`` and 1 − ``quantile`` of the (n, h, w) samples (float32), from one partial
+    sort (the median as :func:`numpy.median` gives it: the mean of the middle two of an even n)."""
     n = stack.shape[0]
     k_low = int(quantile * (n - 1))
     k_high = n - 1 - k_low
-    ordered = np.partition(stack, sorted({k_low, k_high}), axis=0)
-    return ordered[k_low].astype(np.float32), ordered[k_high].astype(np.float32)
+    middle = sorted({(n - 1) // 2, n // 2})
+    ordered = np.partition(stack, sorted({k_low, k_high, *middle}), axis=0)
+    median = (ordered[middle[0]].astype(np.float64) + ordered[middle[-1]]) / 2
+    return median.astype(np.float32), ordered[k_low].astype(np.float32), ordered[k_high].astype(np.float32)
 
 
 def active_box(background: np.ndarray, scale: int) -> tuple[int, int, int, int]:
