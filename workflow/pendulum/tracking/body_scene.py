@@ -72,7 +72,8 @@ def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int =
     stats[0] = (0, 0, w, h, h * w - int(stats[1:, 4].sum()))  # the background: the rest of the image
     masses = np.zeros(n)
     if n > 1:
-        masses = np.bincount(labels.ravel(), weights=diff.ravel(), minlength=n)
+        # over the box only: every labelled pixel is in it, each summed in the same order as over the image
+        masses = np.bincount(part.ravel(), weights=diff[y0:y1, x0:x1].ravel(), minlength=n)
         masses[0] = 0.0
     return labels, stats, masses
 
