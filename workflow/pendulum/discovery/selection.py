@@ -57,11 +57,12 @@ import numpy as np
 from pendulum.discovery import diagnosis, findings
 from pendulum.fit.checks import MISFIT_RATIO
 from pendulum.fit.group import (
+    MAX_HELD_OUT_FOLDS,
     GroupFit,
     GroupProblem,
     coefficient_entries,
     forecast,
-    leave_one_trial_out,
+    leave_trials_out,
     ordered,
     solve_many,
     start_values,
@@ -173,7 +174,7 @@ class Discovery:
         if key not in self._held_out:
             full = self.fit(key)
             if self.loto:
-                parts = leave_one_trial_out(full, self.settings)
+                parts = leave_trials_out(full, self.settings)
             else:
                 parts = forecast(full, self.settings, self.options.held_out_fraction)
             self._held_out[key] = float(np.sqrt(np.mean(np.concatenate(parts) ** 2)))
@@ -368,7 +369,12 @@ class Discovery:
                 "period_drift": diagnosis.period_drift(base),
                 "fit_warnings": self.baseline_warnings,
             },
-            "held_out_method": "leave one trial out (its θ0, θ̇0 and offset refitted)"
+            "held_out_method": (
+                "leave one trial out (its θ0, θ̇0 and offset refitted)"
+                if len(self.records) <= MAX_HELD_OUT_FOLDS
+                else f"trials left out in {MAX_HELD_OUT_FOLDS} folds, each predicted from a fit of the others "
+                "(its θ0, θ̇0 and offset refitted)"
+            )
             if self.loto
             else f"held-out cycles: the last {100 * self.options.held_out_fraction:.0f} % of each record forecast",
             "single_swing_frequency": self.single_frequency,

@@ -18,9 +18,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import sparse
 from scipy.optimize import least_squares
 
-from pendulum.fit.output_error import bounded_least_squares
+from pendulum.fit.output_error import SPARSE_FROM_TRIALS, bounded_least_squares, stacked_jacobian
 from pendulum.fit.records import AngleRecord, FitSettings
 from pendulum.fit.uncertainty import (
     coefficient_entry,
@@ -34,6 +35,7 @@ from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import PendulumModel, simulate
 
 RIG_LEVEL = ("linear_damping", "coulomb_friction")  # a rig's bearing and arm: one coefficient per rig
+MAX_HELD_OUT_FOLDS = 10  # trials held out in at most this many folds (each a refit of the rest): one per trial up to 10
 
 
 def typical_scale(parameter: str, rig) -> float:
@@ -148,28 +150,34 @@ class GroupProblem:
             self._parts, self._key = self.residual_parts(x), key
         return np.concatenate(self._parts)
 
-    def jacobian(self, x) -> np.ndarray:
-        """Forward differences (a rig's coefficient only on its trials); the offset columns are exact."""
+    def jacobian_blocks(self, x):
+        """The Jacobian's nonzero blocks ``(trial k, column j, ∂r_k/∂x_j)``: forward differences (a rig's coefficient
+        only on its trials; a trial's θ0, θ̇0 only on it), the offset columns exact (∂r_k/∂δ_k = 1)."""
         self.residuals(x)
         base = self._parts
-        rows = np.cumsum([0] + [b.size for b in base])
-        jac = np.zeros((rows[-1], x.size))
         for j in range(self.n_phys):
             step = max(1e-6 * abs(x[j]), self.steps[j])
             moved = x.copy()
             moved[j] += step
             for k in range(len(self.records)):
                 if self.touches(j, k):
-                    jac[rows[k] : rows[k + 1], j] = (self.trial_residual(k, moved) - base[k]) / step
+                    yield k, j, (self.trial_residual(k, moved) - base[k]) / step
         for k in range(len(self.records)):
             col = self.n_phys + 3 * k
             for i in range(2):
                 step = max(1e-6 * abs(x[col + i]), 1e-8)
                 moved = x.copy()
                 moved[col + i] += step
-                jac[rows[k] : rows[k + 1], col + i] = (self.trial_residual(k, moved) - base[k]) / step
-            jac[rows[k] : rows[k + 1], col + 2] = 1.0
-        return jac
+                yield k, col + i, (self.trial_residual(k, moved) - base[k]) / step
+            yield k, col + 2, np.ones(base[k].size)
+
+    def jacobian(self, x) -> np.ndarray:
+        """The Jacobian, dense (:meth:`jacobian_blocks`)."""
+        return stacked_jacobian(self.jacobian_blocks(x), self.masks, x.size)
+
+    def sparse_jacobian(self, x) -> sparse.csr_matrix:
+        """The Jacobian as a sparse matrix (a trial's rows hold the body's, its rig's and its own coefficients)."""
+        return stacked_jacobian(self.jacobian_blocks(x), self.masks, x.size, as_sparse=True)
 
     def lower_bounds(self, settings: FitSettings) -> np.ndarray:
         floor = max(-0.99 * r.rig.pivot_inertia_kg_m2 / r.rig.length_m**2 for r in self.records)
@@ -191,7 +199,9 @@ class GroupProblem:
         self._key = None
         lower = self.lower_bounds(settings)
         x0 = np.maximum(np.asarray(x0, float), lower)
-        sol = bounded_least_squares(self.residuals, self.jacobian, x0, lower, tolerance, max_evaluations)
+        large = len(self.records) >= SPARSE_FROM_TRIALS
+        jacobian = self.sparse_jacobian if large else self.jacobian
+        sol = bounded_least_squares(self.residuals, jacobian, x0, lower, tolerance, max_evaluations, sparse=large)
         finite = np.isfinite(lower)
         active = np.asarray(sol.active_mask) != 0
         active[finite] |= sol.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))
@@ -233,29 +243,34 @@ def systematic_shifts(fit: GroupFit, settings: FitSettings) -> dict[str, np.ndar
     return {label: refit.x - fit.x for label, refit in zip(labels, solve_many(jobs), strict=True)}
 
 
-def leave_one_trial_out(fit: GroupFit, settings: FitSettings) -> list[np.ndarray]:
+def leave_trials_out(fit: GroupFit, settings: FitSettings, max_folds: int = MAX_HELD_OUT_FOLDS) -> list[np.ndarray]:
     """Residuals of each trial predicted from a fit of the others, only its θ0, θ̇0 and offset refitted to it.
 
-    Every rig of the group needs a second trial (its own coefficients come from the others).
+    Up to ``max_folds`` trials, each is left out alone; a larger group is split into ``max_folds`` folds (trial k in
+    fold k mod ``max_folds``), each predicted from a fit of the other folds: as many refits whatever the group's
+    size. Every rig of the group needs a trial outside each fold (its own coefficients come from the others).
     """
     problem, n = fit.problem, len(fit.problem.records)
+    n_folds = min(n, max_folds)
+    folds = [[k for k in range(n) if k % n_folds == f] for f in range(n_folds)]
     jobs = []
-    for k in range(n):
-        keep = [j for j in range(n) if j != k]
-        fold = GroupProblem(
+    for fold in folds:
+        keep = [j for j in range(n) if j not in fold]
+        rest = GroupProblem(
             [problem.records[j] for j in keep],
             [problem.rig_of[j] for j in keep],
             problem.terms,
             [problem.masks[j] for j in keep],
             problem.max_step_s,
         )
-        jobs.append((fold, fold.start(fit.values, [fit.nuisance(j) for j in keep]), settings, 1e-8))
+        jobs.append((rest, rest.start(fit.values, [fit.nuisance(j) for j in keep]), settings, 1e-8))
+    predicted_from = {k: rest_fit for fold, rest_fit in zip(folds, solve_many(jobs), strict=True) for k in fold}
     out = []
-    for k, fold_fit in enumerate(solve_many(jobs)):
+    for k in range(n):
         single = GroupProblem(
             [problem.records[k]], [problem.rig_of[k]], problem.terms, [problem.masks[k]], problem.max_step_s
         )
-        phys = single.start(fold_fit.values, [fit.nuisance(k)])[: single.n_phys]
+        phys = single.start(predicted_from[k].values, [fit.nuisance(k)])[: single.n_phys]
 
         def residual(z, phys=phys, single=single):
             return single.trial_residual(0, np.concatenate([phys, z]))
