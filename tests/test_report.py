@@ -18,7 +18,7 @@ import pytest
 from conftest import demo_trials
 from pendulum.report import notebook as R
 from pendulum.report.data import best_variant, nested_parent, variant_order
-from pendulum.report.format import estimate_parts, fmt, format_estimate
+from pendulum.report.format import estimate_parts, fmt, format_estimate, photo_data_uri
 from workflow_run import digest, planned_wildcards, run
 
 VARIANTS = {"quadratic": ["quadratic_drag"], "linear": ["quadratic_drag", "linear_damping"]}
@@ -31,6 +31,27 @@ VARIANTS = {"quadratic": ["quadratic_drag"], "linear": ["quadratic_drag", "linea
 def test_a_coefficient_at_its_bound_is_never_printed_as_rounding_noise():
     entry = {"value": 4.2577e-14, "ci95": [0.0, 0.00118], "lower_bound": 0.0, "at_bound": True, "identifiable": True}
     assert format_estimate(entry) == "0 (at bound; < 0.0012)"
+
+
+def test_a_contact_sheet_is_embedded_as_a_jpeg_an_eighth_of_its_png_and_as_it_looks():
+    """Camera frames' noise makes a PNG of them large; a report of many trials carries one sheet per trial."""
+    import base64
+
+    import cv2
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    scene = cv2.GaussianBlur(rng.normal(128, 40, (540, 1280)), (0, 0), 3) + rng.normal(0, 3, (540, 1280))
+    sheet = cv2.cvtColor(np.clip(scene, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    cv2.circle(sheet, (400, 300), 10, (0, 200, 0), 2)  # a track's green ring
+    png = cv2.imencode(".png", sheet)[1].tobytes()
+    uri = photo_data_uri(png)
+    assert uri.startswith("data:image/jpeg;base64,")
+    jpeg = base64.b64decode(uri.split(",", 1)[1])
+    assert len(jpeg) < len(png) / 4, (len(jpeg), len(png))
+    shown = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+    assert shown.shape == sheet.shape and np.abs(shown.astype(int) - sheet).mean() < 3.0
+    assert photo_data_uri(b"not an image").startswith("data:image/png;base64,")  # as it is: the browser says
 
 
 def test_estimates_keep_two_significant_figures_of_their_interval():

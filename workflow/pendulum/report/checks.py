@@ -16,7 +16,7 @@ from pendulum.report.format import (
     fmt_at,
     garbage_badge,
     is_finite,
-    png_data_uri,
+    photo_data_uri,
     table_html,
     td,
     with_minus_sign,
@@ -454,7 +454,7 @@ class CheckSections(ReportData):
                 "track sits on the pendulum, and of the scene and lighting."
             )
             items = "".join(
-                f'<figure class="sheet"><img src="{png_data_uri(data)}" alt="contact sheet of {esc(t)}">'
+                f'<figure class="sheet"><img src="{photo_data_uri(data)}" alt="contact sheet of {esc(t)}">'
                 f"<figcaption>{esc(t)}{'' if ok else ' (failed)'}</figcaption></figure>"
                 for t, data, ok in sheets
             )
