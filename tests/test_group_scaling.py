@@ -25,11 +25,12 @@ RELEASES_DEG = (25.0, -18.0, 12.0, -30.0, 20.0, -9.0)
 SETTINGS = FitSettings()
 
 
-def large_group(seed: int = 7):
-    """12 trials (6 per rig) with tracking-like noise, and the problem started from per-rig joint fits."""
+def large_group(seed: int = 7, short_trials=range(1, 12, 2)):
+    """12 trials (those in ``short_trials`` on the short rig, the rest on the long one) with tracking-like noise,
+    and the problem started from per-rig joint fits."""
     records, rigs = [], []
     for i in range(12):
-        name = ("long", "short")[i % 2]
+        name = "short" if i in short_trials else "long"
         truth = {**BODY, "linear_damping_nm_s": DAMPING_NM_S[name]}
         table = hidden_effect_table(RIGS[name], truth, RELEASES_DEG[i // 2], seed=100 * seed + i, duration_s=8.0)
         records.append(load_record(table, f"{name}{i}", RIGS[name], SETTINGS))
@@ -60,8 +61,9 @@ def test_a_large_group_is_solved_on_its_sparse_jacobian_to_the_exact_solvers_est
 
 
 def test_a_large_group_is_held_out_in_folds_that_predict_each_trial_to_its_noise():
-    """12 trials in 10 folds (trials 0 and 10, 1 and 11 left out together); each predicted from the rest as
-    closely as when it is left out alone, and to the record's noise (the model is right)."""
+    """12 trials in 10 folds, dealt out a rig's after the other's (long 0, 2, …, 10, then short 1, 3, …, 11): 0
+    and 9, 2 and 11 left out together; each predicted from the rest as closely as when left out alone, and to
+    the record's noise (the model is right)."""
     problem, x0 = large_group()
     fit = problem.solve(x0, SETTINGS)
     folds = leave_trials_out(fit, SETTINGS)
@@ -71,6 +73,16 @@ def test_a_large_group_is_held_out_in_folds_that_predict_each_trial_to_its_noise
         rms_folds, rms_alone = np.sqrt(np.mean(a**2)), np.sqrt(np.mean(b**2))
         assert rms_folds == pytest.approx(rms_alone, rel=0.05), k
         assert rms_folds < 1.3 * fitted_rms, k
-    # trials 2–9 are a fold each: the very refits of leaving one out
-    assert all(np.array_equal(folds[k], alone[k]) for k in range(2, 10))
-    assert not any(np.array_equal(folds[k], alone[k]) for k in (0, 1, 10, 11))
+    together = (0, 9, 2, 11)
+    assert all(np.array_equal(folds[k], alone[k]) for k in range(12) if k not in together)  # the same refits
+    assert not any(np.array_equal(folds[k], alone[k]) for k in together)
+
+
+def test_no_fold_holds_every_trial_of_a_rig():
+    """A rig with two trials 10 apart (0 and 10): in folds of k mod 10 both would be left out together and their
+    rig's damping predicted from no trial of it."""
+    problem, x0 = large_group(short_trials=(0, 10))
+    fit = problem.solve(x0, SETTINGS)
+    fitted_rms = np.sqrt(np.mean(np.concatenate(fit.residuals) ** 2))
+    for k, residual in enumerate(leave_trials_out(fit, SETTINGS)):
+        assert np.sqrt(np.mean(residual**2)) < 1.3 * fitted_rms, k

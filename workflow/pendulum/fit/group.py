@@ -246,13 +246,15 @@ def systematic_shifts(fit: GroupFit, settings: FitSettings) -> dict[str, np.ndar
 def leave_trials_out(fit: GroupFit, settings: FitSettings, max_folds: int = MAX_HELD_OUT_FOLDS) -> list[np.ndarray]:
     """Residuals of each trial predicted from a fit of the others, only its θ0, θ̇0 and offset refitted to it.
 
-    Up to ``max_folds`` trials, each is left out alone; a larger group is split into ``max_folds`` folds (trial k in
-    fold k mod ``max_folds``), each predicted from a fit of the other folds: as many refits whatever the group's
-    size. Every rig of the group needs a trial outside each fold (its own coefficients come from the others).
+    Up to ``max_folds`` trials, each is left out alone; a larger group is split into ``max_folds`` folds, each
+    predicted from a fit of the other folds: as many refits whatever the group's size. The trials are dealt out
+    in turn, a rig's one after another, so that no fold holds all of a rig's (every rig of the group needs a
+    second trial: its own coefficients come from the others).
     """
     problem, n = fit.problem, len(fit.problem.records)
     n_folds = min(n, max_folds)
-    folds = [[k for k in range(n) if k % n_folds == f] for f in range(n_folds)]
+    by_rig = sorted(range(n), key=lambda k: problem.rig_of[k])  # stable: one rig's trials in their order
+    folds = [sorted(by_rig[f::n_folds]) for f in range(n_folds)]
     jobs = []
     for fold in folds:
         keep = [j for j in range(n) if j not in fold]
