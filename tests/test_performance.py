@@ -164,3 +164,16 @@ def test_the_tracks_job_declares_memory_and_time_by_the_clip_s_size():
     mem_mb, runtime = job_resources(3840, 2160, 600)
     assert mem_mb == 3400 and mem_mb > 2900 and runtime == 60  # measured: 2.2 GB and 81 s
     assert job_resources(3840, 2160, 18000)[1] == 250  # five minutes at 60 fps: 0.13 s per frame measured: 40 min
+
+
+def test_a_group_fit_declares_memory_by_its_trials_and_samples():
+    """Discovery on copies of the demo's records (~630 samples each) peaked at 0.31 GB for 20 trials, 1.05 GB for
+    80 and 3.34 GB for 160 (its dense Jacobian and a few copies), against a fixed 2000 MB declared: a cluster would
+    have killed the last. The joint, body and discovery rules now declare by their trials' samples."""
+    from pendulum.groups import group_job_mem_mb
+
+    assert group_job_mem_mb([630] * 5) == 2000
+    assert group_job_mem_mb([630] * 80) == 2000  # measured 1.05 GB
+    declared = group_job_mem_mb([630] * 160)
+    assert 3340 < declared < 1.5 * 3340, declared  # measured 3.34 GB: covered, not grossly over
+    assert group_job_mem_mb([3600] * 160) > 5 * declared  # a minute at 60 fps per trial: about 6× the samples

@@ -33,8 +33,9 @@ from pendulum.fit.records import FitSettings, load_record  # noqa: E402
 from pendulum.trials import RIG_KEYS  # noqa: E402
 
 
-def measure(project: Path) -> dict:
-    """Wall time (s) of what the `discovery` rule computes for paper_rig in a built ``project``."""
+def measure(project: Path, n_trials: int | None = None) -> dict:
+    """Wall time (s) of what the `discovery` rule computes for paper_rig in a built ``project``; with ``n_trials``,
+    on that many trials: the project's records over again under new names (a lab's many trials of one body)."""
     project = Path(project).resolve()
     config = yaml.safe_load((project / "config.yaml").read_text())
     rig = config["rigs"]["paper_rig"]
@@ -46,14 +47,21 @@ def measure(project: Path) -> dict:
         raise SystemExit(f"{project}: no built demo results (run `snakemake -c2` there first)")
     started = time.perf_counter()
     records, fits, noise = [], [], []
-    for name in names:
+    for i in range(n_trials or len(names)):
+        name = names[i % len(names)]
+        trial = name if i < len(names) else f"{name}_copy{i // len(names)}"
         info = json.loads((project / f"results/angles/{name}.json").read_text())
         table = pd.read_csv(project / f"results/angles/{name}.csv")
         values = {k: rig[k] for k in RIG_KEYS if k in rig}
-        records.append(load_record(table, name, values, settings, tolerances=rig.get("tolerances"), angle_info=info))
-        fits.append(json.loads((project / f"results/fits/{variant}/{name}.json").read_text()))
+        records.append(load_record(table, trial, values, settings, tolerances=rig.get("tolerances"), angle_info=info))
+        fit = json.loads((project / f"results/fits/{variant}/{name}.json").read_text())
+        fits.append({**fit, "trials": {trial: fit["trials"][name]}})
         noise.append(info["noise_deg"])
-    joint = json.loads((project / f"results/fits/{variant}/joint/paper_rig.json").read_text())
+    if n_trials:
+        started = time.perf_counter()  # the records read; discovery's own time, from each trial's own fit
+        joint = None
+    else:
+        joint = json.loads((project / f"results/fits/{variant}/joint/paper_rig.json").read_text())
     run = Discovery(
         records,
         ["paper_rig"] * len(records),
@@ -61,7 +69,7 @@ def measure(project: Path) -> dict:
         discovery["candidates"] or ["linear_damping", "coulomb_friction", "history_force", "restoring_correction"],
         settings=settings,
         options=DiscoveryOptions(alpha=discovery["alpha"]),
-        baseline_fits=[joint, *fits],
+        baseline_fits=[joint, *fits] if joint else fits,
         noise_deg=noise,
     )
     document = run.run()

@@ -87,3 +87,18 @@ def group_trial_rigs(settings: dict[str, dict], by_rig: dict[str, list[str]], gr
         }
         for name in group_trials(by_rig, groups, group)
     }
+
+
+# A fit of a group of trials (joint, body, discovery) holds its dense Jacobian, samples × (3 per trial + the
+# coefficients) in float64, and a few copies of it (the error budget's linear responses, the rank check's SVD):
+# peaks measured on 2026-12-02 (copies of the demo's records, ~630 samples each): 0.31 GB for 20 trials, 1.05 GB
+# for 80, 3.34 GB for 160 (about 8 Jacobians above 0.25 GB). Declared with 10 Jacobians above 0.3 GB.
+GROUP_JOB_BASE_MB, GROUP_JOB_JACOBIANS, GROUP_JOB_MIN_MB = 300, 10, 2000
+
+
+def group_job_mem_mb(samples_per_trial: list[int]) -> int:
+    """Memory (MB) a group fit's job declares: max(2000, 300 + 10 J) MB, J = S (3N + 6) × 8 B the Jacobian of
+    N trials of S samples in all (rounded up to 100 MB)."""
+    n, samples = len(samples_per_trial), sum(samples_per_trial)
+    jacobian_mb = samples * (3 * n + 6) * 8 / 1e6
+    return max(GROUP_JOB_MIN_MB, -(-int(GROUP_JOB_BASE_MB + GROUP_JOB_JACOBIANS * jacobian_mb) // 100) * 100)

@@ -40,7 +40,7 @@ rule discovery:
     priority: 3  # the longest job: started as soon as the baseline's fits are in
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=group_mem_mb,  # from the trials' samples (inputs.smk)
         runtime=60,
     params:
         rigs=lambda wc: DISCOVERY_GROUPS[wc.group],

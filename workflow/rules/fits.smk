@@ -46,7 +46,7 @@ rule fit_joint:
     priority: 2
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=group_mem_mb,  # from the trials' samples (inputs.smk)
         runtime=120,
     params:
         terms=variant_terms,
@@ -98,7 +98,7 @@ rule fit_body:
         body=r"[A-Za-z0-9_.+-]+",
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=group_mem_mb,  # from the trials' samples (inputs.smk)
         runtime=120,
     params:
         terms=variant_terms,

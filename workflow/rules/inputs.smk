@@ -3,6 +3,7 @@
 import json
 from pathlib import Path
 
+from pendulum.groups import group_job_mem_mb  # noqa: E402
 from pendulum.tracking.settings import job_resources  # noqa: E402
 
 
@@ -182,3 +183,20 @@ def status_trials():
         }
         for name in sorted(TRIALS)
     }
+
+
+def group_mem_mb(wildcards, input):
+    """A group fit's memory from its trials' samples (pendulum.groups.group_job_mem_mb), read from
+    their angle documents; before they exist the missing file is raised (<TBD>, as for tracks).
+    """
+    samples = []
+    for path in input.angle_info:
+        try:
+            samples.append(
+                int(json.loads(Path(path).read_text()).get("n_samples") or 0)
+            )
+        except FileNotFoundError:
+            raise
+        except (OSError, ValueError, TypeError, AttributeError):
+            samples.append(0)  # a failed record: left out of the fit
+    return group_job_mem_mb(samples)
