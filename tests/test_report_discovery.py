@@ -305,3 +305,29 @@ def test_the_extinction_caption_says_which_models_lines_lie_over_each_other():
     assert "Coulomb" not in note and "coulomb" not in note, note
     table["amplitude_loss_rad"] *= table.model.map({"quadratic_drag+linear_damping": 1.1}).fillna(1.0)
     assert "Lines that lie over each other" not in figures_html(document, _residuals(models), table, D._PLAIN)
+
+
+@pytest.mark.parametrize("n_trials", [5, 7, 20])
+def test_the_trials_legend_fits_the_figure_and_many_trials_are_named_as_such(n_trials):
+    """20 trials' names in 8 columns ran off both sides of the discovery figures (a lab's 20 copies of the demo)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from pendulum.report.discovery_figures import TRIAL_COLOURS, trial_legend
+    from pendulum.report.figures import new_figure
+
+    fig = new_figure(10, 3.0)
+    ax = fig.subplots()
+    for i in range(n_trials):
+        ax.plot([0, 1], [i, i], color=TRIAL_COLOURS[i % len(TRIAL_COLOURS)], label=f"demo_p75_copy{i}")
+    ax.axhspan(-1, 1, color="0.8", label="white noise (95 %)")
+    trial_legend(fig, *ax.get_legend_handles_labels(), n_trials)
+    fig.canvas.draw()
+    (legend,) = fig.legends
+    texts = [t.get_text() for t in legend.get_texts()]
+    if n_trials > len(TRIAL_COLOURS):
+        assert texts == [f"one line per trial ({n_trials} trials; the colours repeat)", "white noise (95 %)"]
+    else:
+        assert texts == [f"demo_p75_copy{i}" for i in range(n_trials)] + ["white noise (95 %)"]
+    box = legend.get_window_extent()
+    assert 0 <= box.x0 and box.x1 <= fig.bbox.width, (box, fig.bbox.width)

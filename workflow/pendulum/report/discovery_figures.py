@@ -24,6 +24,21 @@ def model_key(terms) -> str:
     return "+".join(terms)
 
 
+def trial_legend(fig, handles: list, labels: list[str], n_trials: int, fontsize: float | None = None) -> None:
+    """The trials' legend above the figure, in as many columns as fit its width; with more trials than colours
+    (their lines repeat the colours) a line saying so instead of a legend that cannot tell them apart."""
+    if n_trials > len(TRIAL_COLOURS):  # one entry for them all, then what follows the trials (a noise band)
+        from matplotlib.lines import Line2D
+
+        every = Line2D([], [], color="0.45", lw=0.8)
+        handles = [every, *handles[n_trials:]]
+        labels = [f"one line per trial ({n_trials} trials; the colours repeat)", *labels[n_trials:]]
+    width_pt = fig.get_figwidth() * 72
+    entry_pt = 30 + 5.5 * max(len(label) for label in labels)  # handle, gap and the label at the legend's size
+    ncol = max(1, min(len(labels), int(width_pt // entry_pt), 8))
+    fig.legend(handles, labels, loc="outside upper center", ncol=ncol, frameon=False, fontsize=fontsize)
+
+
 def model_label(document: dict, key: str) -> str:
     """A model of the residual and extinction tables in words: ``baseline: …``, or ``baseline + …`` (final)."""
     base = document["baseline"]["terms"]
@@ -58,8 +73,7 @@ def residual_figure(document: dict, residuals: pd.DataFrame) -> bytes | None:
             ax.set_title(f"{title} — RMS {fmt(rms, 2)}°", loc="left")
             ax.set_ylabel("residual (°)")
         axes[-1].set_xlabel("time since release (s)")
-        handles, labels = axes[0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 8), frameon=False)
+        trial_legend(fig, *axes[0].get_legend_handles_labels(), len(trials))
         return figure_png(fig)
 
 
@@ -173,7 +187,7 @@ def autocorrelation_figure(document: dict, residuals: pd.DataFrame, max_lag_s: f
         ax.axhspan(-band, band, color="0.8", lw=0, label="white noise (95 %)")
         ax.set_xlabel("lag (s)")
         ax.set_ylabel("autocorrelation")
-        fig.legend(frameon=False, fontsize=7, loc="outside upper center", ncol=8)
+        trial_legend(fig, *ax.get_legend_handles_labels(), rows.trial.nunique(), fontsize=7)
         return figure_png(fig)
 
 
