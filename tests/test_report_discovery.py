@@ -331,3 +331,19 @@ def test_the_trials_legend_fits_the_figure_and_many_trials_are_named_as_such(n_t
         assert texts == [f"demo_p75_copy{i}" for i in range(n_trials)] + ["white noise (95 %)"]
     box = legend.get_window_extent()
     assert 0 <= box.x0 and box.x1 <= fig.bbox.width, (box, fig.bbox.width)
+
+
+def test_an_extinction_legend_of_more_trials_than_marker_shapes_says_measured_once():
+    """20 trials' "(measured)" entries covered the extinction curves and ran off the figure's top."""
+    from pendulum.report.figures import trials_collapsed
+    from pendulum.report.format import MARKERS
+
+    for n in (len(MARKERS), len(MARKERS) + 1, 20):
+        handles = list(range(n + 2))
+        labels = [f"t{i} (measured)" for i in range(n)] + ["quadratic prediction", "friction prediction"]
+        shown_handles, shown = trials_collapsed(handles, labels, n)
+        if n <= len(MARKERS):
+            assert (shown_handles, shown) == (handles, labels)
+        else:
+            assert shown == [f"measured: {n} trials (open markers, the shapes repeat)", *labels[n:]]
+            assert shown_handles == [0, n, n + 1]

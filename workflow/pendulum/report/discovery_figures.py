@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.model.effects import TERMS
-from pendulum.report.figures import EXTINCTION_LABELS, MPL_STYLE, figure_png, log_axes, new_figure
+from pendulum.report.figures import EXTINCTION_LABELS, MPL_STYLE, figure_png, log_axes, new_figure, trials_collapsed
 from pendulum.report.format import MARKERS, PALETTE, esc, figure_html, fmt
 
 TRIAL_COLOURS = tuple(c for c in PALETTE if c != "#F0E442")  # yellow lines vanish on white
@@ -161,7 +161,10 @@ def extinction_figure(document: dict, extinction: pd.DataFrame) -> bytes | None:
                     **style,
                 )
         log_axes(ax, *EXTINCTION_LABELS)
-        ax.legend(frameon=False, fontsize=7, loc="lower right")
+        n_measured = measured.trial.nunique()
+        ax.legend(
+            *trials_collapsed(*ax.get_legend_handles_labels(), n_measured), frameon=False, fontsize=7, loc="lower right"
+        )
         return figure_png(fig)
 
 

@@ -55,6 +55,15 @@ def log_axes(ax, xlabel: str, ylabel: str) -> None:
     ax.set_ylabel(ylabel)
 
 
+def trials_collapsed(handles: list, labels: list[str], n_trials: int) -> tuple[list, list[str]]:
+    """A legend's entries with its first ``n_trials`` (one marker per trial) made one entry where the trials are
+    more than the marker shapes (beyond, the shapes repeat and a legend of every name outgrows its figure)."""
+    if n_trials <= len(MARKERS):
+        return handles, labels
+    every = f"measured: {n_trials} trials (open markers, the shapes repeat)"
+    return [handles[0], *handles[n_trials:]], [every, *labels[n_trials:]]
+
+
 def new_figure(width_in: float, height_in: float):
     """A figure outside pyplot (no global state, nothing shown twice in the notebook)."""
     from matplotlib.figure import Figure
@@ -280,11 +289,12 @@ class FigureSections(ReportData):
                 fig = new_figure(10, 4.2)
                 ax, bx = fig.subplots(1, 2)
                 grey = ("0.1", "0.35", "0.55", "0.7", "0.45")
-                not_drawn = shown = 0  # half cycles with no measured loss: off a log axis
+                not_drawn = shown = measured = 0  # half cycles with no measured loss: off a log axis
                 for i, t in enumerate(trials):
                     c = self.cycles(variant, t)
                     if c.empty:
                         continue
+                    measured += 1
                     not_drawn += int((c.amplitude_loss_rad <= 0).sum())
                     shown += len(c)
                     ax.plot(
@@ -326,7 +336,7 @@ class FigureSections(ReportData):
                         first = False
                 log_axes(ax, *EXTINCTION_LABELS)
                 ax.set_title("extinction curve", loc="left")
-                ax.legend(frameon=False, fontsize=7)
+                ax.legend(*trials_collapsed(*ax.get_legend_handles_labels(), measured), frameon=False, fontsize=7)
                 joint = self.joint.get((variant, rig), {})
                 cd = joint.get("parameters", {}).get("drag_coefficient") if is_ok(joint) else None
                 if cd:
@@ -337,7 +347,7 @@ class FigureSections(ReportData):
                     bx.axhline(truth.pop(), color="black", ls="--", lw=1, label="truth")
                 log_axes(bx, "Keulegan–Carpenter number of the half cycle", "local $C_d$ (all loss charged to drag)")
                 bx.set_title("local drag coefficient", loc="left")
-                bx.legend(frameon=False, fontsize=7)
+                bx.legend(*trials_collapsed(*bx.get_legend_handles_labels(), measured), frameon=False, fontsize=7)
                 png = figure_png(fig)
             caption = self.figure_caption(
                 f"Rig {esc(rig)}. Left: the extinction curve — loss of amplitude over each half cycle against the "
