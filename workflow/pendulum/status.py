@@ -63,7 +63,9 @@ def fitted_trials(
 
     A fit marked ``reliable: false`` (its record failed the garbage checks of
     :func:`pendulum.fit.checks.record_checks`) is left out too: one mis-tracked video
-    must not move the coefficients of every trial it would be pooled with.
+    must not move the coefficients of every trial it would be pooled with. So is a trial whose
+    angle record is another's, sample for sample (``record_sha256``): counted twice, one recording
+    would narrow the intervals and pass its own held-out check.
     """
     excluded = {}
     for name in sorted(names):
@@ -77,6 +79,18 @@ def fitted_trials(
             excluded[name] = "unreliable record: " + (problems[0] if problems else "see its fit's warnings")
         if name in excluded:
             log.warning("%s: %s left out (%s)", context, name, excluded[name])
+    # one recording under two names (a video copied or exported twice, tracked alike) is one measurement
+    first_of: dict[str, str] = {}
+    for name in sorted(n for n in names if n not in excluded):
+        digest = angle_info[name].get("record_sha256")
+        if digest in first_of:
+            excluded[name] = (
+                f"the same angle record as {first_of[digest]}, sample for sample (the same video under another "
+                "name, tracked alike): counted once"
+            )
+            log.warning("%s: %s left out (%s)", context, name, excluded[name])
+        elif digest:
+            first_of[digest] = name
     return [n for n in sorted(names) if n not in excluded], excluded
 
 

@@ -11,6 +11,7 @@ from pendulum.angles.record import (
     angles_from_track,
     angles_from_tracker_csv,
     read_tracker_csv,
+    record_digest,
     vertical_turned_with_the_picture,
 )
 from pendulum.camera.view import ImageToPlane, map_point, map_track
@@ -97,6 +98,7 @@ def work():
     log.info("trial %s: %s", trial, info)
     write_csv(table, sm.output.angles)
     document = {"trial": trial, "rig": settings["rig_name"], "status": "ok", **info.to_dict()}
+    document["record_sha256"] = record_digest(table)  # the same recording under two names is counted once
     if track_summary is not None:
         document["method"] = (track_summary.get("method") or {}).get("used", "marker")
         document["path"] = path

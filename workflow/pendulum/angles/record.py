@@ -7,6 +7,7 @@ which names the file and what to do.
 
 from __future__ import annotations
 
+import hashlib
 import io
 import math
 from dataclasses import asdict, dataclass, field
@@ -161,6 +162,13 @@ def angle_record(
         # starts at that turning point, as a release would
         info.first_extremum_deg = start if start * first < 0 and abs(start) > 0.5 * abs(first) else first
     return table, info
+
+
+def record_digest(table: pd.DataFrame) -> str:
+    """SHA-256 of a record's times and angles as written (``%.10g``): two trials with the same digest are one
+    recording under two names (a video copied, or exported twice, and tracked alike), not two measurements."""
+    text = table[["time_s", "theta_rad"]].to_csv(index=False, float_format="%.10g", lineterminator="\n")
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def vertical_turned_with_the_picture(track: pd.DataFrame, pivot_px, vertical_deg: float, rotation_deg: float):

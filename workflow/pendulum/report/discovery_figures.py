@@ -197,18 +197,20 @@ def autocorrelation_figure(document: dict, residuals: pd.DataFrame, max_lag_s: f
 def figures_html(document: dict, residuals: pd.DataFrame, extinction: pd.DataFrame, caption) -> str:
     """The residual and extinction figures and, when structure is left unexplained, the autocorrelation."""
     group = esc(document.get("group", ""))
+    n_trials = residuals.trial.nunique() if "trial" in residuals else 0
+    colours = "each trial a colour" if n_trials <= len(TRIAL_COLOURS) else f"{n_trials} trials, the colours repeating"
     figures = [
         (
             residual_figure(document, residuals),
             f"Group {group}: residual (model − measured) of the baseline and of the model after each step, one "
-            "panel per model on its own scale, each trial a colour. Structure that repeats with the swing is physics "
+            f"panel per model on its own scale, {colours}. Structure that repeats with the swing is physics "
             "the model misses; what is left at the end should be the tracking noise.",
             "residuals",
         ),
         (
             extinction_figure(document, extinction),
             f"Group {group}: extinction curve, the amplitude lost over each half cycle against the amplitude at its "
-            "start: measured (open markers, one kind per trial) and as each model's fitted curve predicts it (the "
+            "start: measured (open markers, one shape per trial) and as each model's fitted curve predicts it (the "
             "baseline, the baseline with each first-round candidate and the models on the path; black: the final "
             "model). On log axes Coulomb friction gives a constant loss, linear damping and the history force a "
             "slope 1, quadratic drag a slope 2." + _off_axes(extinction) + _overlapping(document, extinction),
