@@ -333,3 +333,21 @@ def test_the_tracking_table_says_a_body_was_tracked_and_its_warning(tmp_path):
     report.__post_init__()
     row = _row(report.tracking_section(), trial="t10")
     assert "hides part of the body at x 295–308, y 196–236 px" in row
+
+
+def test_copies_left_out_for_the_same_reason_are_named_together_once():
+    """A lab's 25 copies of 5 clips were 25 entries of one long reason each in the summary and Table 3."""
+    from pendulum.report.data import ReportData
+
+    same = "the same angle record as a, sample for sample (the same video under another name): counted once"
+    left_out = {
+        "a_1": (same, ["quadratic", "linear"]),
+        "b_1": ("unreliable record: fitted rest angle −12.0°", ["quadratic", "linear"]),
+        "a_2": (same, ["quadratic", "linear"]),
+        "a_3": (same, ["quadratic"]),
+    }
+    assert ReportData.grouped(left_out) == [
+        (["a_1", "a_2"], same, ["quadratic", "linear"]),
+        (["b_1"], "unreliable record: fitted rest angle −12.0°", ["quadratic", "linear"]),
+        (["a_3"], same, ["quadratic"]),
+    ]

@@ -328,10 +328,10 @@ class ComparisonSections(ReportData):
         }
         if left_out:
             items = "; ".join(
-                f"{esc(t)}"
+                esc(", ".join(ts))
                 + ("" if len(vs) == len(self.order) else f" (by {esc(', '.join(vs))})")
-                + f" — {esc(reason)}"
-                for t, (reason, vs) in left_out.items()
+                + f" — {esc(r)}"
+                for ts, r, vs in self.grouped(left_out)
             )
             out.append(f"Left out of the joint fits: {items}.")
         if not best["comparable"]:

@@ -288,6 +288,15 @@ class ReportData:
                 out.setdefault(trial, (reason, []))[1].append(v)
         return out
 
+    @staticmethod
+    def grouped(left_out: dict[str, tuple[str, list[str]]]) -> list[tuple[list[str], str, list[str]]]:
+        """:meth:`left_out`'s trials with the same reason and variants together (a lab's copies of one clip, each
+        left out as the same record as the first: one entry), in their order: (trials, reason, variants)."""
+        groups: dict[tuple, list[str]] = {}
+        for trial, (reason, variants) in left_out.items():
+            groups.setdefault((reason, tuple(variants)), []).append(trial)
+        return [(trials, reason, list(variants)) for (reason, variants), trials in groups.items()]
+
     def kc(self, variant: str, trial: str) -> float | None:
         fit = self.fits.get((variant, trial))
         return float(fit["keulegan_carpenter_number"]) if is_ok(fit) else None

@@ -400,10 +400,10 @@ class TableSections(ReportData):
             left_out = self.left_out(rig)
             if left_out:
                 items = "; ".join(
-                    f"<b>{esc(t)}</b>"
+                    f"<b>{esc(', '.join(ts))}</b>"
                     + ("" if len(vs) == len(self.order) else f" ({esc(', '.join(vs))})")
                     + f": {esc(reason)}"
-                    for t, (reason, vs) in left_out.items()
+                    for ts, reason, vs in self.grouped(left_out)
                 )
                 rows.append(
                     [
