@@ -727,3 +727,12 @@ def test_a_tie_between_variants_and_an_unresolved_coefficient_are_said_in_the_su
     linear["warnings"] = []
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.summary_box()))
     assert "tie" not in text and "cannot tell" not in text
+
+
+def test_the_truth_table_says_which_trials_have_no_truth_file(documents, monkeypatch):
+    """A lab's trials added beside synthetic ones (a reviewer's 25 copies): '5 of 5' covered, with 30 fitted."""
+    monkeypatch.setattr(documents, "truth", {"t20": {"added_mass_kg": 2.5}})
+    html = documents.truth_section()
+    assert "1 trial(s) have no truth file (<code>truth_dir</code>) and are not counted: bad." in html
+    monkeypatch.setattr(documents, "truth", {"t20": {"added_mass_kg": 2.5}, "bad": {"added_mass_kg": 2.5}})
+    assert "no truth file" not in documents.truth_section()

@@ -302,6 +302,12 @@ class CheckSections(ReportData):
                 if garbage
                 else ""
             )
+            + (
+                f" {len(untold)} trial(s) have no truth file (<code>truth_dir</code>) and are not counted: "
+                f"{esc(', '.join(untold[:5]) + (', …' if len(untold) > 5 else ''))}."
+                if (untold := [t for t in self.trial_order() if t not in self.truth])
+                else ""
+            )
         )
         return table_html(header, rows, caption=caption, table_id="truth-table")
 
