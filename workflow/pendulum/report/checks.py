@@ -304,7 +304,7 @@ class CheckSections(ReportData):
             )
             + (
                 f" {len(untold)} trial(s) have no truth file (<code>truth_dir</code>) and are not counted: "
-                f"{esc(', '.join(untold[:5]) + (', …' if len(untold) > 5 else ''))}."
+                f"{esc(', '.join(untold[:5]) + (', …' if len(untold) > 5 else '.'))}"
                 if (untold := [t for t in self.trial_order() if t not in self.truth])
                 else ""
             )
