@@ -18,10 +18,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import sparse
 from scipy.optimize import least_squares
 
-from pendulum.fit.output_error import SPARSE_FROM_TRIALS, bounded_least_squares, stacked_jacobian
+from pendulum.fit.output_error import solve_stacked, stacked_jacobian
 from pendulum.fit.records import AngleRecord, FitSettings
 from pendulum.fit.uncertainty import (
     coefficient_entry,
@@ -175,10 +174,6 @@ class GroupProblem:
         """The Jacobian, dense (:meth:`jacobian_blocks`)."""
         return stacked_jacobian(self.jacobian_blocks(x), self.masks, x.size)
 
-    def sparse_jacobian(self, x) -> sparse.csr_matrix:
-        """The Jacobian as a sparse matrix (a trial's rows hold the body's, its rig's and its own coefficients)."""
-        return stacked_jacobian(self.jacobian_blocks(x), self.masks, x.size, as_sparse=True)
-
     def lower_bounds(self, settings: FitSettings) -> np.ndarray:
         floor = max(-0.99 * r.rig.pivot_inertia_kg_m2 / r.rig.length_m**2 for r in self.records)
         lower = [
@@ -199,9 +194,7 @@ class GroupProblem:
         self._key = None
         lower = self.lower_bounds(settings)
         x0 = np.maximum(np.asarray(x0, float), lower)
-        large = len(self.records) >= SPARSE_FROM_TRIALS
-        jacobian = self.sparse_jacobian if large else self.jacobian
-        sol = bounded_least_squares(self.residuals, jacobian, x0, lower, tolerance, max_evaluations, sparse=large)
+        sol = solve_stacked(self, x0, lower, tolerance, max_evaluations)
         finite = np.isfinite(lower)
         active = np.asarray(sol.active_mask) != 0
         active[finite] |= sol.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))

@@ -178,11 +178,18 @@ class _Problem:
 
     def solve(self, x0, lower, tolerance=1e-10):
         self._cache_key = None
-        large = len(self.records) >= SPARSE_FROM_TRIALS
-        jacobian = (lambda x: stacked_jacobian(self.jacobian_blocks(x), self.masks, x.size, True)) if large else None
-        return bounded_least_squares(
-            self.residuals, jacobian or self.jacobian, np.maximum(x0, lower), lower, tolerance, sparse=large
-        )
+        return solve_stacked(self, np.maximum(x0, lower), lower, tolerance)
+
+
+def solve_stacked(problem, x0, lower, tolerance=1e-10, max_evaluations=200):
+    """:func:`bounded_least_squares` of a problem of stacked trials (its ``residuals``, ``jacobian_blocks``,
+    ``masks``, ``records``): on its sparse Jacobian from :data:`SPARSE_FROM_TRIALS` trials, else the dense one."""
+    large = len(problem.records) >= SPARSE_FROM_TRIALS
+
+    def jacobian(x):
+        return stacked_jacobian(problem.jacobian_blocks(x), problem.masks, x.size, as_sparse=large)
+
+    return bounded_least_squares(problem.residuals, jacobian, x0, lower, tolerance, max_evaluations, sparse=large)
 
 
 def stacked_jacobian(blocks, masks: list[np.ndarray], n_columns: int, as_sparse: bool = False):
