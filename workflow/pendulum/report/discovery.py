@@ -307,10 +307,8 @@ def excluded_html(document: dict) -> str:
     excluded = document.get("excluded_trials") or {}
     if not excluded:
         return f'<p class="table-note">Trials used: {esc(", ".join(document.get("trials", [])))}; none left out.</p>'
-    by_reason: dict[str, list[str]] = {}  # a lab's copies of one clip, each the same record as the first: one item
-    for t, reason in sorted(excluded.items()):
-        by_reason.setdefault(reason, []).append(t)
-    items = "".join(f"<li><b>{esc(', '.join(ts))}</b>: {esc(reason)}</li>" for reason, ts in by_reason.items())
+    by_reason = ReportData.grouped({t: (reason, []) for t, reason in sorted(excluded.items())})
+    items = "".join(f"<li><b>{esc(', '.join(ts))}</b>: {esc(reason)}</li>" for ts, reason, _ in by_reason)
     return f'<p class="warn">Trials left out of discovery:</p><ul>{items}</ul>'
 
 
