@@ -8,6 +8,7 @@ same bytes as an uninterrupted one.
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -180,6 +181,17 @@ def test_a_truncated_and_a_fake_video_cost_nothing_else(small_build):
     assert again.returncode != 0
     assert {rule for rule, _ in planned_wildcards(again.stdout)} <= {"check_trials", "all"}
     assert digest(work / "results") == results  # (the build other tests compare with)
+
+
+def test_the_terminal_shows_what_went_wrong_and_the_logs_hold_the_rest(small_build):
+    """A job's progress and facts go to its log only; its warnings and errors to the terminal too."""
+    work, terminal = small_build.work, small_build.output
+    assert " INFO " not in terminal, [line for line in terminal.splitlines() if " INFO " in line][:5]
+    assert re.search(r" ERROR .*fake\.mp4", terminal) and re.search(r" ERROR .*truncated\.mp4", terminal)
+    tracks = (work / "logs/tracks/demo_p20.log").read_text()
+    assert " INFO data/raw/demo_p20.mp4: detected a bright marker" in tracks and "frames usable" in tracks
+    frames = (work / "logs/frames/demo_p20.log").read_text()
+    assert re.search(r"INFO data/raw/demo_p20\.mp4: 660 frames of 1280×720 px \(h264, yuv420p\)", frames)
 
 
 def _answers_ctrl_c() -> None:

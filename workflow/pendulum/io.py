@@ -132,13 +132,19 @@ def write_png(image: np.ndarray, path) -> None:
 
 
 def script_logger(log_path, name: str) -> logging.Logger:
-    """A logger writing to the rule's log file and to stderr (Snakemake shows both)."""
+    """A logger writing everything (INFO up) to the rule's log file and its warnings and errors to stderr too.
+
+    The terminal shows Snakemake's jobs, what went wrong or may be wrong, and the trials' outcome at the end
+    (the Snakefile's ``onsuccess``/``onerror``); each job's progress and facts are in its log (``logs/``), where
+    they are looked up (the demo's build printed 118 lines of them among Snakemake's, 20 more for each trial)."""
     logging.raiseExceptions = False  # a log on a full disk must not print a traceback of its own
     logger = logging.getLogger(name)
     logger.setLevel(logging.INFO)
     logger.handlers.clear()
     fmt = logging.Formatter("%(asctime)s %(levelname)s %(message)s")
-    for handler in (logging.FileHandler(log_path, mode="w"), logging.StreamHandler(sys.stderr)):
+    terminal = logging.StreamHandler(sys.stderr)
+    terminal.setLevel(logging.WARNING)
+    for handler in (logging.FileHandler(log_path, mode="w"), terminal):
         handler.setFormatter(fmt)
         logger.addHandler(handler)
     return logger

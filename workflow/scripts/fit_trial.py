@@ -46,7 +46,7 @@ def fit_stage():
     fit = fit_trials([record], terms, settings)
     document = fit_document(fit, variant=variant, rig=sm.params.rig, sources=[sm.input.angles], settings=settings)
     for warning in fit["warnings"]:
-        log.warning("trial %s, variant %s: %s", trial, variant, warning)
+        log.warning("trial %s, variant %s: %s", trial, variant, warning.removeprefix(f"trial {trial}: "))
     log.info("trial %s, variant %s: rms %.4f deg, %s", trial, variant, fit["rms_deg"], fit["optimiser"]["message"])
     write_json({"trial": trial, "status": "ok", **document}, sm.output.fit)
     run_stage("curve", log, lambda: curve_stage(angles), write_failed)

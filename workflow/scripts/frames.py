@@ -46,7 +46,20 @@ def work():
         "bit_depth": info.bit_depth,
         "warnings": list(info.warnings),
     }
-    log.info("%s: %s", video, summary)
+    log.info(
+        "%s: %d frames of %d×%d px (%s, %s), %.3f s at %s frames/s (stated %s), %d keyframes, %d irregular intervals",
+        video,
+        summary["n_frames"],
+        summary["width_px"],
+        summary["height_px"],
+        summary["codec"],
+        summary["pixel_format"],
+        summary["duration_s"],
+        f"{summary['mean_fps']:.3f}" if summary["mean_fps"] else "–",
+        summary["nominal_fps"],
+        summary["keyframes"],
+        summary["irregular_intervals"],
+    )
     for warning in info.warnings:
         log.warning("%s", warning)
     if summary["dropped_frames"] or summary["duplicate_timestamps"]:

@@ -111,10 +111,11 @@ def resolve_settings(path, settings: TrackerSettings, progress=None):
     if start is None and polarity == found.polarity:
         start = found.start_px
     if progress:
+        seen = found.start_px
         progress(
             f"{path}: detected a {found.polarity} marker, radius {found.marker_radius_px:.1f} px, "
-            f"start {found.start_px}, "
-            f"swinging about ({found.pivot_px[0]:.0f}, {found.pivot_px[1]:.0f}) px, confidence "
+            + (f"start ({seen[0]:.1f}, {seen[1]:.1f}) px, " if seen is not None else "not seen in the first frame, ")
+            + f"swinging about ({found.pivot_px[0]:.0f}, {found.pivot_px[1]:.0f}) px, confidence "
             f"{found.confidence:.2f} ({time.perf_counter() - started:.1f} s)"
         )
     return replace(settings, polarity=polarity, marker_radius_px=float(radius), start_px=start), found
