@@ -44,8 +44,7 @@ localrules:
 rule all:
     default_target: True
     input:
-        all_targets(),
-        report_targets(),
+        default_targets(),
 
 
 # After Snakemake's own lines, where a user reads last: the trials no variant fits, then the trials that failed

@@ -1,5 +1,5 @@
-# Targets: what the workflow builds for the trials found (rule all, the aggregates'
-# per-trial inputs, the documents the status table and a freeze read).
+# Targets: what the workflow builds for the trials found (by default, and every file for a freeze), the
+# aggregates' per-trial inputs, the documents the status table and a freeze read.
 
 
 def all_targets():
@@ -31,6 +31,24 @@ def all_targets():
     targets += DISCOVERY_TARGETS  # workflow/rules/discovery.smk
     targets += DESIGN_TARGETS  # workflow/rules/design.smk
     return targets
+
+
+def default_targets():
+    """What a plain `snakemake` builds: the products no other job reads. Every other result comes with
+    them (the status table, the summary and the report read each trial's frames, tracks, angles and fits;
+    a job writes all its outputs): the same jobs as asking for every file (all_targets: ten more inputs
+    per trial), whose planning of 1,000 trials took 4 % longer (13.5 against 13.0 s, alternated dry runs).
+    """
+    targets = []
+    if config["frames"]["keep_images"]:
+        targets += [f"results/frames/{name}/images" for name in VIDEO_TRIALS]
+    if TRIALS or SKIPPED:  # every trial skipped: the status table says so
+        targets.append("results/status/trials.csv")
+    if TRIALS:
+        targets += ["results/status/all_trials_ok.txt", "results/fits/summary.csv"]
+    for variant in sorted(config["variants"]):
+        targets += joint_fits(variant) + body_fits(variant)
+    return targets + DISCOVERY_TARGETS + DESIGN_TARGETS + report_targets()
 
 
 def joint_fits(variant):
