@@ -168,12 +168,14 @@ def test_the_tracks_job_declares_memory_and_time_by_the_clip_s_size():
 
 def test_a_group_fit_declares_memory_by_its_trials_and_samples():
     """Discovery on copies of the demo's records (~630 samples each) peaked at 0.31 GB for 20 trials, 1.05 GB for
-    80 and 3.34 GB for 160 (its dense Jacobian and a few copies), against a fixed 2000 MB declared: a cluster would
-    have killed the last. The joint, body and discovery rules now declare by their trials' samples."""
-    from pendulum.groups import group_job_mem_mb
+    80 and 3.34 GB for 160 while it held the dense Jacobian, against a fixed 2000 MB declared: a cluster would
+    have killed the last. From SPARSE_FROM_TRIALS trials it holds the sparse one: 0.29 GB for 40, 0.41 GB for
+    160 (2026-12-03). The joint, body and discovery rules declare by their trials' samples."""
+    from pendulum.fit import output_error
+    from pendulum.groups import SPARSE_FROM_TRIALS, group_job_mem_mb
 
+    assert SPARSE_FROM_TRIALS == output_error.SPARSE_FROM_TRIALS  # one threshold, two modules' copies
     assert group_job_mem_mb([630] * 5) == 2000
-    assert group_job_mem_mb([630] * 80) == 2000  # measured 1.05 GB
-    declared = group_job_mem_mb([630] * 160)
-    assert 3340 < declared < 1.5 * 3340, declared  # measured 3.34 GB: covered, not grossly over
-    assert group_job_mem_mb([3600] * 160) > 5 * declared  # a minute at 60 fps per trial: about 6× the samples
+    assert group_job_mem_mb([630] * 160) == 2000  # measured 0.41 GB
+    assert group_job_mem_mb([100_000] * 10) > 2900  # ten records of 28 min at 60 fps: a dense Jacobian of 2.9 GB
+    assert 2000 < group_job_mem_mb([630] * 1000) < 5000  # its compressed rows 216 MB, a square matrix 72 MB

@@ -89,16 +89,25 @@ def group_trial_rigs(settings: dict[str, dict], by_rig: dict[str, list[str]], gr
     }
 
 
-# A fit of a group of trials (joint, body, discovery) holds its dense Jacobian, samples × (3 per trial + the
-# coefficients) in float64, and a few copies of it (the error budget's linear responses, the rank check's SVD):
-# peaks measured on 2026-12-02 (copies of the demo's records, ~630 samples each): 0.31 GB for 20 trials, 1.05 GB
-# for 80, 3.34 GB for 160 (about 8 Jacobians above 0.25 GB). Declared with 10 Jacobians above 0.3 GB.
-GROUP_JOB_BASE_MB, GROUP_JOB_JACOBIANS, GROUP_JOB_MIN_MB = 300, 10, 2000
+# A fit of a group of trials (joint, body, discovery, design) holds its Jacobian, samples × (3 per trial + the
+# coefficients): dense below SPARSE_FROM_TRIALS trials (pendulum.fit.output_error's, the same number), sparse from
+# there (each sample's row holds at most 9 nonzeros: 12 B each in a CSR matrix), with a few square matrices of
+# (3 per trial + the coefficients)² float64 (normal matrix, sandwich, their inverses) and, for the rank check, the
+# trials' QR-compressed rows (at most 9 per trial, as wide: pendulum.fit.uncertainty.compressed_rows). Peaks
+# measured on 2026-12-03 (copies of the demo's records, ~630 samples each): discovery 0.29 GB for 40 trials, 0.41 GB
+# for 160 (3.34 GB while it held the dense Jacobian), the design 0.34 GB for 160. Declared with 10 times what is
+# held above 0.3 GB, at least 2000 MB.
+SPARSE_FROM_TRIALS = 11
+GROUP_JOB_BASE_MB, GROUP_JOB_COPIES, GROUP_JOB_MIN_MB = 300, 10, 2000
 
 
 def group_job_mem_mb(samples_per_trial: list[int]) -> int:
-    """Memory (MB) a group fit's job declares: max(2000, 300 + 10 J) MB, J = S (3N + 6) × 8 B the Jacobian of
-    N trials of S samples in all (rounded up to 100 MB)."""
+    """Memory (MB) a group fit's job declares: max(2000, 300 + 10 H) MB (rounded up to 100 MB), H what it holds:
+    the Jacobian of N trials of S samples in all (S (3N + 6) × 8 B dense, below SPARSE_FROM_TRIALS trials; else
+    S × 9 × 12 B sparse and its compressed rows, 9N × (3N + 6) × 8 B) and a square matrix of (3N + 6)² × 8 B."""
     n, samples = len(samples_per_trial), sum(samples_per_trial)
-    jacobian_mb = samples * (3 * n + 6) * 8 / 1e6
-    return max(GROUP_JOB_MIN_MB, -(-int(GROUP_JOB_BASE_MB + GROUP_JOB_JACOBIANS * jacobian_mb) // 100) * 100)
+    columns = 3 * n + 6
+    dense = n < SPARSE_FROM_TRIALS
+    jacobian_mb = (samples * columns * 8 if dense else samples * 9 * 12 + 9 * n * columns * 8) / 1e6
+    held_mb = jacobian_mb + columns**2 * 8 / 1e6
+    return max(GROUP_JOB_MIN_MB, -(-int(GROUP_JOB_BASE_MB + GROUP_JOB_COPIES * held_mb) // 100) * 100)

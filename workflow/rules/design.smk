@@ -37,7 +37,7 @@ rule design:
         group=r"[A-Za-z0-9_.+-]+",
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=group_mem_mb,  # from the trials' samples (inputs.smk), as discovery's
         runtime=10,
     params:
         trial_rigs=lambda wc: group_trial_rigs(

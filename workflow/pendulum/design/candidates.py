@@ -6,9 +6,10 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import sparse
 
 from pendulum.fit.group import GroupFit, GroupProblem
-from pendulum.fit.uncertainty import Z95, ar_meat, fit_ar
+from pendulum.fit.uncertainty import Z95, ar_meat, fit_ar, normal_matrix, used_columns
 from pendulum.model.physics import PendulumModel, simulate
 from pendulum.model.rig import Rig
 
@@ -53,8 +54,14 @@ def today(fit: GroupFit, max_ar_order: int) -> tuple[Information, list[tuple[np.
     jac = fit.jacobian
     rows = np.cumsum([0] + [r.size for r in fit.residuals])
     noise = noise_models(fit, max_ar_order)
-    meat = sum(ar_meat(jac[rows[k] : rows[k + 1]], phi, var) for k, (phi, var) in enumerate(noise))
-    info = Information(list(problem.labels), list(problem.columns), jac.T @ jac, meat)
+    if sparse.issparse(jac):  # a large group: each trial's meat on the columns it touches
+        meat = np.zeros((jac.shape[1], jac.shape[1]))
+        for k, (phi, var) in enumerate(noise):
+            used, part = used_columns(jac[rows[k] : rows[k + 1]])
+            meat[np.ix_(used, used)] += ar_meat(part, phi, var)
+    else:
+        meat = sum(ar_meat(jac[rows[k] : rows[k + 1]], phi, var) for k, (phi, var) in enumerate(noise))
+    info = Information(list(problem.labels), list(problem.columns), normal_matrix(jac), meat)
     reported, _, _ = fit.covariance(max_ar_order)
     formula = info.coefficient_variances()
     ratio = np.where(formula > 0, np.diag(reported)[: problem.n_phys] / np.where(formula > 0, formula, 1.0), 1.0)

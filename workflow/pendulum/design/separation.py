@@ -6,9 +6,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy import sparse
 
 from pendulum.design.candidates import Candidate
 from pendulum.fit.group import GroupProblem, ordered
+from pendulum.fit.output_error import working_jacobian
+from pendulum.fit.uncertainty import used_columns
 from pendulum.model.effects import TERMS
 
 
@@ -19,6 +22,22 @@ def _unexplained(rows: list[tuple[np.ndarray, np.ndarray]]) -> float:
     coef, *_ = np.linalg.lstsq(jac, signal, rcond=None)
     rest = signal - jac @ coef
     return float(rest @ rest)
+
+
+def _compressed(rows: list[tuple]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The (J, s) blocks of a large group (J sparse) as one dense block with the same ‖(I − P) s‖²: each trial's
+    [J_k | s_k] on the columns it touches reduced by a QR to as many rows plus one ([J | s] = diag(Q_k) R), in
+    memory that grows as the trials where the stacked J grows as their square."""
+    n_cols = rows[0][0].shape[1]
+    blocks, signals = [], []
+    for jac, signal in rows:
+        used, part = used_columns(jac)
+        upper = np.linalg.qr(np.column_stack([part, signal]), mode="r")
+        block = np.zeros((upper.shape[0], n_cols))
+        block[:, used] = upper[:, :-1]
+        blocks.append(block)
+        signals.append(upper[:, -1])
+    return [(np.vstack(blocks), np.concatenate(signals))]
 
 
 def _signal_and_rival(problem: GroupProblem, rival: GroupProblem, x: np.ndarray, effect_column: int):
@@ -33,7 +52,7 @@ def _signal_and_rival(problem: GroupProblem, rival: GroupProblem, x: np.ndarray,
     for j, column in enumerate(rival.columns):
         if column not in values:
             x_rival[j] = 0.0
-    jac = rival.jacobian(x_rival)
+    jac = working_jacobian(rival, x_rival)  # sparse for a large group
     rows = np.cumsum([0] + [m.sum() for m in rival.masks])
     out = []
     for k in range(n_trials):
@@ -70,6 +89,8 @@ def separations(d, groups: list[dict]) -> list[dict]:
             terms = tuple(t for t in problem.terms if t != carried) + (other,)
             rival = GroupProblem(problem.records, problem.rig_of, ordered(terms), problem.masks, problem.max_step_s)
             today_rows = [(j * scale, s * scale) for j, s in _signal_and_rival(problem, rival, fit.x, column)]
+            if sparse.issparse(today_rows[0][0]):
+                today_rows = _compressed(today_rows)
             n_cols = today_rows[0][0].shape[1]
             today = math.sqrt(_unexplained(today_rows))
             best = None

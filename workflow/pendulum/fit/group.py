@@ -20,12 +20,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from pendulum.fit.output_error import solve_stacked, stacked_jacobian
+from pendulum.fit.output_error import solve_stacked, stacked_jacobian, working_jacobian
 from pendulum.fit.records import AngleRecord, FitSettings
 from pendulum.fit.uncertainty import (
     coefficient_entry,
     drag_coefficient_entry,
     linear_response,
+    normal_matrix,
     sandwich_covariance,
     shared_frontal_area,
     systematic_perturbations,
@@ -82,9 +83,10 @@ class GroupFit:
         return self.x[self.problem.n_phys + 3 * k : self.problem.n_phys + 3 * k + 3]
 
     @property
-    def jacobian(self) -> np.ndarray:
+    def jacobian(self):
+        """At the estimate: sparse for a large group (:func:`pendulum.fit.output_error.working_jacobian`)."""
         if self._jacobian is None:
-            self._jacobian = self.problem.jacobian(self.x)
+            self._jacobian = working_jacobian(self.problem, self.x)
         return self._jacobian
 
     def covariance(self, max_ar_order: int) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -93,7 +95,7 @@ class GroupFit:
         rows = np.cumsum([0] + [r.size for r in self.residuals])
         parts = [jac[rows[k] : rows[k + 1]] for k in range(len(self.residuals))]
         cov, info = sandwich_covariance(parts, self.residuals, max_ar_order)
-        white = np.linalg.pinv(jac.T @ jac) * self.rss / max(self.n - self.x.size, 1)
+        white = np.linalg.pinv(normal_matrix(jac)) * self.rss / max(self.n - self.x.size, 1)
         return cov, white, info
 
     def trial_curve(self, k: int) -> np.ndarray:

@@ -52,12 +52,14 @@ from pendulum.fit.records import AngleRecord, FitSettings
 from pendulum.fit.uncertainty import (
     Z95,
     coefficient_entry,
+    compressed_rows,
     consistency_test,
     drag_coefficient_entry,
     interval95,
     jacobian_rank_warnings,
     lag1_autocorrelation,
     linear_response,
+    normal_matrix,
     sandwich_covariance,
     shared_frontal_area,
     systematic_perturbations,
@@ -187,9 +189,17 @@ def solve_stacked(problem, x0, lower, tolerance=1e-10, max_evaluations=200):
     large = len(problem.records) >= SPARSE_FROM_TRIALS
 
     def jacobian(x):
-        return stacked_jacobian(problem.jacobian_blocks(x), problem.masks, x.size, as_sparse=large)
+        return working_jacobian(problem, x)
 
     return bounded_least_squares(problem.residuals, jacobian, x0, lower, tolerance, max_evaluations, sparse=large)
+
+
+def working_jacobian(problem, x):
+    """The Jacobian of a problem of stacked trials as its fit works with it (steps, covariance, systematic
+    shifts, rank check): sparse from :data:`SPARSE_FROM_TRIALS` trials (its memory grows as the trials: 160
+    trials' dense one and its products took 3.3 GB in discovery), else dense."""
+    large = len(problem.records) >= SPARSE_FROM_TRIALS
+    return stacked_jacobian(problem.jacobian_blocks(x), problem.masks, x.size, as_sparse=large)
 
 
 def stacked_jacobian(blocks, masks: list[np.ndarray], n_columns: int, as_sparse: bool = False):
@@ -297,19 +307,20 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
     n_outliers += n_rejected
     if n_rejected:
         sol = problem.solve(sol.x, lower)
-    jac = problem.jacobian(sol.x)
+    jac = working_jacobian(problem, sol.x)
     res_parts = problem.trial_residuals(sol.x)
     rows = np.cumsum([0] + [p.size for p in res_parts])
     jac_parts = [jac[rows[k] : rows[k + 1]] for k in range(len(records))]
     cov, hac_info = sandwich_covariance(jac_parts, res_parts, settings.max_ar_order)
     residual = np.concatenate(res_parts)
     n = residual.size
-    white_cov = np.linalg.pinv(jac.T @ jac) * float(residual @ residual) / max(n - sol.x.size, 1)
+    white_cov = np.linalg.pinv(normal_matrix(jac)) * float(residual @ residual) / max(n - sol.x.size, 1)
     hac_info["systematic_shifts"] = _systematic_shifts(problem, sol, jac, lower)
     labels = list(model.parameter_names) + [f"{k}[{r.trial}]" for r in records for k in NUISANCE]
     free = np.asarray(sol.active_mask) == 0
+    ranked = compressed_rows(jac, rows) if sparse.issparse(jac) else jac  # the same singular values
     hac_info["jacobian_warnings"] = jacobian_rank_warnings(
-        jac[:, free], [n for n, f in zip(labels, free, strict=True) if f]
+        ranked[:, free], [n for n, f in zip(labels, free, strict=True) if f]
     )
     return _summarise(
         model, records, problem, sol, cov, white_cov, res_parts, starts, n_outliers, hac_info, settings, lower

@@ -6,6 +6,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+from scipy import sparse
 from scipy.linalg import solve_banded
 from scipy.special import chdtrc, ndtri
 
@@ -89,9 +90,13 @@ def sandwich_covariance(
     details = []
     rng = np.random.default_rng(seed)
     for jk, rk in zip(jac_parts, res_parts, strict=True):
-        bread += jk.T @ jk
-        used = np.flatnonzero(np.any(jk != 0, axis=0))
-        ju = jk[:, used]
+        if sparse.issparse(jk):  # a large group's (its memory grows as the trials, the dense one's as their square)
+            used, ju = used_columns(jk)
+            bread[np.ix_(used, used)] += ju.T @ ju
+        else:
+            bread += jk.T @ jk
+            used = np.flatnonzero(np.any(jk != 0, axis=0))
+            ju = jk[:, used]
         phi, var, order = fit_ar(rk, max_ar_order)
         s_k = ar_meat(ju, phi, var)
         meat[np.ix_(used, used)] += s_k
@@ -116,6 +121,32 @@ def sandwich_covariance(
         "noise_models": details,
         "residual_noise_bias_correction": scale.tolist(),
     }
+
+
+def used_columns(part) -> tuple[np.ndarray, np.ndarray]:
+    """The columns one trial's rows of a sparse Jacobian touch (any nonzero), and those columns, dense."""
+    part = sparse.csc_matrix(part)
+    used = np.flatnonzero(np.asarray(abs(part).sum(axis=0)).ravel() > 0)
+    return used, part[:, used].toarray()
+
+
+def normal_matrix(jac) -> np.ndarray:
+    """JᵀJ, dense, of a dense or a sparse Jacobian."""
+    product = jac.T @ jac
+    return product.toarray() if sparse.issparse(product) else product
+
+
+def compressed_rows(jac, rows) -> np.ndarray:
+    """R with RᵀR = JᵀJ and J's singular values, from a sparse J whose trial k holds rows ``rows[k]:rows[k+1]``:
+    each trial's touched columns reduced by a QR to as many rows (J = diag(Q_k) R). What the rank check needs of
+    J in memory that grows as the trials (Σ_k m_k × p, m_k the columns trial k touches), J's as their square."""
+    blocks = []
+    for k in range(len(rows) - 1):
+        used, ju = used_columns(jac[rows[k] : rows[k + 1]])
+        block = np.zeros((min(ju.shape), jac.shape[1]))
+        block[:, used] = np.linalg.qr(ju, mode="r")
+        blocks.append(block)
+    return np.vstack(blocks)
 
 
 def ar_meat(jac: np.ndarray, phi: np.ndarray, var: float) -> np.ndarray:
@@ -337,10 +368,20 @@ def drag_coefficient_entry(drag_area: dict, frontal_area_m2: float, frontal_area
     }
 
 
-def linear_response(jac: np.ndarray, free: np.ndarray, delta_residual: np.ndarray) -> np.ndarray:
-    """Shift of the least-squares estimate when the residuals move by δr: δx = −J⁺ δr (parameters at a bound stay)."""
+def linear_response(jac, free: np.ndarray, delta_residual: np.ndarray) -> np.ndarray:
+    """Shift of the least-squares estimate when the residuals move by δr: δx = −J⁺ δr (parameters at a bound stay);
+    of a sparse J by its column-scaled normal equations (a refit's start: their squared condition number is no
+    matter there)."""
     dx = np.zeros(jac.shape[1])
-    dx[free] = np.linalg.lstsq(jac[:, free], -delta_residual, rcond=None)[0]
+    if not sparse.issparse(jac):
+        dx[free] = np.linalg.lstsq(jac[:, free], -delta_residual, rcond=None)[0]
+        return dx
+    jf = sparse.csc_matrix(jac)[:, np.flatnonzero(free)]
+    normal, gradient = normal_matrix(jf), jf.T @ delta_residual
+    diagonal = np.diag(normal)
+    scale = np.where(diagonal > 0, 1.0 / np.sqrt(np.where(diagonal > 0, diagonal, 1.0)), 0.0)
+    step = np.linalg.lstsq(normal * np.outer(scale, scale), -gradient * scale, rcond=None)[0]
+    dx[free] = scale * step
     return dx
 
 
