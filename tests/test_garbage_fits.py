@@ -248,3 +248,18 @@ def test_a_drag_coefficient_no_body_has_names_the_fluid_density():
             assert "is far below any body's" in drag[0] and "1000 kg/m³ here" in drag[0] and "air is 1.2" in drag[0]
         else:
             assert fit["parameters"]["drag_coefficient"]["value"] == pytest.approx(1.45, rel=0.05)
+
+
+def test_a_mass_in_grams_gives_a_drag_coefficient_no_body_has_and_the_warning_names_the_mass():
+    """The apple's 0.18 kg written as 180 (a lab's scale reads grams; a fresh-eyes user, 2026-12-03): an air
+    pendulum's period does not show it (the rig checks pass), its C_d comes out ~1000× (1456): the warning names
+    mass_kg and its value, not only the density and the area."""
+    air = {"mass_kg": 0.18, "length_m": 1.053, "frontal_area_m2": 0.0038, "fluid_density_kg_m3": 1.2}
+    model = PendulumModel(Rig.from_mapping(air), ("quadratic_drag",))
+    table = synthetic_angle_table(
+        model, {"added_mass_kg": 0.0, "drag_area_m2": 1.45 * 0.0038}, 22.0, rng=np.random.default_rng(4), fps=60.0
+    )
+    fit = fit_trials([load_record(table.copy(), "apple", {**air, "mass_kg": 180.0}, FitSettings())], ["quadratic_drag"])
+    assert fit["parameters"]["drag_coefficient"]["value"] == pytest.approx(1.45 * 1000, rel=0.1)
+    drag = [w for w in fit["warnings"] if "fitted drag coefficient" in w]
+    assert len(drag) == 1 and "far above any body's" in drag[0] and "mass_kg (180 kg here" in drag[0], drag

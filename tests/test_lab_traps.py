@@ -62,6 +62,15 @@ def test_a_sidecar_may_be_named_after_the_file_or_the_trial_but_never_silently_i
     (tmp_path / "run 8.yaml").write_text("mass_kg: 3.5\n")  # a typo'd or orphaned sidecar
     with pytest.raises(ConfigError, match=r"run 8\.yaml: a sidecar of no trial .* would be ignored"):
         discover_trials(tmp_path)
+    (tmp_path / "run 8.yaml").unlink()
+    # the video's whole name with .yaml after it, as a phone's IMG_0042.MOV gets IMG_0042.MOV.yaml (a fresh-eyes
+    # user's, 2026-12-03: refused with a message that told them to do what they had done)
+    (tmp_path / "IMG_0042.MOV").write_bytes(b"")
+    (tmp_path / "IMG_0042.MOV.yaml").write_text("mass_kg: 0.18\n")
+    assert discover_trials(tmp_path)["IMG_0042"].sidecar == {"mass_kg": 0.18}
+    (tmp_path / "IMG_0042.yaml").write_text("mass_kg: 0.18\n")
+    with pytest.raises(ConfigError, match=r"are both sidecars of .*IMG_0042\.MOV"):
+        discover_trials(tmp_path)
 
 
 def test_hidden_files_are_not_trials_and_names_differing_in_case_are_refused(tmp_path):

@@ -303,9 +303,10 @@ def trial_name(stem: str) -> str:
 
 
 def _sidecar_of(path: Path, name: str) -> Path | None:
-    """The trial's sidecar: its file's name with .yaml (or .yml), or its trial name with .yaml (or .yml);
-    two of them refused naming both."""
+    """The trial's sidecar: its file's name with .yaml (or .yml) for its extension or after it (``run1.yaml`` or
+    ``run1.mp4.yaml``), or its trial name with .yaml (or .yml); two of them refused naming both."""
     candidates = [path.with_suffix(ext) for ext in SIDECAR_EXTENSIONS]
+    candidates += [path.with_name(path.name + ext) for ext in SIDECAR_EXTENSIONS]
     candidates += [path.with_name(name + ext) for ext in SIDECAR_EXTENSIONS if name != path.stem]
     found = [c for c in dict.fromkeys(candidates) if c.is_file()]
     if len(found) > 1:
@@ -356,8 +357,9 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
     if stray:
         raise ConfigError(
             f"{stray[0]}: a sidecar of no trial (no video or angle table named {stray[0].stem} or with that trial "
-            "name), so it would be ignored; name it after its video (data/raw/<video file name>.yaml) or move it "
-            "out of the raw folder"
+            "name), so it would be ignored; name it after its video, with .yaml for the video's extension or "
+            "after it (data/raw/run1.yaml or data/raw/run1.mp4.yaml for data/raw/run1.mp4), or move it out of "
+            "the raw folder"
         )
     return trials
 

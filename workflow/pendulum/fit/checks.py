@@ -151,8 +151,10 @@ DRAG_COEFFICIENT_RANGE = (0.05, 10.0)  # any body's C_d, streamlined to a flat p
 
 def drag_checks(rig: Rig, drag_coefficient: dict) -> list[str]:
     """A warning when a measured C_d lies far outside any body's (:data:`DRAG_COEFFICIENT_RANGE`): the drag torque
-    ½ ρ C_d A L³ θ̇|θ̇| gives C_d only through ρ and A, so a fluid density or frontal area that is not the rig's
-    shows here first (a pendulum in air with water's default density: C_d ≈ 0.0018 for an apple's 1.5)."""
+    ½ ρ C_d A L³ θ̇|θ̇| gives C_d only through ρ and A, and the decay it makes through the swing's inertia
+    I = m L² + …, so a fluid density, frontal area or mass that is not the rig's shows here first (a pendulum in
+    air with water's default density: C_d ≈ 0.0018 for an apple's 1.5; its mass in grams, 180 for 0.18 kg,
+    which leaves an air pendulum's period as it is: C_d ≈ 1460)."""
     value = drag_coefficient.get("value")
     if value is None or drag_coefficient.get("at_bound") or drag_coefficient.get("identifiable") is False:
         return []
@@ -161,8 +163,10 @@ def drag_checks(rig: Rig, drag_coefficient: dict) -> list[str]:
         return []
     return [
         f"fitted drag coefficient C_d = {value:.3g} is far {'below' if value < low else 'above'} any body's "
-        f"({low:g}–{high:g}): check fluid_density_kg_m3 ({rig.fluid_density_kg_m3:g} kg/m³ here; water's 1000 is "
-        "the default, air is 1.2) and frontal_area_m2"
+        f"({low:g}–{high:g}): check the rig values it comes through: fluid_density_kg_m3 "
+        f"({rig.fluid_density_kg_m3:g} kg/m³ here; water's 1000 is the default, air is 1.2), frontal_area_m2 "
+        f"({rig.frontal_area_m2:g} m² here) and mass_kg ({rig.mass_kg:g} kg here: the swing's inertia sets how "
+        "much drag a decay means; a mass in grams leaves an air pendulum's period as it is)"
     ]
 
 
