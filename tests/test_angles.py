@@ -1,6 +1,7 @@
 """Angles stage: pivot, vertical, release and θ(t) against the truth; real Tracker exports."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -278,3 +279,42 @@ def test_a_swing_seen_in_perspective_carries_a_second_harmonic_that_is_measured(
     found = second_harmonic(times, ellipse + noise, period, 0.01)
     assert found["present"] and abs(found["quadrature_deg"]) > 3 * abs(found["in_phase_deg"]), found
     assert "an elliptical swing" in found["verdict"]
+
+
+def test_a_record_too_short_for_a_period_says_so_where_the_period_would_be(tmp_path, monkeypatch):
+    """A 6 s clip of the apple (2.9 periods) gave no period and a blank in trials.csv, with no reason (a
+    fresh-eyes user, 2026-12-03). The angles job's document now says why in its warnings (trials.csv's column);
+    the whole record gives its period and no such warning."""
+    import json
+    import logging
+    import runpy
+
+    from conftest import ROOT, FakeSnakemake
+    from pendulum.angles.swings import crossing_period
+
+    monkeypatch.syspath_prepend(str(ROOT / "workflow" / "scripts"))
+    raw = pd.read_csv(SHARED / "data" / "real-air-pendulum" / "wooden_bob.csv")
+    documents = {}
+    for label, rows in (("whole", raw), ("short", raw[raw.iloc[:, 0] <= raw.iloc[0, 0] + 2.0])):
+        source = tmp_path / f"{label}.csv"
+        rows.to_csv(source, index=False)
+        settings = {"length_m": 0.334, "vertical_deg": 0.0, "rig_name": "air_wooden"}
+        out = {"angles": str(tmp_path / f"{label}.angles.csv"), "summary": str(tmp_path / f"{label}.json")}
+        sm = FakeSnakemake(
+            {"table": str(source)},
+            out,
+            str(tmp_path / f"{label}.log"),
+            {"settings": settings, "keep_rest_s": 2.0},
+            {"trial": label},
+        )
+        runpy.run_path(str(ROOT / "workflow" / "scripts" / "angles.py"), init_globals={"snakemake": sm})
+        logging.getLogger("angles").handlers.clear()
+        documents[label] = json.loads(Path(out["summary"]).read_text())
+    assert documents["whole"]["period_s"] is not None
+    assert not any("no period measured" in w for w in documents["whole"]["warnings"])
+    short = documents["short"]
+    table = pd.read_csv(tmp_path / "short.angles.csv")
+    assert crossing_period(table.time_s.to_numpy(), table.theta_rad.to_numpy()) is None
+    assert short["status"] == "ok" and short["period_s"] is None
+    said = [w for w in short["warnings"] if w.startswith("no period measured")]
+    assert len(said) == 1 and "turning point(s) over" in said[0] and "three periods or more" in said[0], said

@@ -14,6 +14,7 @@ from pendulum.angles.record import (
     record_digest,
     vertical_turned_with_the_picture,
 )
+from pendulum.angles.swings import missing_period
 from pendulum.camera.view import ImageToPlane, map_point, map_track
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
@@ -91,6 +92,10 @@ def work():
             pivot_covariance_px2=pivot_cov,
         )
         info.notes = notes + info.notes
+    if info.period_s is None:  # said where the period would be read (trials.csv, the report), not a blank
+        warning = missing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
+        log.warning("trial %s: %s", trial, warning)
+        warnings.append(warning)
     if (info.second_harmonic or {}).get("present"):
         warning = info.second_harmonic["verdict"]
         log.warning("trial %s: %s", trial, warning)

@@ -267,6 +267,19 @@ def rest_start_index(theta: np.ndarray, sigmas: float = 5.0) -> int | None:
     return start if start < th.size - 1 else None
 
 
+def missing_period(time_s: np.ndarray, theta: np.ndarray) -> str:
+    """Why :func:`crossing_period` gives no period for this record, for its angles document and the status table."""
+    t = np.asarray(time_s, float)
+    finite = np.isfinite(np.asarray(theta, float))
+    span = float(t[finite][-1] - t[finite][0]) if finite.sum() > 1 else 0.0
+    turning = int(swing_extrema(np.asarray(theta, float)).size)
+    return (
+        f"no period measured: it is timed from three crossings of the swing's middle each way (two whole periods "
+        f"in each direction), and this record has {turning} turning point(s) over {span:.1f} s, too few; a "
+        "record of three periods or more, with its swings' middles in view, gives it"
+    )
+
+
 def crossing_period(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, float, int] | None:
     """The record's mean period from the times it crosses its middle level: ``(period_s, stderr_s, n_cycles)``.
 
