@@ -188,7 +188,10 @@ def test_a_trial_skipped_by_its_sidecar_is_listed_with_why_and_fails_nothing(tmp
     table = status_table([ok, star])
     assert list(table.status) == ["ok", "skipped"] and failure_summary(table) is None and misfit_trials(table) == []
     text = failure_summary(status_table([ok, lost, star]))
-    assert text.startswith("1 of 2 trial(s) failed; the report and the other 1 trial(s)' results were built:")
+    assert text.startswith(
+        "1 of 2 trial(s) failed; the report and the other 1 trial(s)' results were built (1 more skipped by their "
+        "sidecars):"
+    )  # the skipped one said too (a fresh-eyes user, 2026-12-03: only the report listed it after a failed run)
     path = tmp_path / "trials.csv"
     status_table([ok, lost, star]).to_csv(path, index=False)
     outcomes = trial_outcomes(path)  # what a frozen folder's provenance says

@@ -183,6 +183,8 @@ def failure_summary(table: pd.DataFrame) -> str | None:
         if len(bad) < len(run)
         else "the report says why, trial by trial"
     )
+    skipped = len(table) - len(run)
+    built += f" ({skipped} more skipped by their sidecars)" if skipped else ""
     lines = [f"{len(bad)} of {len(run)} trial(s) failed; {built}:"]
     lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
     lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")

@@ -73,11 +73,19 @@ def work():
         100 * usable_fraction(track),
         f"; {held} more held by hand before the release or after a catch" if held else "",
     )
+    warnings = []  # what may be wrong in the track (trials.csv and the report list them)
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
+        warnings.append(track.attrs["video"]["stopped_early"])
     timing = track.attrs.get("timing") or {}
     if said := slip_sentence(timing):
         log.warning("%s: %s", video, said)
+    if breaks := timing.get("unexplained"):  # found and not put right: the frames after it may be off in time
+        warnings.append(
+            f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock explains "
+            "(frames lost in a row, two slips close together, or the picture moving): the frames after it may be "
+            "off in time or place, which biases a fit; not corrected"
+        )
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)
@@ -99,6 +107,7 @@ def work():
             "body": track.attrs.get("body"),  # the body tracker's scene facts (None: a marker was tracked)
             "decoder": track.attrs.get("video", {}),
             "settings": settings.__dict__,
+            "warnings": warnings,
         },
         sm.output.summary,
     )

@@ -1,10 +1,8 @@
 """Which variant to trust: the summary box and the model comparison.
 
-The summary box recommends, per rig, the joint fit of the best-supported
-variant with its consistency verdict and the warnings that matter; the model
-comparison sets the variants side by side (RMS, ΔAIC/ΔBIC, consistency) and
-weighs the evidence for each added term.
-"""
+The summary box recommends, per rig, the joint fit of the best-supported variant with its consistency verdict and
+the warnings that matter; the model comparison sets the variants side by side (RMS, ΔAIC/ΔBIC, consistency) and
+weighs the evidence for each added term."""
 
 from __future__ import annotations
 
@@ -264,7 +262,7 @@ class ComparisonSections(ReportData):
     def _tracking_note(self, trial: str) -> str:
         """A trial's path and timing findings in one clause ('' if none): a creeping camera (corrected), a path off
         one circle (carried by the angles), a second harmonic in its angles (perspective), frames lost or repeated
-        under even stamps (times corrected)."""
+        under even stamps (times corrected), breaks in its track no slip explains (not corrected)."""
         tracks = self.docs.get((trial, "tracks")) or {}
         if not is_ok(tracks):
             return ""
@@ -286,13 +284,17 @@ class ComparisonSections(ReportData):
                 "film square-on to the swing plane, from farther away)"
             )
         lost, repeated, other = slip_counts(tracks.get("timing") or {})
-        if lost or repeated or other:
-            counts = [f"{lost} frame(s) lost"] * bool(lost) + [f"{repeated} repeated"] * bool(repeated)
-            counts += [f"{other} slip(s) of the clock by part of a frame"] * bool(other)
-            parts.append(
-                f"{', '.join(counts)} while the time stamps in the file stayed even (times corrected from the motion; "
-                "near a turning point the motion cannot check the correction)"
-            )
+        counts = [f"{lost} frame(s) lost"] * bool(lost) + [f"{repeated} repeated"] * bool(repeated)
+        counts += [f"{other} slip(s) of the clock by part of a frame"] * bool(other)
+        parts += [
+            f"{', '.join(counts)} while the time stamps in the file stayed even (times corrected from the motion; "
+            "near a turning point the motion cannot check the correction)"
+        ] * bool(counts)
+        breaks = ", ".join(map(str, (tracks.get("timing") or {}).get("unexplained") or []))
+        parts += [
+            f"a break in its track at frame {breaks} no slip of the clock explains (not corrected: the frames "
+            "after it may be off in time, which biases its fits)"
+        ] * bool(breaks)
         return ", ".join(parts)
 
     def _summary_warnings(self, rig: str, variant: str, joint: dict, best: dict) -> list[str]:
