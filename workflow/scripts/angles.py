@@ -63,6 +63,12 @@ def work():
                     log.warning("trial %s: %s", trial, warning)
                     notes.append(warning)
                     warnings.append(warning)
+                if not own and trial in (geometry.get("rejected_trials") or {}):  # the pooling's stricter test
+                    notes.append(
+                        "left out of the rig's pooled pivot (results/geometry: "
+                        f"{geometry['rejected_trials'][trial].split(':')[0]}), yet close enough to the rig's circle "
+                        "for its angles to be measured about the rig's pivot"
+                    )
             vertical = vertical if vertical is not None else geometry["vertical_deg"]
         if vertical is None:  # the trial's own pivot (sidecar), no vertical: from its own swings
             own = estimate_rig_geometry({trial: track}, pivot_px=pivot)
