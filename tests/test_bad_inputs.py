@@ -491,6 +491,7 @@ def test_flat_angle_table_has_no_release(tmp_path):
         ("length_m: 0\n", r"length_m is 0; it must be greater than 0"),
         ("mass_kg: .nan\n", r"mass_kg is nan; give a finite number"),
         ("- mass_kg: 3\n", r"must be a mapping of keys to values .*not list"),
+        ("rig:air\n", r"not str \(it reads as the text 'rig:air': write a space after each key's colon"),
         ("mass_kg: [3.5\n", r"not valid YAML \(line 2, column 1: expected ',' or '\]'"),
         ("mass_kg:\t3\n", r"not valid YAML \(line 1, column 9: found character '\\t'"),
         ("displaced_volume_m3: 0.01\n", r"the pendulum floats: buoyancy ρ V g = 1000 × 0.01 × 9.81 = 98.1 N"),

@@ -402,7 +402,12 @@ def read_sidecar(path: str | Path) -> dict:
     if doc is None:
         return {}
     if not isinstance(doc, dict):
-        raise ConfigError(f"{path}: must be a mapping of keys to values (e.g. mass_kg: 3.5), not {type(doc).__name__}")
+        hint = ""
+        if isinstance(doc, str) and re.search(r"^\s*[A-Za-z_]\w*:\S", doc):  # rig:air is YAML text, rig: air a key
+            hint = f" (it reads as the text {doc.strip()[:40]!r}: write a space after each key's colon, e.g. rig: air)"
+        raise ConfigError(
+            f"{path}: must be a mapping of keys to values (e.g. mass_kg: 3.5), not {type(doc).__name__}{hint}"
+        )
     _validate(doc, "sidecar.schema.yaml", str(path))
     return doc
 
