@@ -441,3 +441,21 @@ def test_a_rigs_geometry_is_kept_when_a_trial_it_did_not_rest_on_leaves_for_its_
     assert kept_geometry_trials(document, demo, set(demo)) == demo  # the apple's video deleted: its track is gone
     assert kept_geometry_trials(document, ["d1", "d2"], videos) == ["d1", "d2"]  # a trial it rests on left
     assert kept_geometry_trials(None, demo, videos) == demo
+
+
+def test_the_same_recording_under_two_names_is_said_in_the_status_table():
+    """A copy of a clip under another name (a fresh-eyes user, 2026-12-03): the group fits counted it once, but
+    trials.csv called it a plain ok; it now says whose record it is, once, on the later-named trial."""
+    from pendulum.outcomes import mark_copies
+
+    def documents(digest):
+        return [("angles", "a.log", {"status": "ok", "period_s": 2.078, "record_sha256": digest, "warnings": []})]
+
+    rows = [trial_status(n, f"data/raw/{n}.mov", "air", documents(d)) for n, d in (("b", "x"), ("a", "x"), ("c", "y"))]
+    mark_copies(rows, {"a": "x", "b": "x", "c": "y"})
+    table = status_table(rows).set_index("trial")
+    assert table.loc["b", "n_warnings"] == 1 and table.loc["b", "warnings"].startswith(
+        "angles: the same angle record as a, sample for sample"
+    )
+    assert table.loc["a", "n_warnings"] == 0 and table.loc["c", "n_warnings"] == 0
+    assert list(table.status) == ["ok", "ok", "ok"]
