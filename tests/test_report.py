@@ -294,6 +294,30 @@ def test_the_summary_does_not_recommend_a_fit_that_misses_its_records(documents)
     assert "Recommended" not in box and "<h3>Best of the variants tried, none fits within the record's noise" in box
 
 
+def test_many_trials_misfits_are_said_once_in_the_summary(documents):
+    """Thirteen apple clips (a fresh-eyes user, 2026-12-03): the summary listed each trial's misfit warning, 13
+    paragraphs; more than three are said in one line, with the trials and their ranges."""
+    from pendulum.report.checks import misfits_together
+
+    def misfit(trial, rms, ratio):
+        return (
+            f"trial {trial}: residual RMS {rms}° is {ratio}× the record's noise (0.003°) and smooth (lag-1 1.00): the "
+            "model misses a systematic effect; its coefficients absorb it and their intervals do not cover that error"
+        )
+
+    warnings = ["the consistency test is not testable"] + [misfit(f"a{k}", 0.2 + k / 100, 40 + k) for k in range(5)]
+    assert misfits_together(warnings[:4]) == warnings[:4]  # three trials: each said
+    together = misfits_together(warnings)
+    assert together == [
+        warnings[0],
+        "5 trials' residuals (a0, a1, a2, a3, a4) are 0.2–0.24° RMS, 40–44× their records' noise, and smooth: the "
+        "model misses a systematic effect; its coefficients absorb it and their intervals do not cover that error",
+    ]
+    documents.joint[("linear", "rig")]["warnings"] = warnings
+    box = html_module.unescape(documents.summary_box())
+    assert box.count("misses a systematic effect") == 1 and "5 trials' residuals (a0, a1, a2, a3, a4)" in box
+
+
 def test_a_rig_whose_values_cannot_give_its_trials_periods_says_so_in_the_summary(tmp_path):
     """Real clips dropped into the shipped rig without sidecars: every fit refused (``rig_mismatch``); the summary
     says the rig's values are another pendulum's, with the periods, and what to give (before: "No joint fit

@@ -21,7 +21,7 @@ INPUT_WORDS = {  # error-budget input → (words in a sentence, unit)
         ("length_m", "the arm length"),
         ("frontal_area_m2", "the frontal area"),
         ("displaced_volume_m3", "the displaced volume"),
-        ("fluid_density_kg_m3", "the water's density"),
+        ("fluid_density_kg_m3", "the fluid's density"),
         ("body_inertia_kg_m2", "the body's moment of inertia"),
         ("gravity_m_s2", "gravity"),
     )

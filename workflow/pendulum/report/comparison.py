@@ -13,6 +13,7 @@ import numpy as np
 from pendulum.design.tolerances import input_words, largest_input, split_key
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.outcomes import MISFIT_MARK
+from pendulum.report.checks import MANY_TRIALS, misfits_together, tracking_note
 from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report.format import (
     COEFFICIENTS,
@@ -27,7 +28,6 @@ from pendulum.report.format import (
     table_html,
     td,
 )
-from pendulum.tracking.timing import slip_counts
 
 TRADED = re.compile(r"(\w+) and (\w+) are (-?[0-9.]+) correlated")
 TRADED_LIMIT = 0.99  # |correlation| of two coefficients in a joint fit at which the records cannot tell them apart
@@ -259,44 +259,6 @@ class ComparisonSections(ReportData):
         )
         return sentence[0].upper() + sentence[1:]
 
-    def _tracking_note(self, trial: str) -> str:
-        """A trial's path and timing findings in one clause ('' if none): a creeping camera (corrected), a path off
-        one circle (carried by the angles), a second harmonic in its angles (perspective), frames lost or repeated
-        under even stamps (times corrected), breaks in its track no slip explains (not corrected)."""
-        tracks = self.docs.get((trial, "tracks")) or {}
-        if not is_ok(tracks):
-            return ""
-        parts = []
-        path = tracks.get("path") or {}
-        creep = path.get("creep") or {}
-        if path.get("corrected") and is_finite(creep.get("motion_px")):
-            parts.append(f"the camera crept by {fmt(creep['motion_px'], 2)} px (corrected)")
-        if path.get("departs") and is_finite(path.get("unexplained_angle_deg")):
-            parts.append(
-                f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
-                f"({fmt(path['unexplained_angle_deg'], 2)}°; not corrected, it stays in the angles)"
-            )
-        harmonic = (self.docs.get((trial, "angles")) or {}).get("second_harmonic") or {}
-        if harmonic.get("present"):
-            parts.append(
-                f"its angles hold a second harmonic of {fmt(harmonic['amplitude_deg'], 2)}° (perspective: its "
-                "distance from the camera changes with the swing; not corrected, it stays in the fits' residuals: "
-                "film square-on to the swing plane, from farther away)"
-            )
-        lost, repeated, other = slip_counts(tracks.get("timing") or {})
-        counts = [f"{lost} frame(s) lost"] * bool(lost) + [f"{repeated} repeated"] * bool(repeated)
-        counts += [f"{other} slip(s) of the clock by part of a frame"] * bool(other)
-        parts += [
-            f"{', '.join(counts)} while the time stamps in the file stayed even (times corrected from the motion; "
-            "near a turning point the motion cannot check the correction)"
-        ] * bool(counts)
-        breaks = ", ".join(map(str, (tracks.get("timing") or {}).get("unexplained") or []))
-        parts += [
-            f"a break in its track at frame {breaks} no slip of the clock explains (not corrected: the frames "
-            "after it may be off in time, which biases its fits)"
-        ] * bool(breaks)
-        return ", ".join(parts)
-
     def _summary_warnings(self, rig: str, variant: str, joint: dict, best: dict) -> list[str]:
         out = []
         failed = self.failed_trials()
@@ -357,8 +319,8 @@ class ComparisonSections(ReportData):
                 "The per-trial estimates disagree beyond their intervals: the joint interval is widened by S, "
                 "but the model may miss physics."
             )
-        for w in joint.get("warnings", []):
-            if "lower bound" not in w and "not identifiable" not in w:  # said above, in words
+        for w in misfits_together([w for w in joint.get("warnings", []) if "lower bound" not in w]):
+            if "not identifiable" not in w:  # said above, in words
                 out.append(esc(w))
         per_trial = [  # other than the garbage-in problems, said above
             t
@@ -372,10 +334,15 @@ class ComparisonSections(ReportData):
             )
         fitted = set(joint["trials"] if "trials" in joint else self.rig_trials(rig))  # not a failed trial's record
         tracking = [
-            f"<b>{esc(t)}</b>: {esc(n)}" for t in self.rig_trials(rig) if t in fitted and (n := self._tracking_note(t))
+            f"<b>{esc(t)}</b>: {esc(n)}"
+            for t in self.rig_trials(rig)
+            if t in fitted and (n := tracking_note(self.docs.get((t, "tracks")), self.docs.get((t, "angles"))))
         ]
-        if tracking:
-            out.append("What the fitted videos' records carry (Tracking quality): " + "; ".join(tracking) + ".")
+        said = "What the fitted videos' records carry (Tracking quality)"
+        if len(tracking) > MANY_TRIALS:  # a lab's many trials: folded, not a page of text in the summary
+            out.append(f"<details><summary>{said}: {len(tracking)} trials</summary>{'; '.join(tracking)}.</details>")
+        elif tracking:
+            out.append(f"{said}: " + "; ".join(tracking) + ".")
         if not self.provenance.get("commit"):
             out.append("Not built from a git commit: the code version of these results is not recorded.")
         elif self.provenance.get("dirty"):
