@@ -29,7 +29,23 @@ STATUS_COLUMNS = [
     "warnings",
 ]
 MISFIT_MARK = "misses a systematic effect"  # the fits' warning that the model is wrong for the record
+# the fits' notes on the model itself (pendulum.fit: misfit, a coefficient at its bound, not identifiable, traded
+# against another): what a variant too simple or too rich says on every trial
+MODEL_NOTE_MARKS = (
+    MISFIT_MARK,
+    "its estimate is not a measurement",
+    "is not identifiable from this record",
+    "the record hardly separates them",
+)
 EVERY_VARIANT = "fit (every variant): "
+
+
+def for_the_terminal(warning: str) -> bool:
+    """Whether a fit's warning goes to the terminal as well as its log: not a note on the model itself
+    (:data:`MODEL_NOTE_MARKS`), which every variant too simple or too rich gives on every trial (134 of 187
+    warning lines on 13 apple clips, 2026-12-03); trials.csv, the report's Table 3 and the run's last lines (the
+    trials no variant fits) say those. What may be wrong with the record or the rig values is said there too."""
+    return not any(mark in warning for mark in MODEL_NOTE_MARKS)
 
 
 def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, str, dict]]) -> dict:

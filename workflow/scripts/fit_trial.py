@@ -21,6 +21,7 @@ from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
 from pendulum.fit.summary import CURVE_COLUMNS, cycle_table, fit_document, fitted_curve
 from pendulum.io import read_json, script_logger, write_csv, write_json
+from pendulum.outcomes import for_the_terminal
 from pendulum.status import empty_table, require_ok, run_stage
 
 sm = snakemake  # noqa: F821
@@ -45,8 +46,9 @@ def fit_stage():
     log.info("trial %s, variant %s (%s): %d samples", trial, variant, "+".join(terms), record.n_samples)
     fit = fit_trials([record], terms, settings)
     document = fit_document(fit, variant=variant, rig=sm.params.rig, sources=[sm.input.angles], settings=settings)
-    for warning in fit["warnings"]:
-        log.warning("trial %s, variant %s: %s", trial, variant, warning.removeprefix(f"trial {trial}: "))
+    for warning in fit["warnings"]:  # notes on the model to its log only (trials.csv and the report list them)
+        said = log.warning if for_the_terminal(warning) else log.info
+        said("trial %s, variant %s: %s", trial, variant, warning.removeprefix(f"trial {trial}: "))
     log.info("trial %s, variant %s: rms %.4f deg, %s", trial, variant, fit["rms_deg"], fit["optimiser"]["message"])
     write_json({"trial": trial, "status": "ok", **document}, sm.output.fit)
     run_stage("curve", log, lambda: curve_stage(angles), write_failed)
