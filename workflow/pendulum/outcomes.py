@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from pendulum.status import is_failed
+from pendulum.status import copies_of, is_failed, same_record
 
 STATUS_COLUMNS = [
     "trial",
@@ -183,22 +183,15 @@ def misfit_trials(table: pd.DataFrame) -> list[str]:
 
 def mark_copies(rows: list[dict], digests: dict[str, str | None]) -> None:
     """Warn on each trial whose angle record is an earlier-named trial's, sample for sample (``record_sha256``, the
-    angles documents'): the group fits count it once (:func:`pendulum.status.fitted_trials`); trials.csv says so
-    too, not only the report."""
-    first_of: dict[str, str] = {}
-    for row in sorted(rows, key=lambda r: r["trial"]):
-        digest = digests.get(row["trial"])
-        if not digest or row.get("status") != "ok":
-            continue
-        if digest not in first_of:
-            first_of[digest] = row["trial"]
-            continue
-        said = (
-            f"angles: the same angle record as {first_of[digest]}, sample for sample (the same video under another "
-            "name): counted once in the joint fits, body fits and discovery"
-        )
-        row["warnings"] = " | ".join([w for w in [row.get("warnings") or ""] if w] + [said])
-        row["n_warnings"] = int(row.get("n_warnings") or 0) + 1
+    angles documents'): the group fits count it once (:func:`pendulum.status.fitted_trials`, by the same
+    :func:`pendulum.status.copies_of`); trials.csv says so too, not only the report."""
+    ok = {row["trial"]: digests.get(row["trial"]) for row in rows if row.get("status") == "ok"}
+    copies = copies_of(ok)
+    for row in rows:
+        if row["trial"] in copies:
+            said = f"angles: {same_record(copies[row['trial']])} in the joint fits, body fits and discovery"
+            row["warnings"] = " | ".join([w for w in [row.get("warnings") or ""] if w] + [said])
+            row["n_warnings"] = int(row.get("n_warnings") or 0) + 1
 
 
 def status_table(rows: list[dict]) -> pd.DataFrame:

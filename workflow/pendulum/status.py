@@ -80,18 +80,32 @@ def fitted_trials(
         if name in excluded:
             log.warning("%s: %s left out (%s)", context, name, excluded[name])
     # one recording under two names (a video copied or exported twice, tracked alike) is one measurement
+    kept = [n for n in names if n not in excluded]
+    for name, first in copies_of({n: angle_info[n].get("record_sha256") for n in kept}).items():
+        excluded[name] = same_record(first)
+        log.warning("%s: %s left out (%s)", context, name, excluded[name])
+    return [n for n in sorted(names) if n not in excluded], excluded
+
+
+def copies_of(digests: dict[str, str | None]) -> dict[str, str]:
+    """Trial → the first-named trial whose angle record it is, sample for sample (the same ``record_sha256``)."""
     first_of: dict[str, str] = {}
-    for name in sorted(n for n in names if n not in excluded):
-        digest = angle_info[name].get("record_sha256")
+    copies = {}
+    for name in sorted(digests):
+        digest = digests[name]
         if digest in first_of:
-            excluded[name] = (
-                f"the same angle record as {first_of[digest]}, sample for sample (the same video under another "
-                "name, tracked alike): counted once"
-            )
-            log.warning("%s: %s left out (%s)", context, name, excluded[name])
+            copies[name] = first_of[digest]
         elif digest:
             first_of[digest] = name
-    return [n for n in sorted(names) if n not in excluded], excluded
+    return copies
+
+
+def same_record(first: str) -> str:
+    """Why a trial is fitted once, not twice (:func:`copies_of`)."""
+    return (
+        f"the same angle record as {first}, sample for sample (the same video under another name, tracked alike): "
+        "counted once"
+    )
 
 
 def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_failed: Callable[[dict], None]) -> bool:

@@ -19,7 +19,7 @@ from pendulum.status import empty_table, failure_image, require_ok, run_stage
 from pendulum.tracking.method import track_trial, usable_fraction
 from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
-from pendulum.tracking.timing import slip_sentence
+from pendulum.tracking.timing import break_sentence, slip_sentence
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "tracks")
@@ -80,12 +80,8 @@ def work():
     timing = track.attrs.get("timing") or {}
     if said := slip_sentence(timing):
         log.warning("%s: %s", video, said)
-    if breaks := timing.get("unexplained"):  # found and not put right: the frames after it may be off in time
-        warnings.append(
-            f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock explains "
-            "(frames lost in a row, two slips close together, or the picture moving): the frames after it may be "
-            "off in time or place, which biases a fit; not corrected"
-        )
+    if said := break_sentence(timing):  # found and not put right
+        warnings.append(f"{said}, which biases a fit; not corrected")
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)

@@ -11,7 +11,7 @@ from scipy import sparse
 from pendulum.design.candidates import Candidate
 from pendulum.fit.group import GroupProblem, ordered
 from pendulum.fit.output_error import working_jacobian
-from pendulum.fit.uncertainty import used_columns
+from pendulum.fit.uncertainty import compressed_rows
 from pendulum.model.effects import TERMS
 
 
@@ -25,19 +25,12 @@ def _unexplained(rows: list[tuple[np.ndarray, np.ndarray]]) -> float:
 
 
 def _compressed(rows: list[tuple]) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The (J, s) blocks of a large group (J sparse) as one dense block with the same ‖(I − P) s‖²: each trial's
-    [J_k | s_k] on the columns it touches reduced by a QR to as many rows plus one ([J | s] = diag(Q_k) R), in
-    memory that grows as the trials where the stacked J grows as their square."""
-    n_cols = rows[0][0].shape[1]
-    blocks, signals = [], []
-    for jac, signal in rows:
-        used, part = used_columns(jac)
-        upper = np.linalg.qr(np.column_stack([part, signal]), mode="r")
-        block = np.zeros((upper.shape[0], n_cols))
-        block[:, used] = upper[:, :-1]
-        blocks.append(block)
-        signals.append(upper[:, -1])
-    return [(np.vstack(blocks), np.concatenate(signals))]
+    """The (J, s) blocks of a large group (J sparse) as one dense block with the same ‖(I − P) s‖²: the trials'
+    [J_k | s_k] reduced by a QR each (:func:`pendulum.fit.uncertainty.compressed_rows`), in memory that grows as
+    the trials where the stacked J grows as their square."""
+    stacked = sparse.vstack([sparse.hstack([jac, sparse.csr_matrix(signal[:, None])]) for jac, signal in rows])
+    upper = compressed_rows(stacked.tocsr(), np.cumsum([0] + [signal.size for _, signal in rows]))
+    return [(upper[:, :-1], upper[:, -1])]
 
 
 def _signal_and_rival(problem: GroupProblem, rival: GroupProblem, x: np.ndarray, effect_column: int):

@@ -387,17 +387,22 @@ def slip_counts(timing: dict) -> tuple[int, int, int]:
 UNCHECKED_FRACTION = 0.2  # below this share of a record where a lost frame would stand out, the check is said unmade
 
 
+def break_sentence(timing: dict) -> str:
+    """The breaks :func:`find_slips` found and no slip explains (``unexplained``), in one sentence ('' when none)."""
+    breaks = timing.get("unexplained") or []
+    if not breaks:
+        return ""
+    return (
+        f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock explains "
+        "(frames lost in a row, two slips close together, or the picture moving): the frames after it may be off "
+        "in time or place"
+    )
+
+
 def slip_sentence(timing: dict) -> str:
     """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
     slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
-    breaks = timing.get("unexplained") or []
-    others = [_picture_sentence(timing.get("picture_steps") or [])]
-    if breaks:
-        others.append(
-            f"the track breaks at frame {', '.join(str(f) for f in breaks)} in a way no slip of the clock explains "
-            "(frames lost in a row, two slips close together, or the picture moving): the frames after it may be off "
-            "in time or place"
-        )
+    others = [_picture_sentence(timing.get("picture_steps") or []), break_sentence(timing)]
     checked = timing.get("checked_fraction")
     if checked is not None and float(checked) < UNCHECKED_FRACTION and not slips and not repeated:
         others.append(
