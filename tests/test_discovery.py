@@ -233,7 +233,7 @@ def test_noise_floor_of_a_continuous_record_is_its_noise_not_its_sampling_densit
     rng = np.random.default_rng(int(release_deg))
     t = np.arange(600) / 30.0
     theta = np.radians(release_deg) * np.exp(-t / 8.0) * np.cos(2 * np.pi * t / 1.6)
-    noisy = SimpleNamespace(theta_rad=theta + rng.normal(0.0, np.radians(0.005), t.size))
+    noisy = SimpleNamespace(time_s=t, theta_rad=theta + rng.normal(0.0, np.radians(0.005), t.size))
     assert math.degrees(noise_floor_rad(noisy)) == pytest.approx(0.005, rel=0.10)
-    clicked = SimpleNamespace(theta_rad=np.round(theta / np.radians(0.05)) * np.radians(0.05))
+    clicked = SimpleNamespace(time_s=t, theta_rad=np.round(theta / np.radians(0.05)) * np.radians(0.05))
     assert math.degrees(noise_floor_rad(clicked)) >= 0.9 * 0.05 / math.sqrt(12)

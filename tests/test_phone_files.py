@@ -84,11 +84,17 @@ def test_trimmed_clip_timeline_is_the_decoded_frames(tmp_path, monkeypatch):
     assert len(hidden) == lead and hidden[0].is_keyframe
 
 
-def write_frames(path, frames, times_s=None, rate=30, codec="libx264", pix_fmt="yuv420p", rotation=None):
+def write_frames(
+    path, frames, times_s=None, rate=30, codec="libx264", pix_fmt="yuv420p", rotation=None, ticks_per_s=90000
+):
+    """``frames`` written at ``times_s`` (every 1/``rate`` s when None), stamped in ticks of 1/``ticks_per_s`` s
+    (rounded to them)."""
+    tick = Fraction(1, ticks_per_s)
     with av.open(str(path), mode="w", format="mp4") as container:
         stream = container.add_stream(codec, rate=rate)
         stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], pix_fmt
-        stream.codec_context.time_base = Fraction(1, 90000)
+        stream.codec_context.time_base = tick
+        stream.time_base = tick
         if codec == "libx265":
             stream.options = {
                 "crf": "20",
@@ -102,7 +108,7 @@ def write_frames(path, frames, times_s=None, rate=30, codec="libx264", pix_fmt="
         for i, image in enumerate(frames):
             frame = av.VideoFrame.from_ndarray(image, format="gray").reformat(format=pix_fmt)
             t = i / rate if times_s is None else times_s[i]
-            frame.pts, frame.time_base = int(round(t * 90000)), Fraction(1, 90000)
+            frame.pts, frame.time_base = int(round(t * ticks_per_s)), tick
             for packet in stream.encode(frame):
                 container.mux(packet)
         for packet in stream.encode():
@@ -141,6 +147,29 @@ def test_variable_frame_rate_keeps_timestamps_and_is_no_dropped_frame_spam(tmp_p
     info, timeline = frame_timeline(tmp_path / "cfr.mp4")
     assert not info.variable_frame_rate and timeline.dropped_before.sum() == 2
     assert info.frame_interval_s == pytest.approx(1 / 30, abs=1e-5) and not info.warnings
+
+
+@pytest.mark.parametrize("ticks_per_s", [1000, 600])
+def test_stamps_rounded_to_a_coarse_tick_are_the_regular_clock_they_round(tmp_path, ticks_per_s):
+    """59.94 fps stamped in milliseconds (Matroska, some muxers) or in an iPhone's 1/600 s step by 16 and 17 ms
+    (10 and 11 ticks): the frames are taken at the regular clock those stamps round, 16.683 ms, within a fifth of a
+    tick (the stamps: half a tick; 0.02 ms from milliseconds, 0.25 ms from 1/600 s over 5 s), with no warning that the
+    frames come every 17 ms, and a lost frame still counted (before: the median step, 17 ms, and the stamps'
+    rounding in every frame's time). A variable frame rate keeps its stamps."""
+    period = 1001 / 60000
+    slots = np.delete(np.arange(300), 150)  # 5 s; the camera lost frame 150
+    write_frames(tmp_path / "ms.mp4", moving_square(299), slots * period, rate=60, ticks_per_s=ticks_per_s)
+    info, timeline = frame_timeline(tmp_path / "ms.mp4")
+    assert info.rounded_stamps_tick_s == pytest.approx(1 / ticks_per_s)
+    assert info.frame_interval_s == pytest.approx(period, abs=1e-5) and not info.warnings
+    assert np.abs(timeline.time_s - slots * period).max() < 0.2 / ticks_per_s
+    assert timeline.dropped_before.sum() == 1 and not info.variable_frame_rate
+    rng = np.random.default_rng(4)
+    times = np.concatenate([[0.0], np.cumsum(rng.choice([0.015, 0.0167, 0.0184], 59))])
+    write_frames(tmp_path / "vfr.mp4", moving_square(60), times, rate=60, ticks_per_s=ticks_per_s)
+    info, timeline = frame_timeline(tmp_path / "vfr.mp4")
+    assert info.rounded_stamps_tick_s is None
+    assert np.abs(timeline.time_s - times).max() <= 0.5 / ticks_per_s + 1e-9
 
 
 def test_rotation_metadata_is_reported_and_frames_used_as_stored(tmp_path):

@@ -35,6 +35,7 @@ def work():
         "mean_fps": float((len(timeline) - 1) / timeline.time_s.iloc[-1]) if len(timeline) > 1 else None,
         "frame_interval_s": info.frame_interval_s,
         "variable_frame_rate": info.variable_frame_rate,
+        "rounded_stamps_tick_s": info.rounded_stamps_tick_s,
         "irregular_intervals": int(timeline.irregular_interval.sum()),
         "dropped_frames": int(timeline.dropped_before.sum()),
         "duplicate_timestamps": int(timeline.duplicate_time.sum()),
@@ -60,6 +61,14 @@ def work():
         summary["keyframes"],
         summary["irregular_intervals"],
     )
+    if info.rounded_stamps_tick_s:
+        log.info(
+            "%s: time stamps rounded to the container's %.4g ms tick, taken as the regular clock they round "
+            "(%.4f ms per frame)",
+            video,
+            1e3 * info.rounded_stamps_tick_s,
+            1e3 * info.frame_interval_s,
+        )
     for warning in info.warnings:
         log.warning("%s", warning)
     if summary["dropped_frames"] or summary["duplicate_timestamps"]:

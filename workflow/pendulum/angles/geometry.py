@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.swings import swing_centre_rad
+from pendulum.tracking.path_shape import arc_span_deg
 
 
 @dataclass
@@ -60,7 +61,6 @@ def fit_circle(x, y, weights=None) -> CircleFit:
     else:
         sol = least_squares(lambda p: root_w * residual(p), [cx, cy, r0], x_scale="jac")
     cx, cy, r = sol.x
-    ang = np.degrees(np.arctan2(x - cx, y - cy))
     # Covariance σ² (JᵀJ)⁻¹, with n replaced by an effective count n (1 − ρ)/(1 + ρ):
     # neighbouring track points share their errors (texture, blur), ρ is the lag-1 correlation.
     res = sol.fun
@@ -74,7 +74,7 @@ def fit_circle(x, y, weights=None) -> CircleFit:
         float(r),
         float(np.sqrt(np.mean(res**2))) if root_w is None else float(np.sqrt(np.mean(residual(sol.x) ** 2))),
         int(x.size),
-        float(np.ptp(ang)),
+        arc_span_deg(x, y, (cx, cy)),
         cov[:2, :2].tolist(),
         float(n_eff),
     )

@@ -136,7 +136,7 @@ def angle_record(
         n_flagged=int((table.flag != "ok").sum()),
         rest_from_s=rest_from,
         held_frames=int(held[:first_free].sum()) if by_hand else 0,
-        noise_deg=math.degrees(sample_noise_rad(theta)),
+        noise_deg=math.degrees(sample_noise_rad(theta, t)),
         arm_radius_px=arm_radius_px,
         pivot_covariance_px2=pivot_covariance_px2,
     )

@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from pendulum.camera.stamps import read_clock, regular_clock
+
 VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov")
 
 
@@ -38,6 +40,7 @@ class VideoInfo:
     discarded_packets: int = 0  # packets before the first shown frame (a trimmed clip's edit list)
     frame_interval_s: float | None = None  # median interval between shown frames
     variable_frame_rate: bool = False
+    rounded_stamps_tick_s: float | None = None  # stamps rounded to this tick, taken as the regular clock they round
     rotation_deg: float = 0.0  # display rotation the file states (frames are used as stored)
     pixel_format: str = ""
     bit_depth: int = 8
@@ -113,10 +116,6 @@ def _open(path: Path):
         container.close()
         raise VideoError(f"{path}: contains no video stream (audio only?); remove it or convert it")
     return container
-
-
-IRREGULAR_INTERVAL = 0.1  # an interval more than this fraction of the median off a whole multiple of it
-VARIABLE_RATE_FRACTION = 0.02  # more irregular intervals than this (and ≥ 3): a variable frame rate
 
 
 def _first_decoded_frame(packet, state: dict) -> None:
@@ -213,42 +212,22 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
             "the decoder yields; the timeline starts at the first shown frame"
         )
     table.insert(0, "frame", np.arange(len(table)))
-    table.insert(2, "time_s", (table.pts - shown_from).to_numpy(dtype=float) * float(tb))
-    interval = np.diff(table.time_s.to_numpy(), prepend=np.nan)
-    positive = interval[np.isfinite(interval) & (interval > 0)]
-    frame_interval = float(np.median(positive)) if positive.size else 1.0 / stated_fps
-    with np.errstate(invalid="ignore", divide="ignore"):
-        multiple = interval / frame_interval
-        irregular = np.isfinite(multiple) & (multiple > 0) & (np.abs(multiple - np.rint(multiple)) > IRREGULAR_INTERVAL)
-        irregular |= np.isfinite(multiple) & (multiple > 0) & (np.rint(multiple) == 0)
-    n_irregular = int(irregular.sum())
-    variable = n_irregular >= 3 and n_irregular > VARIABLE_RATE_FRACTION * max(1, positive.size)
-    if variable:
-        dropped = np.zeros(len(table), int)
-        warnings.append(
-            f"{path}: variable frame rate: frame intervals {positive.min() * 1e3:.1f}–{positive.max() * 1e3:.1f} ms "
-            f"(median {frame_interval * 1e3:.1f} ms, {n_irregular} irregular); every frame keeps its own timestamp "
-            "and no frames are counted as dropped"
-        )
-    else:
-        with np.errstate(invalid="ignore"):
-            dropped = np.where(interval >= 1.5 * frame_interval, np.rint(interval / frame_interval) - 1, 0)
-        dropped = np.nan_to_num(dropped).astype(int)
-        if positive.size and all(abs(frame_interval * r - 1) > 0.01 for r in stated_rates):
-            warnings.append(
-                f"{path}: the container states {stated_fps:.3f} fps but the frames come every "
-                f"{frame_interval * 1e3:.2f} ms ({1 / frame_interval:.3f} fps); the timestamps are used"
-            )
+    rounded = regular_clock(table.pts.to_numpy())
+    ticks = table.pts.to_numpy(dtype=float) if rounded is None else rounded[0]
+    table.insert(2, "time_s", (ticks - ticks[0]) * float(tb))
+    clock, clock_warnings = read_clock(table.time_s.to_numpy(), stated_rates, path)
+    warnings.extend(clock_warnings)
     if facts["rotation_deg"]:
         warnings.append(
             f"{path}: the file asks players to rotate the picture by {facts['rotation_deg']:g}°; its frames are used "
-            f"as stored ({width}×{height}): tracks, pivot_px and vertical_deg are in stored pixel coordinates (give "
-            "pivot_px/vertical_deg as measured in the stored frames, not in the rotated picture a player shows)"
+            f"as stored ({width}×{height}): tracks and pivot_px are in stored pixel coordinates (give pivot_px as "
+            "measured in the stored frames, not in the rotated picture a player shows; a vertical_deg the swing "
+            "shows to be the shown picture's is turned with it)"
         )
-    table.insert(3, "interval_s", interval)
-    table.insert(4, "dropped_before", dropped)
-    table.insert(5, "duplicate_time", np.nan_to_num(interval, nan=1.0) <= 0)
-    table.insert(6, "irregular_interval", irregular)
+    table.insert(3, "interval_s", clock["interval"])
+    table.insert(4, "dropped_before", clock["dropped"])
+    table.insert(5, "duplicate_time", np.nan_to_num(clock["interval"], nan=1.0) <= 0)
+    table.insert(6, "irregular_interval", clock["irregular"])
     info = VideoInfo(
         str(path),
         width,
@@ -259,8 +238,9 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         stated,
         tuple(warnings),
         discarded_packets=discarded,
-        frame_interval_s=frame_interval,
-        variable_frame_rate=bool(variable),
+        frame_interval_s=clock["frame_interval"],
+        variable_frame_rate=clock["variable"],
+        rounded_stamps_tick_s=None if rounded is None else rounded[2] * float(tb),
         rotation_deg=facts["rotation_deg"],
         pixel_format=facts["pixel_format"],
         bit_depth=facts["bit_depth"],

@@ -33,7 +33,7 @@ def noise_floor_rad(record, noise_deg: float | None = None) -> float:
     the samples fill the swing (a 60° swing of 600 samples: 0.2°, whose /√12 is four times a
     tracker's 0.005°).
     """
-    sigma = math.radians(noise_deg) if noise_deg is not None else sample_noise_rad(record.theta_rad)
+    sigma = math.radians(noise_deg) if noise_deg is not None else sample_noise_rad(record.theta_rad, record.time_s)
     theta = np.asarray(record.theta_rad, float)
     theta = theta[np.isfinite(theta)]
     d3 = np.diff(theta, 3)

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from pendulum.angles.swings import noise_differences
 from pendulum.fit.records import AngleRecord
 from pendulum.fit.uncertainty import lag1_autocorrelation
 from pendulum.model.rig import Rig
@@ -20,32 +21,6 @@ MIN_USABLE_FRACTION = 0.5  # of the samples after the release transient: less, a
 MAX_REST_OFFSET_DEG = 2.0  # with the vertical given or estimated from the swings the rest angle is ≈ 0
 MAX_ROUGHNESS_RATIO = 5.0  # RMS over robust σ of the residual's third differences; Gaussian noise: ≈ 1
 MIN_NOISE_TRIPLES = 20  # fewer runs of four consecutive samples: the noise cannot be told from jumps
-
-
-def noise_differences(time_s: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Third differences over four consecutive samples, scaled to the noise: z ~ N(0, σ²) for white noise σ.
-
-    z = Σ w_j x_j / √(Σ w_j²), w the third divided difference's weights 1/Π_{k≠j}(t_j − t_k) (on a regular
-    grid ∝ (−1, 3, −3, 1), so z = Δ³x/√20; uneven (variable-frame-rate) grids are handled exactly).
-    Smooth motion adds ≈ x‴ h³/√20, negligible at video rates. Consecutive: no interval longer than
-    1.5× the median interval; a gap (flagged or dropped frames) breaks a run and no difference spans it.
-    """
-    t, x = np.asarray(time_s, float), np.asarray(values, float)
-    if t.size < 4:
-        return np.empty(0)
-    dt = np.diff(t)
-    regular = (dt > 0) & (dt <= 1.5 * float(np.median(dt)))
-    ok = np.flatnonzero(regular[:-2] & regular[1:-1] & regular[2:])
-    if ok.size == 0:
-        return np.empty(0)
-    points = t[ok[:, None] + np.arange(4)[None, :]]
-    weights = np.ones_like(points)
-    for j in range(4):
-        for k in range(4):
-            if k != j:
-                weights[:, j] /= points[:, j] - points[:, k]
-    samples = x[ok[:, None] + np.arange(4)[None, :]]
-    return (weights * samples).sum(axis=1) / np.sqrt((weights**2).sum(axis=1))
 
 
 def record_noise_rad(time_s: np.ndarray, theta_rad: np.ndarray) -> float:

@@ -24,7 +24,6 @@ import math
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import least_squares
 
 MIN_ARC_SPAN_DEG = 5.0  # a path shorter than this says nothing about its circle
 MAX_DEGREE = 2
@@ -40,6 +39,17 @@ NOT_CIRCLE_SWING_FRACTION = 0.02
 NOT_CIRCLE_NOISE_RATIO = 3.0
 
 
+def arc_span_deg(x, y, centre) -> float:
+    """The angle the points (x, y) span about ``centre``: the spread of their directions about their mean
+    direction, so that a path across the upward vertical (a camera upside down: atan2 wraps at ±180° there) is
+    not counted as 360°."""
+    direction = np.arctan2(np.asarray(x, float) - centre[0], np.asarray(y, float) - centre[1])
+    if not direction.size:
+        return 0.0
+    mean = math.atan2(float(np.sin(direction).sum()), float(np.cos(direction).sum()))
+    return float(np.degrees(np.ptp(np.mod(direction - mean + math.pi, 2 * math.pi) - math.pi)))
+
+
 def _design(t: np.ndarray, degree: int) -> tuple[np.ndarray, float, float]:
     centre, span = float(np.mean(t)), float(max(np.ptp(t), 1e-9))
     tau = (t - centre) / span
@@ -47,6 +57,8 @@ def _design(t: np.ndarray, degree: int) -> tuple[np.ndarray, float, float]:
 
 
 def _fit(x, y, t, degree: int, start):
+    from scipy.optimize import least_squares  # here: the angles job imports arc_span_deg
+
     basis, _, _ = _design(t, degree)
 
     def residual(p):
@@ -106,7 +118,7 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
     (c0, c1, c2), *_ = np.linalg.lstsq(a, x**2 + y**2, rcond=None)
     start = [c0 / 2, c1 / 2, math.sqrt(max(c2 + (c0 / 2) ** 2 + (c1 / 2) ** 2, 1e-9))]
     params, cov, rms = _fit(x, y, t, 0, start)
-    span = float(np.ptp(np.degrees(np.arctan2(x - params[0], y - params[1]))))
+    span = arc_span_deg(x, y, params[:2])
     document = {"circle_rms_px": round(rms, 4), "noise_px": round(noise_px, 4), "arc_span_deg": round(span, 2)}
     best = (0, params, cov, rms, None)
     # a creeping pivot is told from a path that spans enough of its circle

@@ -43,6 +43,7 @@ STILL_FRACTION = 0.05  # a repeated frame: a step under this share of the steps 
 MAX_ROUNDS = 3
 UNEXPLAINED = 100.0  # a break this × the usual misfit that no shift mends: said (the apple's rough spots: 5–12×)
 PICTURE_SHARE = 0.5  # turning points that move across a slip by this share of what it implies: the picture moved
+ROUNDING_SHARE = 0.05  # of a frame period: corrected stamps may run back by this much (stamps rounded to ticks)
 PICTURE_USUAL = 3.0  # ... and by this many times their usual movement from one swing to the next
 
 
@@ -325,7 +326,9 @@ def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
     period = found["period_s"]
     shift = found.pop("shift_periods")
     corrected = stamp + period * shift
-    if np.any(np.diff(corrected[np.isfinite(corrected)]) < -1e-9 * max(period, 1e-9)):  # never: a safeguard
+    # never (a safeguard), but for stamps rounded to a coarse tick (a repeat's moment a rounding before the frame's
+    # before it: max.accumulate below takes that): a step back of a twentieth of a period is no rounding
+    if np.any(np.diff(corrected[np.isfinite(corrected)]) < -ROUNDING_SHARE * max(period, 1e-9)):
         shift[:] = 0.0
         corrected = stamp.copy()
         found.update(slips=[], repeated=[], note="slips found made time run backwards: none applied")
