@@ -228,6 +228,37 @@ def test_stamps_rounded_to_milliseconds_keep_their_frame_period_and_a_missing_st
     assert np.nanmax(np.abs(out.time_s - taken)) < 0.002  # the millisecond rounding, no more
 
 
+@pytest.mark.parametrize("tick_s", [1e-3, 1 / 600])
+def test_stamps_rounded_to_a_coarse_tick_are_the_clock_they_round_and_slips_are_still_put_right(tick_s):
+    """59.94 fps stamped in milliseconds or in an iPhone's 1/600 s (steps of 16 and 17 ms, or 10 and 11 ticks), a
+    lost frame and a repeated one at fast moments, 20 seeds: the stamps taken as the clock they round, every
+    corrected time within 0.1 frame period of the moment the frame was taken (as above: a slip is measured to
+    0.05 period) and the slips found, in at least 19. Before, at 1/600 s a repeat whose correction put it a
+    rounding before the frame before it switched off every correction ("slips found made time run backwards":
+    the lost frame's period, 17 ms, left in every later time)."""
+    fps = 60000 / 1001
+    passed = 0
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        _, _, theta = swing_track(np.random.default_rng(seed), fps=fps, duration_s=12.0)
+        n = theta.size
+        lost, repeat = (fast_frame(rng, theta, a * n // 3, (a + 1) * n // 3 - 8) for a in (1, 2))
+        track, taken, _ = swing_track(
+            np.random.default_rng(seed), slips=[(lost, 1.0), (repeat, -1.0)], fps=fps, duration_s=12.0
+        )
+        track["time_s"] = np.round(track.time_s / tick_s) * tick_s
+        out = correct_slips(track)
+        timing = out.attrs["timing"]
+        error = np.abs(out.time_s.to_numpy() - taken)
+        passed += bool(
+            error.max() <= 0.1 / fps
+            and timing["rounded_stamps_tick_s"] == pytest.approx(tick_s)
+            and [f for f, _ in timing["slips"]] == [lost]
+            and timing["repeated"] == [repeat]
+        )
+    assert passed >= 19, passed
+
+
 def test_the_checked_share_counts_every_pair_of_usable_frames():
     """Glare at the bottom of every swing leaves only the windows clear of it to search: the share checked says
     so (it counted the searched windows alone, 0.97 where under a third of the record could be searched)."""

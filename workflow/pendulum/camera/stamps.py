@@ -44,6 +44,28 @@ def regular_clock(pts: np.ndarray) -> tuple[np.ndarray, float, int] | None:
     return times, float(period), step
 
 
+def regular_times(stamp_s: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """:func:`regular_clock` of stamps in seconds from the first frame (the rounding step read from their two
+    step lengths): ``(times from the first frame, the rounding step in s)``, or None."""
+    stamp_s = np.asarray(stamp_s, float)
+    steps = np.diff(stamp_s)
+    if steps.size < 10 or not np.all(np.isfinite(stamp_s)) or np.any(steps <= 0):
+        return None
+    typical = float(np.median(steps))
+    regular = steps[np.abs(steps - typical) <= 0.5 * typical]
+    values = np.unique(np.round(regular, 9))
+    if values.size != 2:
+        return None
+    step = float(regular.sum() / np.rint(regular / (values[1] - values[0])).sum())  # to the stamps' precision
+    ticks = (stamp_s - stamp_s[0]) / step
+    if np.abs(ticks - np.rint(ticks)).max() > 1e-3:
+        return None
+    clock = regular_clock(np.rint(ticks).astype(np.int64))
+    if clock is None:
+        return None
+    return (clock[0] - clock[0][0]) * step, step * clock[2]
+
+
 def read_clock(time_s: np.ndarray, stated_rates: list[float], path) -> tuple[dict, list[str]]:
     """The clock of frames shown at ``time_s`` (from the first shown frame): ``interval`` per frame (NaN for the
     first), ``frame_interval`` (the median interval), ``irregular`` (more than 10 % off a whole number of frame

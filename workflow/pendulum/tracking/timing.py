@@ -30,6 +30,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from pendulum.camera.stamps import regular_times
+
 HALF_WINDOW = 6  # usable frames on each side of a boundary
 DEGREE = 4  # of the polynomial through a window (x and y)
 MAX_SHIFT = 2.5  # frame periods a slip may be late (lost frames) ...
@@ -310,8 +312,9 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
 
 def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
     """``track`` with ``time_s`` put right for lost and repeated frames (:func:`find_slips` on its ``ok`` and
-    ``jump`` frames), repeated frames flagged ``duplicate``, and ``jump`` frames beside a slip that fit the
-    corrected motion made ``ok``; ``attrs["timing"]`` says what was found."""
+    ``jump`` frames; stamps rounded to a coarse tick first taken as the regular clock they round:
+    :func:`pendulum.camera.stamps.regular_times`), repeated frames flagged ``duplicate``, and ``jump`` frames
+    beside a slip that fit the corrected motion made ``ok``; ``attrs["timing"]`` says what was found."""
     if track.empty:
         return track
     # a frame the marker tracker saw repeat the one before (the same picture) is flagged duplicate already: its
@@ -320,6 +323,9 @@ def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
     x = track.x_px.to_numpy(float)
     y = track.y_px.to_numpy(float)
     stamp = track.time_s.to_numpy(float)
+    rounded = regular_times(stamp)  # stamps rounded to a coarse tick: the regular clock they round (camera.stamps)
+    if rounded is not None:
+        stamp = rounded[0]
     found = find_slips(track.frame.to_numpy(), stamp, x, y, usable & np.isfinite(x) & np.isfinite(y))
     out = track.copy()
     out.attrs = dict(track.attrs)
@@ -343,6 +349,7 @@ def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
         **found,
         "jumps_cleared": cleared,
         "checked_fraction": round(found["checked_fraction"], 4),
+        "rounded_stamps_tick_s": None if rounded is None else rounded[1],
         "max_shift_s": round(float(np.abs(period * shift).max()), 6) if shift.size else 0.0,
     }
     return out
