@@ -147,6 +147,53 @@ def test_apple_frames_lost_and_repeated_by_the_phone_are_found_and_put_right(app
     assert abs(at_half[138] - slips[276] / 2) <= 0.1 and abs(at_half[232] - slips[463] / 2) <= 0.1
 
 
+def restamped(path: Path, out: Path, ticks_per_s: int) -> Path:
+    """The clip's packets, not decoded, stored again with every time stamp rounded to 1/``ticks_per_s`` s (a
+    Matroska or WebM file's milliseconds, an iPhone's 1/600 s)."""
+    from fractions import Fraction
+
+    import av
+
+    tick = Fraction(1, ticks_per_s)
+    with av.open(str(path)) as source, av.open(str(out), "w", format="mov") as target:
+        stream = source.streams.video[0]
+        copy = target.add_stream_from_template(stream)
+        copy.time_base = tick
+        for packet in source.demux(stream):
+            if packet.dts is None:
+                continue
+            for name in ("pts", "dts"):
+                value = getattr(packet, name)
+                setattr(packet, name, None if value is None else round(value * stream.time_base / tick))
+            packet.time_base, packet.stream = tick, copy
+            target.mux(packet)
+    return out
+
+
+@pytest.mark.parametrize("ticks_per_s", [1000, 600])
+def test_the_apple_stamped_in_a_coarse_tick_is_timed_as_the_clip_itself(apple, tmp_path, ticks_per_s):
+    """The clip's own packets with their stamps rounded to milliseconds or to 1/600 s (16 and 17 ms, 10 and 11
+    ticks, for its 59.94 fps): the same frames lost and repeated found, the same times within a tenth of a frame
+    period, the same period (before, in milliseconds: frames said to come every 17 ms, the repeat at 309 missed,
+    the period 2.0799 s; in 1/600 s every correction switched off, 2.0784 s)."""
+    from pendulum.camera.video import frame_timeline
+    from pendulum.tracking.method import track_trial
+
+    track, _, table, info = apple
+    video = restamped(APPLE, tmp_path / f"apple_{ticks_per_s}.mov", ticks_per_s)
+    frames, _ = frame_timeline(video)
+    assert frames.rounded_stamps_tick_s == pytest.approx(1 / ticks_per_s) and not frames.warnings
+    assert frames.frame_interval_s == pytest.approx(1001 / 60000, rel=1e-4)
+    again = track_trial(video, default_settings())
+    timing, own = again.attrs["timing"], track.attrs["timing"]
+    assert timing["repeated"] == own["repeated"] and [f for f, _ in timing["slips"]] == [f for f, _ in own["slips"]]
+    both = (again.flag == "ok").to_numpy() & (track.flag == "ok").to_numpy()
+    assert np.abs(again.time_s - track.time_s)[both].max() <= 0.1 * timing["period_s"]
+    assert zero_crossing_period(again.time_s.to_numpy(), np.where(both, again.x_px, np.nan)) == pytest.approx(
+        zero_crossing_period(track.time_s.to_numpy(), np.where(both, track.x_px, np.nan)), rel=1e-4
+    )
+
+
 @pytest.mark.parametrize("variant", ["hand_release", "hand_release_long_dark", "hand_release_fingers"])
 def test_a_hand_holding_the_apple_before_the_release_is_never_taken_for_it(apple, tmp_path, variant):
     """The clip released by hand in view (``real_variants._hand_release``: held at its first place by a hand from
