@@ -5,9 +5,9 @@ A container stores each frame's presentation time in ticks of its time base. Whe
 the frame period (59.94 fps in milliseconds, as Matroska/WebM and some muxers store them, or in an iPhone's
 1/600 s) the stamps of a constant-rate camera step by two neighbouring tick counts (16 and 17 ms): each stamp
 is the frame's time rounded, off by up to half a tick (0.5 ms: 0.03° at mid-swing of a 20° swing of 2 s), and
-the median step is not the frame period. Stamps that lie within half a tick of one regular clock, t_k = c + P n_k
-(n_k the frame's slot, counting lost frames), are taken as that clock; stamps that do not (a phone's variable
-frame rate) keep their own times.
+the median step is not the frame period. Stamps that lie within their rounding of one regular clock,
+t_k = c + P n_k (n_k the frame's slot, counting lost frames; c and P fitted, so ¾ of a tick is allowed), are taken
+as that clock; stamps that do not (a phone's variable frame rate) keep their own times.
 """
 
 from __future__ import annotations
