@@ -311,6 +311,10 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
 # lighter parts come within 12 grey levels of the band's wall and those frames are flagged (93.3 % ok, the flagged
 # positions 1.9 px off): below the 95 % issue 23 asks of a held-out clip. The bars are what is measured, less a
 # margin, so that a change that loses frames fails here.
+# Under a light that flickers at 100 Hz, filmed at 60 fps, bands of ±12 % of the brightness roll down the frame:
+# the scene's noise read 18.5 grey levels, only the apple's darkest part stood above 5σ, and 93.2 % of the frames
+# were ok at 0.039° (2026-12-03); each sample's rows are now brought to one exposure and the window's offset is a
+# line in the row (99.85 %, 0.006°).
 # Filmed in colour (a phone's video is), the two-tone ball with a dark blue lower half before the band (as the
 # held-out clip) is measured by its colour (pendulum.tracking.colour): 99.9 % ok, where its brightness
 # silhouette gives 96.6 % and is 21 % smaller mid-swing (the apple before the band in colour: 93.5 -> 99.85 %,
@@ -324,6 +328,7 @@ REAL_VARIANTS = {
     "upside_down": (99.0, 180.0),
     "sideways": (99.0, -90.0),
     "15fps": (99.0, 0.0),
+    "mains_flicker": (99.0, 0.0),
     "swing_leaves_the_frame": (80.0, None),
 }
 

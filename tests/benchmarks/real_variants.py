@@ -5,7 +5,8 @@
 `../shared/data/real-video/redapple_480p.mov` (real phone footage, MIT licence) is turned into the
 variants a lab's footage differs by — half, double and triple (1080p) size, 30 and 15 fps, a 6 s record, a
 record that starts later in the swing, a phone on its side, upside down or 5° off level, a swing that
-leaves the frame at one end, exposure drift, defocus, a low bitrate, the sensor noise of a dim room, a
+leaves the frame at one end, exposure drift, mains flicker (a light's bands rolling down the frame), defocus, a
+low bitrate, the sensor noise of a dim room, a
 dark backdrop, a letterbox, a burnt-in timestamp, a post in front of the swing, an uncalibrated fisheye
 lens, a phone held upright (the swing out of view most of the time: a refusal that says so), a soft dark
 band across the wall (on the wall only, or on the apple too), the apple's own soft shadow beside it, a
@@ -58,6 +59,14 @@ def _resize(factor):
 
 def _drift(image, index, n):
     gain = 0.75 + 0.4 * index / max(n - 1, 1)  # auto-exposure creeping over the clip
+    return np.clip(image.astype(np.float32) * gain, 0, 255).astype(np.uint8)
+
+
+def _flicker(image, index, n):
+    """A light's bands rolling down a rolling-shutter frame: 60 fps under 50 Hz mains (the light at 100 Hz beats
+    with the frame rate at 20 Hz), ±12 % of the brightness, bands 240 px apart."""
+    rows = np.arange(image.shape[0], dtype=np.float32)[:, None]
+    gain = 1 + 0.12 * np.sin(2 * np.pi * (20.0 * index / APPLE_FPS + rows / 240.0))
     return np.clip(image.astype(np.float32) * gain, 0, 255).astype(np.uint8)
 
 
@@ -373,6 +382,7 @@ def variants():
         "tilted_5deg": (_tilted, 1, 0, 18),
         "swing_leaves_the_frame": (_cropped, 1, 0, 18),
         "exposure_drift": (_drift, 1, 0, 18),
+        "mains_flicker": (_flicker, 1, 0, 18),
         "defocus": (_defocus, 1, 0, 18),
         "low_bitrate": (None, 1, 0, 34),
         "dim_room_noise": (_noisy, 1, 0, 18),

@@ -11,7 +11,8 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    of where the silhouette then changes mid-swing (``unseen_scene``, ``warning`` in the facts).
    Static shadows, wall gradients and stripes are part of the scene; σ is the MAD of I − B.
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
-   window's median offset, which follows slow exposure drift), or for a one-sided body
+   window's offset, a line in the row fitted to its border, which follows slow exposure drift and a light's
+   bands rolling down the frame: :func:`border_offset`), or for a one-sided body
    (``body_scene.body_polarity``: at least 80 % of its first-frame pixels' |I − B| on one side of the scene,
    an apple or a two-tone ball's dark half before a light wall, where that side alone finds the same body)
    that side's only, D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays
@@ -167,6 +168,27 @@ def _body_close_size(inner_radius_px: float) -> int:
     """Closing disk (odd, px) for a body of this inner radius: ~½ of it, so a print's dark patches (a third
     of the radius apart) are one object before the opening."""
     return 2 * int(round(inner_radius_px / 4)) + 1
+
+
+def border_offset(signed: np.ndarray) -> np.ndarray | float:
+    """The window's offset from the scene as a line in the row, o(y) = a + b (y − ȳ), fitted to its border's
+    I − B (its left and right columns row by row, its top and bottom rows at their ends), twice, the second time
+    without the pixels more than 3 MAD (at least 1.5 grey levels) off the first (a string, a shadow); the median
+    where the window is too short. A level follows slow exposure drift; the slope, a light's bands rolling down a
+    rolling-shutter frame (mains flicker, with the samples' rows brought to one exposure:
+    :func:`pendulum.tracking.scene_stack.same_exposure`)."""
+    h = signed.shape[0]
+    rows = np.r_[np.arange(h), np.arange(h), np.zeros(signed.shape[1]), np.full(signed.shape[1], h - 1)]
+    values = np.r_[signed[:, 0], signed[:, -1], signed[0], signed[-1]].astype(np.float64)
+    if h < 8:
+        return float(np.median(values))
+    y = rows - 0.5 * (h - 1)
+    keep = np.ones(values.size, bool)
+    for _ in range(2):
+        slope, level = np.polyfit(y[keep], values[keep], 1)
+        residual = values - (level + slope * y)
+        keep = np.abs(residual) <= max(3 * 1.4826 * float(np.median(np.abs(residual))), 1.5)
+    return (level + slope * (np.arange(h) - 0.5 * (h - 1)))[:, None].astype(np.float32)
 
 
 def _open_size(inner_radius_px: float) -> int:
@@ -376,8 +398,7 @@ def track_body(
         flag, x, y, mass, bx, by = "lost", math.nan, math.nan, 0.0, math.nan, math.nan
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
-            border = np.concatenate([signed[0], signed[-1], signed[:, 0], signed[:, -1]])
-            diff = one_sided(signed - np.median(border), scene.polarity)
+            diff = one_sided(signed - border_offset(signed), scene.polarity)
             component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area)
             if component is not None:
                 here = float(np.percentile(diff[component], 90))

@@ -22,7 +22,8 @@ def same_exposure(images: list[np.ndarray]) -> np.ndarray:
     """The samples brought to one exposure, as one (n, h, w) uint8 stack: each mapped by the gain and offset that
     best take it to the samples' median on every 4th pixel (two passes, the second without pixels off by > 3 MAD,
     at least 1.5 grey levels: the body; by the offset alone where the pixels kept span under 4 grey levels, as on
-    a plain wall, whose gain they cannot tell: a fit there gave gains of 0.5 and offsets of 85)."""
+    a plain wall, whose gain they cannot tell: a fit there gave gains of 0.5 and offsets of 85); and, where a
+    light's bands roll down the frame (mains flicker), by each row's own offset (:func:`_row_offsets`)."""
     grid = np.stack([im[::4, ::4] for im in images]).astype(np.float32)
     reference = np.median(grid, axis=0).ravel()
     out = np.empty((len(images), *images[0].shape), np.uint8)  # written in place: no second copy of the samples
@@ -41,11 +42,36 @@ def same_exposure(images: list[np.ndarray]) -> np.ndarray:
                 offset = at_mean - gain * mean
             residual = values - (gain * reference + offset)
             keep = np.abs(residual) <= max(3 * 1.4826 * float(np.median(np.abs(residual))), 1.5)
-        if abs(gain - 1) < 0.005 and abs(offset) < 0.5:
+        rows = _row_offsets(residual.reshape(small.shape), keep.reshape(small.shape), image.shape[0])
+        if abs(gain - 1) < 0.005 and abs(offset) < 0.5 and rows is None:
             out[k] = image
         else:
-            out[k] = np.clip(np.rint((image.astype(np.float32) - offset) / gain), 0, 255)
+            level = offset if rows is None else offset + rows[:, None]
+            out[k] = np.clip(np.rint((image.astype(np.float32) - level) / gain), 0, 255)
     return out
+
+
+ROW_BAND_SIGMAS = 5.0  # row offsets whose spread is this many times their own noise (and ≥ 1 grey level): bands
+
+
+def _row_offsets(residual: np.ndarray, keep: np.ndarray, height: int) -> np.ndarray | None:
+    """Per image row, the offset that a light's bands rolling down a rolling-shutter frame (mains flicker) add
+    along the rows, from the median residual of each sampled row (every 4th) over its kept pixels, smoothed over
+    five of them and continued to every row; None where their spread is not ROW_BAND_SIGMAS times the noise of
+    a row's median and at least 1 grey level (no bands: the sample as it was)."""
+    masked = np.where(keep, residual, np.nan)
+    counts = keep.sum(axis=1)
+    if residual.shape[0] < 10 or np.any(counts < 8):
+        return None
+    with np.errstate(all="ignore"):
+        medians = np.nanmedian(masked, axis=1)
+    sigma = 1.4826 * float(np.median(np.abs(residual[keep])))
+    noise = 1.25 * sigma / np.sqrt(float(np.median(counts)))
+    spread = float(np.std(medians))
+    if spread < max(1.0, ROW_BAND_SIGMAS * noise):
+        return None
+    smooth = np.array([np.median(medians[max(0, i - 2) : i + 3]) for i in range(medians.size)])
+    return np.interp(np.arange(height), 4 * np.arange(medians.size), smooth).astype(np.float32)
 
 
 MEDIAN_ROWS = 64  # image rows per band of the per-pixel medians (memory, not results)
