@@ -56,9 +56,10 @@ ROW_BAND_SIGMAS = 5.0  # row offsets whose spread is this many times their own n
 
 def _row_offsets(residual: np.ndarray, keep: np.ndarray, height: int) -> np.ndarray | None:
     """Per image row, the offset that a light's bands rolling down a rolling-shutter frame (mains flicker) add
-    along the rows, from the median residual of each sampled row (every 4th) over its kept pixels, smoothed over
-    five of them and continued to every row; None where their spread is not ROW_BAND_SIGMAS times the noise of
-    a row's median and at least 1 grey level (no bands: the sample as it was)."""
+    along the rows, from the median residual of each sampled row (every 4th) over its kept pixels, continued to
+    every row (not smoothed: a band's slope is up to 4 grey levels from one sampled row to the next); None where
+    their spread is not ROW_BAND_SIGMAS times the noise of a row's median and at least 1 grey level (no bands:
+    the sample as it was)."""
     masked = np.where(keep, residual, np.nan)
     counts = keep.sum(axis=1)
     if residual.shape[0] < 10 or np.any(counts < 8):
@@ -70,8 +71,7 @@ def _row_offsets(residual: np.ndarray, keep: np.ndarray, height: int) -> np.ndar
     spread = float(np.std(medians))
     if spread < max(1.0, ROW_BAND_SIGMAS * noise):
         return None
-    smooth = np.array([np.median(medians[max(0, i - 2) : i + 3]) for i in range(medians.size)])
-    return np.interp(np.arange(height), 4 * np.arange(medians.size), smooth).astype(np.float32)
+    return np.interp(np.arange(height), 4 * np.arange(medians.size), medians).astype(np.float32)
 
 
 MEDIAN_ROWS = 64  # image rows per band of the per-pixel medians (memory, not results)
