@@ -20,7 +20,7 @@ ROUNDING_TOLERANCE = 0.75  # rounding steps: stamps within this of one regular c
 # the 0.5 of the true clock where few steps are long) are that clock, rounded
 
 
-def regular_clock(pts: np.ndarray) -> tuple[np.ndarray, float, int] | None:
+def _regular_clock(pts: np.ndarray) -> tuple[np.ndarray, float, int] | None:
     """The regular clock that stamps ``pts`` (integer ticks, in order) round, as ``(times in ticks, period in
     ticks, the rounding step in ticks)``, where their steps take two counts one rounding step q apart (16 and 17
     ms; q the steps' greatest common divisor, a muxer may store milliseconds in finer ticks) and every stamp lies
@@ -45,7 +45,7 @@ def regular_clock(pts: np.ndarray) -> tuple[np.ndarray, float, int] | None:
 
 
 def regular_times(stamp_s: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """:func:`regular_clock` of stamps in seconds from the first frame (the rounding step read from their two
+    """:func:`_regular_clock` of stamps in seconds from the first frame (the rounding step read from their two
     step lengths): ``(times from the first frame, the rounding step in s)``, or None."""
     stamp_s = np.asarray(stamp_s, float)
     steps = np.diff(stamp_s)
@@ -60,7 +60,7 @@ def regular_times(stamp_s: np.ndarray) -> tuple[np.ndarray, float] | None:
     ticks = (stamp_s - stamp_s[0]) / step
     if np.abs(ticks - np.rint(ticks)).max() > 1e-3:
         return None
-    clock = regular_clock(np.rint(ticks).astype(np.int64))
+    clock = _regular_clock(np.rint(ticks).astype(np.int64))
     if clock is None:
         return None
     return (clock[0] - clock[0][0]) * step, step * clock[2]

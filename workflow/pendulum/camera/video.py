@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pendulum.camera.stamps import read_clock, regular_clock
+from pendulum.camera.stamps import read_clock, regular_times
 
 VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov")
 
@@ -212,9 +212,9 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
             "the decoder yields; the timeline starts at the first shown frame"
         )
     table.insert(0, "frame", np.arange(len(table)))
-    rounded = regular_clock(table.pts.to_numpy())
-    ticks = table.pts.to_numpy(dtype=float) if rounded is None else rounded[0]
-    table.insert(2, "time_s", (ticks - ticks[0]) * float(tb))
+    stamps = (table.pts - shown_from).to_numpy(dtype=float) * float(tb)
+    rounded = regular_times(stamps)  # the tracks stage reads its stamps the same way (tracking.timing)
+    table.insert(2, "time_s", stamps if rounded is None else rounded[0])
     clock, clock_warnings = read_clock(table.time_s.to_numpy(), stated_rates, path)
     warnings.extend(clock_warnings)
     if facts["rotation_deg"]:
@@ -240,7 +240,7 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         discarded_packets=discarded,
         frame_interval_s=clock["frame_interval"],
         variable_frame_rate=clock["variable"],
-        rounded_stamps_tick_s=None if rounded is None else rounded[2] * float(tb),
+        rounded_stamps_tick_s=None if rounded is None else rounded[1],
         rotation_deg=facts["rotation_deg"],
         pixel_format=facts["pixel_format"],
         bit_depth=facts["bit_depth"],

@@ -184,8 +184,12 @@ def border_offset(signed: np.ndarray) -> np.ndarray | float:
         return float(np.median(values))
     y = rows - 0.5 * (h - 1)
     keep = np.ones(values.size, bool)
-    for _ in range(2):
-        slope, level = np.polyfit(y[keep], values[keep], 1)
+    for _ in range(2):  # least squares in closed form (a call of np.polyfit per frame cost 4 % of a body's track)
+        ys, vs = y[keep], values[keep]
+        y_mean, v_mean = float(ys.mean()), float(vs.mean())
+        spread = float(((ys - y_mean) ** 2).sum())
+        slope = float(((ys - y_mean) * (vs - v_mean)).sum()) / spread if spread > 0 else 0.0
+        level = v_mean - slope * y_mean
         residual = values - (level + slope * y)
         keep = np.abs(residual) <= max(3 * 1.4826 * float(np.median(np.abs(residual))), 1.5)
     return (level + slope * (np.arange(h) - 0.5 * (h - 1)))[:, None].astype(np.float32)
