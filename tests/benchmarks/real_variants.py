@@ -14,8 +14,9 @@ glossy apple, the apple made a two-tone ball (alone, before the band, and that a
 held-out clips), the apple and the two-tone ball (its lower half dark blue) before the band in colour, as a
 phone films (``..._colour``, the ball also at 1080p and at 550×310; every other variant is the clip's luma), a
 release by hand in view (``hand_release``, a darker hand holding it for 10 s: ``hand_release_long_dark``, and
-fingers alone: ``hand_release_fingers``; their ``ok%`` counts the frames after the release), and two pendulums
-side by side (with and without ``start_px``) — and each is tracked
+fingers alone: ``hand_release_fingers``; their ``ok%`` counts the frames after the release), two pendulums
+side by side (with and without ``start_px``), and a white dot on the apple (``dot_on_bob``; two such pendulums with
+``start_px`` at the left one's dot: as the held-out clock pendulums) — and each is tracked
 with config.yaml's defaults (no hints), as a new user would. Per variant: the method used, the share of
 frames ``ok`` (and ``edge``), the vertical found, the angle record's period from its zero crossings
 against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
@@ -408,7 +409,24 @@ def variants():
         "hand_release_fingers": (None, 1, 0, 18),
         "two_pendulums": (None, 1, 0, 18),
         "two_pendulums_start_px": (None, 1, 0, 18),
+        "dot_on_bob": (None, 1, 0, 18),
+        "two_pendulums_dots_start_px": (None, 1, 0, 18),
     }
+
+
+DOT_RADIUS_PX = 5.0  # the dot_on_bob variants: a sticker on the bob, 5 px in radius, 5 px below the apple's centre
+DOT_GREY = 235.0
+
+
+def _dotted(frames: list) -> list:
+    """A white sticker on the bob (as the held-out clock pendulums have a dot on each): a soft-edged disk of
+    :data:`DOT_RADIUS_PX` at 235 grey, fixed 5 px below the apple's centre (its pixels at least half apple),
+    moving with it; on the dark apple before the light wall."""
+    out = []
+    for image, _, xs, ys, cx, cy in _apples(frames, _wall(frames)):
+        cover = np.clip(DOT_RADIUS_PX + 0.5 - np.hypot(xs - cx, ys - cy - 5.0), 0.0, 1.0)
+        out.append(np.clip(image * (1 - cover) + DOT_GREY * cover, 0, 255).astype(np.uint8))
+    return out
 
 
 def _two_pendulums(frames: list) -> list:
@@ -437,6 +455,8 @@ def make(name: str, workdir: Path) -> Path:
     ]
     if transform is not None:
         frames = [transform(image, k, len(frames)) for k, image in enumerate(frames)]
+    if "dot" in name:
+        frames = _dotted(frames)
     if name.startswith("two_pendulums"):
         frames = _two_pendulums(frames)
     if name == "shadow_band":
@@ -473,6 +493,8 @@ def judge(name: str, workdir: Path) -> dict:
     config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
     if name == "two_pendulums_start_px":  # the user points at the left one (the original clip's apple)
         config = {**config, "start_px": list(APPLE_START_PX)}
+    if name == "two_pendulums_dots_start_px":  # ... at the left one's dot
+        config = {**config, "start_px": [APPLE_START_PX[0], APPLE_START_PX[1] + 5.0]}
     settings = TrackerSettings.from_config(config)
     row = {"variant": name}
     try:

@@ -35,8 +35,9 @@ def close_size(shape) -> int:
 
 
 def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int = 5):
-    """Connected components of ``diff > threshold`` after a closing (the image continued by background) and an
-    opening (the image continued by the body where it is cut): (labels, stats, masses)."""
+    """Connected components of ``diff > threshold`` after a closing (the image continued by background), its holes
+    filled where they are a body's markings (:func:`fill_markings`), and an opening (the image continued by the body
+    where it is cut): (labels, stats, masses)."""
     whole = (diff > threshold).astype(np.uint8)
     # The morphology on the pixels that can change: the box of the pixels above the threshold grown by both
     # kernels' reach (beyond it the result is 0 whatever the border; where the box meets the image's edge, the
@@ -58,6 +59,7 @@ def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int =
     pad = close_px // 2 + 1
     padded = cv2.copyMakeBorder(mask, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
     closed = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px,) * 2))
+    fill_markings(closed)
     mask = closed[pad:-pad, pad:-pad]
     if open_px > 1:  # OpenCV's default border on purpose: a body the border cuts is not opened away there
         # (at an edge of the box inside the image the border's foreground reaches no pixel the closing set: those
@@ -76,6 +78,23 @@ def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int =
         masses = np.bincount(part.ravel(), weights=diff[y0:y1, x0:x1].ravel(), minlength=n)
         masses[0] = 0.0
     return labels, stats, masses
+
+
+MARKING_SHARE = 0.1  # holes together up to this share of the filled body: its markings (a dot: (a / R)² of it)
+
+
+def fill_markings(closed: np.ndarray) -> None:
+    """Fill, in place, the holes of ``closed`` (uint8 0/1, its border background) where together they are at most
+    :data:`MARKING_SHARE` of the filled mask: a white dot or a label on a dark body is the body's own. Until
+    2026-12-03 such a dot stayed a hole: the body's inner radius came out halved, and with it the opening that cuts
+    its thread, so an apple's stem was followed in some frames and not others (2 px at the swing's ends). Holes that
+    are more of it (a print's light squares: the pattern, not its outline) are left as they are."""
+    outside = closed.copy()
+    cv2.floodFill(outside, None, (0, 0), 1)
+    holes = outside == 0
+    n_holes = int(np.count_nonzero(holes))
+    if n_holes and n_holes <= MARKING_SHARE * (n_holes + int(np.count_nonzero(closed))):
+        closed[holes] = 1
 
 
 def reduced(image: np.ndarray, scale: int) -> np.ndarray:
