@@ -22,9 +22,9 @@ frames ``ok`` (and ``edge``), the vertical found, the angle record's period from
 against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
 The variants are real footage transformed, not renders: what they change is known exactly, and the rest
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
-Measured 2026-12-03: 37 of 39 pass (36 of 38 on 2026-11-29, before mains_flicker was added): not the post in
+Measured 2026-12-03: 39 of 41 pass (37 of 39 before the dot variants; 36 of 38 on 2026-11-29): not the post in
 front (90.8 % ok, every frame it hides part of the apple in flagged), nor the apple before a shadow band in grey
-(93.5 % of frames ok, below 95 %; in colour it is measured by its colour, 99.85 %; docs/footage.md).
+(93.7 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
 """
 
 from __future__ import annotations

@@ -189,7 +189,7 @@ def stopped_text(stopped: MarkerAbandoned) -> str:
     radius = f", radius {spot.marker_radius_px:.1f} px" if spot.marker_radius_px else ""
     return (
         f"usable in under {100 * MARKER_USABLE_FRACTION:.0f} % of the frames: {found} disk-like spot ({spot.polarity}"
-        f"{radius}; on a body with no marker dot, the body itself) was not measurable "
+        f"{radius}: a marker dot, or the body itself where it has none) was not measurable "
         f"as a disk in more than {100 * (1 - MARKER_USABLE_FRACTION):.0f} % of the frames by frame "
         f"{stopped.at_frame}, where its pass was stopped"
     )
