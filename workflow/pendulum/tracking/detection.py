@@ -363,9 +363,9 @@ def _detect(
     rival = rivals[0] if rivals else None
     if rival is not None and rival.support >= 0.5 * best.support:
         raise DetectionError(
-            f"{where}two objects swing: {best.describe(n)}, and {rival.describe(n)}; give the marker's start_px "
-            "(its centre in the first frame), polarity and marker_radius_px in the trial's sidecar (with all three "
-            "given, no detection runs)"
+            f"{where}two objects swing: {best.describe(n)}, and {rival.describe(n)}; give the start_px of the one to "
+            "follow (its centre in the first frame) in the trial's sidecar (with its polarity and marker_radius_px "
+            "given too, no detection runs)"
         )
     # Blobs of other objects on the same circle (reached by a jump there and back) are not the marker's.
     # The first sample's member, if dropped, is kept aside: a start for when no search has a checked one.
