@@ -18,7 +18,8 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    that side's only, D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays
    out wherever the wall behind it is darker or lighter; a wall darker than a dark body hides it), above
    T = max(5σ, ¼ C), C the body's contrast, closed by a disk of about half the body's inner radius (a print's
-   dark patches are one object) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
+   dark patches are one object), its holes filled where together under a tenth of it (a dot or a label on it:
+   ``body_scene.fill_markings``) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
    soft shadow is below T); the connected component nearest the prediction (where that is over
    :data:`MAX_AREA_RATIO` of the body's area and another is the body's size: that one, a hand drawn back
    after the release), with every component within two closing widths of it. The first frame's body is the
