@@ -259,27 +259,26 @@ def test_a_white_dot_on_the_apple_leaves_the_body_it_is_on_unbiased(tmp_path):
     (the dot as a marker is usable in under 95 % of the frames: its ring lies on the apple's shading and near its
     edge). Until 2026-12-03 the dot was a hole in the dark silhouette: the body's inner radius came out halved, and
     with it the opening that cuts the thread, so the apple's stem was followed in some frames and not others:
-    97.5 % of the frames ok, 0.78 px RMS off the clip without the dot, 2 px at the swing's ends (0.2° on its arm).
-    The hole is now filled (a marking: under a tenth of the body): 99.8 % ok, 0.10 px."""
+    97.5 % of the frames ok, 0.78 px RMS off the apple's centre where the dot was painted (its pixels' centroid,
+    weighted by their share of apple), 2 px at the swing's ends (0.2° on its arm). The hole is now filled (a
+    marking: under a tenth of the body): 99.85 % ok, 0.20 px (the clip without the dot, tracked alike: 0.20 px,
+    its silhouette's centroid not quite that centre)."""
     if not APPLE.is_file():
         pytest.skip(f"{APPLE} not found (../shared beside the project)")
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import make
 
     from pendulum.tracking.method import track_trial
-    from pendulum.tracking.settings import TrackerSettings
 
-    config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
-    body = track_trial(make("dot_on_bob", tmp_path), default_settings())
+    video = make("dot_on_bob", tmp_path)
+    body = track_trial(video, default_settings())
     assert body.attrs["method"]["used"] == "body"
-    # against the clip without the dot, made and tracked the same way (the clip's own track is 0.25 px RMS off that)
-    clip = track_trial(make("original", tmp_path), TrackerSettings.from_config({**config, "method": "body"}))
-    ok, clip_ok = (body.flag == "ok").to_numpy(), (clip.flag == "ok").to_numpy()
+    ok = (body.flag == "ok").to_numpy()
     assert ok.mean() >= 0.99, body.flag.value_counts()
-    dx, dy = (body.x_px - clip.x_px).to_numpy(), (body.y_px - clip.y_px).to_numpy()
-    both = ok & clip_ok
-    off = np.hypot(dx - np.median(dx[both]), dy - np.median(dy[both]))[both]
-    assert np.sqrt(np.mean(off**2)) <= 0.2 and np.percentile(off, 99) <= 0.5, (np.sqrt(np.mean(off**2)), off.max())
+    centre = np.loadtxt(video.with_suffix(".csv"), delimiter=",", skiprows=1)
+    dx, dy = body.x_px.to_numpy() - centre[:, 0], body.y_px.to_numpy() - centre[:, 1]
+    off = np.hypot(dx - np.median(dx[ok]), dy - np.median(dy[ok]))[ok]
+    assert np.sqrt(np.mean(off**2)) <= 0.3 and np.percentile(off, 99) <= 0.8, (np.sqrt(np.mean(off**2)), off.max())
 
 
 def test_spinning_star_is_refused_by_the_tracks_job_with_its_track_shown(tmp_path, monkeypatch):

@@ -418,15 +418,17 @@ DOT_RADIUS_PX = 5.0  # the dot_on_bob variants: a sticker on the bob, 5 px in ra
 DOT_GREY = 235.0
 
 
-def _dotted(frames: list) -> list:
+def _dotted(frames: list) -> tuple[list, np.ndarray]:
     """A white sticker on the bob (as the held-out clock pendulums have a dot on each): a soft-edged disk of
-    :data:`DOT_RADIUS_PX` at 235 grey, fixed 5 px below the apple's centre (its pixels at least half apple),
-    moving with it; on the dark apple before the light wall."""
-    out = []
+    :data:`DOT_RADIUS_PX` at 235 grey, fixed 5 px below the apple's centre (its pixels at least half apple, weighted
+    by their share of apple), moving with it; on the dark apple before the light wall. The frames, and the apple's
+    centre (x, y) in each."""
+    out, centres = [], []
     for image, _, xs, ys, cx, cy in _apples(frames, _wall(frames)):
         cover = np.clip(DOT_RADIUS_PX + 0.5 - np.hypot(xs - cx, ys - cy - 5.0), 0.0, 1.0)
         out.append(np.clip(image * (1 - cover) + DOT_GREY * cover, 0, 255).astype(np.uint8))
-    return out
+        centres.append((cx, cy))
+    return out, np.asarray(centres)
 
 
 def _two_pendulums(frames: list) -> list:
@@ -455,8 +457,9 @@ def make(name: str, workdir: Path) -> Path:
     ]
     if transform is not None:
         frames = [transform(image, k, len(frames)) for k, image in enumerate(frames)]
-    if "dot" in name:
-        frames = _dotted(frames)
+    if "dot" in name:  # the apple's centre per frame beside the video (the left one's, where two are in view)
+        frames, centres = _dotted(frames)
+        np.savetxt(out.with_suffix(".csv"), centres, fmt="%.4f", delimiter=",", header="x_px,y_px", comments="")
     if name.startswith("two_pendulums"):
         frames = _two_pendulums(frames)
     if name == "shadow_band":
