@@ -80,21 +80,41 @@ def components(diff: np.ndarray, threshold: float, open_px: int, close_px: int =
     return labels, stats, masses
 
 
-MARKING_SHARE = 0.1  # holes together up to this share of the filled body: its markings (a dot: (a / R)² of it)
+MARKING_SHARE = 0.1  # a component's holes together up to this share of it, filled: its markings (a dot: (a / R)²)
+THIN_EDGE_SHARE = 0.25  # ... unless more of a hole's rim than this is thread (gone in a 3 px opening): a loop of it
 
 
 def fill_markings(closed: np.ndarray) -> None:
-    """Fill, in place, the holes of ``closed`` (uint8 0/1, its border background) where together they are at most
-    :data:`MARKING_SHARE` of the filled mask: a white dot or a label on a dark body is the body's own. Until
-    2026-12-03 such a dot stayed a hole: the body's inner radius came out halved, and with it the opening that cuts
-    its thread, so an apple's stem was followed in some frames and not others (2 px at the swing's ends). Holes that
-    are more of it (a print's light squares: the pattern, not its outline) are left as they are."""
+    """Fill, in place, each component's holes in ``closed`` (uint8 0/1, its border background) where together they
+    are at most :data:`MARKING_SHARE` of the component filled, and each one's rim is not mostly thread: a white dot
+    or a label on a dark body is the body's own. Until 2026-12-03 such a dot stayed a hole: the body's inner radius
+    came out halved, and with it the opening that cuts its thread, so an apple's stem was followed in some frames and
+    not others (2 px at the swing's ends). Holes that are more of it (a print's light squares: the pattern, not its
+    outline) are left as they are, and so is the wall seen through a loop of thread or a handle above the body (over
+    :data:`THIN_EDGE_SHARE` of its rim gone in a 3 px opening; filled, it moved a bob 5 px along its thread)."""
     outside = closed.copy()
     cv2.floodFill(outside, None, (0, 0), 1)
-    holes = outside == 0
-    n_holes = int(np.count_nonzero(holes))
-    if n_holes and n_holes <= MARKING_SHARE * (n_holes + int(np.count_nonzero(closed))):
-        closed[holes] = 1
+    if outside.all():  # no holes at all (the usual frame)
+        return
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(closed, connectivity=8)
+    thick = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    for i in range(1, n):
+        x, y, w, h, area = (int(v) for v in stats[i])
+        own = np.zeros((h + 2, w + 2), np.uint8)
+        own[1:-1, 1:-1] = labels[y : y + h, x : x + w] == i
+        reached = own.copy()
+        cv2.floodFill(reached, None, (0, 0), 1)
+        holes = (reached[1:-1, 1:-1] == 0) & (closed[y : y + h, x : x + w] == 0)  # its own (islands in them aside)
+        n_holes = int(np.count_nonzero(holes))
+        if not n_holes or n_holes > MARKING_SHARE * (n_holes + area):
+            continue
+        count, parts = cv2.connectedComponents(holes.astype(np.uint8), connectivity=4)
+        for k in range(1, count):
+            hole = (parts == k).astype(np.uint8)
+            rim = (cv2.dilate(hole, np.ones((3, 3), np.uint8)) > 0) & (own[1:-1, 1:-1] > 0)
+            thin = rim & (thick[y : y + h, x : x + w] == 0)
+            if np.count_nonzero(thin) <= THIN_EDGE_SHARE * np.count_nonzero(rim):
+                closed[y : y + h, x : x + w][hole > 0] = 1
 
 
 def reduced(image: np.ndarray, scale: int) -> np.ndarray:
