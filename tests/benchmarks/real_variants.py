@@ -25,7 +25,7 @@ The variants are real footage transformed, not renders: what they change is know
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
 Measured 2026-12-03: 41 of 43 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
 front (90.8 % ok, every frame it hides part of the apple in flagged), nor the apple before a shadow band in grey
-(93.7 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
+(93.6 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
 """
 
 from __future__ import annotations
