@@ -20,33 +20,12 @@ ROUNDING_TOLERANCE = 0.75  # rounding steps: stamps within this of one regular c
 # the 0.5 of the true clock where few steps are long) are that clock, rounded
 
 
-def _regular_clock(pts: np.ndarray) -> tuple[np.ndarray, float, int] | None:
-    """The regular clock that stamps ``pts`` (integer ticks, in order) round, as ``(times in ticks, period in
-    ticks, the rounding step in ticks)``, where their steps take two counts one rounding step q apart (16 and 17
-    ms; q the steps' greatest common divisor, a muxer may store milliseconds in finer ticks) and every stamp lies
-    within :data:`ROUNDING_TOLERANCE` q of c + P n_k (n_k: the frame's slot; a lost frame leaves a slot empty);
-    else None (even stamps need nothing; uneven ones are a variable frame rate)."""
-    pts = np.asarray(pts, np.int64)
-    steps = np.diff(pts)
-    if steps.size < 10 or np.any(steps <= 0):
-        return None
-    typical = float(np.median(steps))
-    regular = steps[np.abs(steps - typical) <= 0.5 * typical]
-    counts = np.unique(regular)
-    step = int(np.gcd.reduce(counts))
-    if counts.size != 2 or counts[1] - counts[0] != step:
-        return None
-    slot = np.rint((pts - pts[0]) / float(regular.mean())).astype(np.int64)
-    period, offset = np.polyfit(slot, pts.astype(float), 1)
-    times = offset + period * slot
-    if np.abs(pts - times).max() > ROUNDING_TOLERANCE * step:
-        return None
-    return times, float(period), step
-
-
 def regular_times(stamp_s: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """:func:`_regular_clock` of stamps in seconds from the first frame (the rounding step read from their two
-    step lengths): ``(times from the first frame, the rounding step in s)``, or None."""
+    """The regular clock that stamps ``stamp_s`` (seconds from the first frame, in order) round: ``(times from the
+    first frame, the rounding step q in s)``, where their steps take two lengths one q apart (16 and 17 ms; q to
+    the stamps' precision, a muxer may store milliseconds in finer ticks), every stamp is a whole number of q, and
+    every stamp lies within :data:`ROUNDING_TOLERANCE` q of c + P n_k (n_k: the frame's slot; a lost frame leaves a
+    slot empty; c and P fitted); else None (even stamps need nothing; uneven ones are a variable frame rate)."""
     stamp_s = np.asarray(stamp_s, float)
     steps = np.diff(stamp_s)
     if steps.size < 10 or not np.all(np.isfinite(stamp_s)) or np.any(steps <= 0):
@@ -60,10 +39,13 @@ def regular_times(stamp_s: np.ndarray) -> tuple[np.ndarray, float] | None:
     ticks = (stamp_s - stamp_s[0]) / step
     if np.abs(ticks - np.rint(ticks)).max() > 1e-3:
         return None
-    clock = _regular_clock(np.rint(ticks).astype(np.int64))
-    if clock is None:
+    pts = np.rint(ticks)
+    slot = np.rint(pts / float(np.rint(regular / step).mean()))
+    period, offset = np.polyfit(slot, pts, 1)
+    times = offset + period * slot
+    if np.abs(pts - times).max() > ROUNDING_TOLERANCE:
         return None
-    return (clock[0] - clock[0][0]) * step, step * clock[2]
+    return (times - times[0]) * step, step
 
 
 def read_clock(time_s: np.ndarray, stated_rates: list[float], path) -> tuple[dict, list[str]]:
