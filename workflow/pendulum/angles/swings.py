@@ -160,9 +160,14 @@ def sample_noise_rad(theta: np.ndarray, time_s: np.ndarray | None = None) -> flo
     """
     if time_s is None:
         return _difference_sigma(theta, 5)
-    z = noise_differences(time_s, theta, 5)
+    return differences_sigma(time_s, theta, 5, 5)
+
+
+def differences_sigma(time_s: np.ndarray, values: np.ndarray, order: int, least: int) -> float:
+    """Robust (MAD) σ of :func:`noise_differences` of ``order`` (their finite ones); 0 with fewer than ``least``."""
+    z = noise_differences(time_s, values, order)
     z = z[np.isfinite(z)]
-    if z.size < 5:
+    if z.size < least:
         return 0.0
     return float(1.4826 * np.median(np.abs(z - np.median(z))))
 

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from pendulum.angles.swings import noise_differences
+from pendulum.angles.swings import differences_sigma, noise_differences
 from pendulum.fit.records import AngleRecord
 from pendulum.fit.uncertainty import lag1_autocorrelation
 from pendulum.model.rig import Rig
@@ -28,10 +28,7 @@ def record_noise_rad(time_s: np.ndarray, theta_rad: np.ndarray) -> float:
 
     0 when fewer than :data:`MIN_NOISE_TRIPLES` differences exist.
     """
-    z = noise_differences(time_s, theta_rad)
-    if z.size < MIN_NOISE_TRIPLES:
-        return 0.0
-    return float(1.4826 * np.median(np.abs(z - np.median(z))))
+    return differences_sigma(time_s, theta_rad, 3, MIN_NOISE_TRIPLES)
 
 
 def record_checks(record: AngleRecord, mask: np.ndarray, residual: np.ndarray, rest_offset_rad: float) -> dict:
