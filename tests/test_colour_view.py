@@ -151,3 +151,36 @@ def test_where_the_brightness_silhouette_fails_the_colour_view_is_tried_without_
     assert (track.flag == "ok").mean() >= 0.97
     error, in_band = _errors(track, truth)
     assert np.sqrt(np.mean(error**2)) <= 0.3
+
+
+def _decided(monkeypatch, brightness_ok: int, colour_ok: int):
+    """What ``method._by_colour`` keeps of a brightness track with ``brightness_ok`` of 1,000 frames usable (a 10 %
+    smaller silhouette mid-swing, no warning) and a colour one with ``colour_ok`` (17 % smaller, warned of)."""
+    import pandas as pd
+
+    from pendulum.tracking import method
+    from pendulum.tracking.settings import TrackerSettings
+
+    def track(ok: int, ratio: float, warning: str | None) -> pd.DataFrame:
+        frame = pd.DataFrame({"frame": range(1000), "flag": ["ok"] * ok + ["occluded"] * (1000 - ok)})
+        frame.attrs["body"] = {"mid_swing_area_ratio": ratio, "warning": warning}
+        return frame
+
+    brightness = track(brightness_ok, 0.895, None)
+    colour = track(colour_ok, 0.834, "in its colour view, the body's silhouette is 17 % smaller mid-swing ...")
+    monkeypatch.setattr(method, "track_by_colour", lambda path, settings, luma, progress=None: (colour, {}))
+    tried = {"body": method._usable(brightness)}
+    kept = method._by_colour("ball.mp4", TrackerSettings(), brightness, tried)
+    return "colour" if kept is colour else "brightness", tried
+
+
+def test_the_colour_view_is_kept_where_it_is_usable_in_more_frames_whatever_its_area_change(monkeypatch):
+    """Usable frames decide. The real clip's two-tone ball before a hard-edged bluish band (2026-12-03): by its
+    colour 99.5 % usable and 17 % smaller mid-swing; by its brightness 89.8 % and 10 % smaller, its usable
+    positions up to 61 px off. The colour track was dropped for its larger change; it is now kept. A tie keeps the
+    brightness silhouette (the sharper one)."""
+    kept, tried = _decided(monkeypatch, brightness_ok=898, colour_ok=995)
+    assert kept == "colour"
+    assert tried["body_by_colour"] == "usable in 99.5 % of the frames"
+    assert _decided(monkeypatch, brightness_ok=950, colour_ok=950)[0] == "brightness"
+    assert _decided(monkeypatch, brightness_ok=990, colour_ok=960)[0] == "brightness"

@@ -12,7 +12,8 @@ lens, a phone held upright (the swing out of view most of the time: a refusal th
 band across the wall (on the wall only, or on the apple too), the apple's own soft shadow beside it, a
 glossy apple, the apple made a two-tone ball (alone, before the band, and that at 1080p: as one of the
 held-out clips), the apple and the two-tone ball (its lower half dark blue) before the band in colour, as a
-phone films (``..._colour``, the ball also at 1080p and at 550×310; every other variant is the clip's luma), a
+phone films (``..._colour``, the ball also at 1080p and at 550×310, and before a lamp's hard-edged bluish shadow:
+``two_tone_hard_band_colour``; every other variant is the clip's luma), a
 release by hand in view (``hand_release``, a darker hand holding it for 10 s: ``hand_release_long_dark``, and
 fingers alone: ``hand_release_fingers``; their ``ok%`` counts the frames after the release), two pendulums
 side by side (with and without ``start_px``), a white dot on the apple (``dot_on_bob``; two such pendulums with
@@ -23,7 +24,7 @@ frames ``ok`` (and ``edge``), the vertical found, the angle record's period from
 against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
 The variants are real footage transformed, not renders: what they change is known exactly, and the rest
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
-Measured 2026-12-03: 41 of 43 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
+Measured 2026-12-03: 42 of 44 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
 front (90.8 % ok, every frame it hides part of the apple in flagged), nor the apple before a shadow band in grey
 (93.6 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
 """
@@ -219,18 +220,21 @@ def _on_the_wall(frames: list, shade, shares: list | None = None) -> list:
     return out
 
 
-def _band(shape) -> np.ndarray:
+def _band(shape, hard: bool = False) -> np.ndarray:
     """A soft dark band across the wall (a shelf's shadow: 45 % darker at its middle, σ 30 px, slanted) that
-    the swing crosses: the gain per pixel."""
+    the swing crosses: the gain per pixel. ``hard``: the shadow of a small lamp instead, 45 % darker over 70 px
+    with edges 1.5 px wide, in the same place."""
     h, w = shape
     ys, xs = np.mgrid[0:h, 0:w]
     distance = (xs - 0.45 * w) + 0.35 * (ys - h / 2)
+    if hard:
+        return 1 - 0.45 / (1 + np.exp(-(35.0 - np.abs(distance)) / 0.75))
     return 1 - 0.45 * np.exp(-0.5 * (distance / 30.0) ** 2)
 
 
-def _shadow_band(frames: list, shares: list | None = None) -> list:
+def _shadow_band(frames: list, shares: list | None = None, hard: bool = False) -> list:
     """:func:`_band` on the wall only (the apple in front of it stays lit)."""
-    gain = _band(frames[0].shape)
+    gain = _band(frames[0].shape, hard)
     return _on_the_wall(frames, lambda k, apple: gain, shares)
 
 
@@ -279,15 +283,15 @@ def _two_tone(frames: list, behind: list | None = None, shares: list | None = No
 _MEMO: dict = {}  # what variants share within one process (tests that share it run on one worker)
 
 
-def _two_tone_before_band(frames: list, shares: list | None, last: int | None) -> list:
+def _two_tone_before_band(frames: list, shares: list | None, last: int | None, hard: bool = False) -> list:
     """The two-tone ball before the band (its luma, as the grey variants and the colour ones have it): made once
     per process from the clip's luma ``frames`` (its first ``last``), with ``shares`` of apple if measured."""
-    key = ("two_tone_before_band", last)
+    key = ("two_tone_before_band", last, hard)
     if key not in _MEMO:
         if shares is None:
             wall = _wall(frames)
             shares = [_apple_share(image, wall) for image in frames]  # measured once, for both
-        _MEMO[key] = _two_tone(frames, _shadow_band(frames, shares), shares)
+        _MEMO[key] = _two_tone(frames, _shadow_band(frames, shares, hard), shares)
     return _MEMO[key]
 
 
@@ -360,19 +364,22 @@ def _in_colour(name: str, last: int | None = None) -> list:
     apple (at chroma resolution). A shadow scales the wall's light, so its chroma's distance from grey (128) too:
     ``shadow_band_colour``; ``two_tone_shadow_band_colour`` (as the held-out clip: a bright patterned top, a dark
     blue bottom) paints the ball's lower half dark blue (U 165, V 117) and its top grey (U = V = 128), before the
-    band."""
+    band. ``two_tone_hard_band_colour``: the same ball before a lamp's hard-edged shadow (:func:`_band`), bluish
+    where daylight fills it (U +6, V −4 at its full depth)."""
     import cv2
 
     ys, us, vs = _colour_planes(last)
     wall = _wall(ys)
     shares = [_apple_share(image, wall) for image in ys]
-    gain = _band(ys[0].shape)
+    hard = "hard_band" in name
+    gain = _band(ys[0].shape, hard)
     h, w = ys[0].shape
     small = (w // 2, h // 2)
     gain_c = cv2.resize(gain.astype(np.float32), small, interpolation=cv2.INTER_AREA)
+    tints = [(1 - gain_c) / 0.45 * shift for shift in ((6.0, -4.0) if hard else (0.0, 0.0))]
     walls_c = [_wall(planes) for planes in (us, vs)]
     if name.startswith("two_tone"):
-        luma = _two_tone_before_band(ys, shares, last)
+        luma = _two_tone_before_band(ys, shares, last, hard)
     else:
         luma = _shadow_band(ys, shares)
     rows_c = np.arange(h // 2)[:, None]
@@ -380,8 +387,8 @@ def _in_colour(name: str, last: int | None = None) -> list:
     for k, image in enumerate(luma):
         apple = cv2.resize(shares[k].astype(np.float32), small, interpolation=cv2.INTER_AREA)
         chroma = []
-        for plane, wall_c, paint in zip((us[k], vs[k]), walls_c, (165.0, 117.0), strict=True):
-            shaded = plane - (1 - apple) * (wall_c - 128) * (1 - gain_c)
+        for plane, wall_c, paint, tint in zip((us[k], vs[k]), walls_c, (165.0, 117.0), tints, strict=True):
+            shaded = plane - (1 - apple) * ((wall_c - 128) * (1 - gain_c) - tint)
             if name.startswith("two_tone"):  # its centre's height from the luma's apple (rows halved, chroma sited)
                 solid = np.where(shares[k] >= 0.5, shares[k], 0.0)
                 cy = float((solid * np.arange(h)[:, None]).sum() / solid.sum())
@@ -444,6 +451,7 @@ def variants():
         "two_tone_shadow_band_colour": (None, 1, 0, 18),
         "two_tone_shadow_band_colour_1080p": (None, 1, 0, 18),
         "two_tone_shadow_band_colour_550": (None, 1, 0, 18),
+        "two_tone_hard_band_colour": (None, 1, 0, 18),
         "hand_release": (None, 1, 0, 18),
         "hand_release_long_dark": (None, 1, 0, 18),
         "hand_release_fingers": (None, 1, 0, 18),

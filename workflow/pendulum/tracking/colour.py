@@ -16,7 +16,7 @@ putting the body's colour contrast C_c at :data:`COLOUR_CONTRAST` grey levels �
 shadows and the thread are all but gone. Taken only for a body whose colour stands out of the chroma noise
 (C_c ≥ :data:`MIN_COLOUR_SNR` × the mean chroma difference of the samples); a grey body, a grey video or a
 render has no colour view. :func:`pendulum.tracking.method.track_trial` keeps the colour view's track where
-it is usable in more frames, with no warning or a milder one (and, where the brightness silhouette fails
+it is usable in more frames (and, where the brightness silhouette fails
 with too few frames usable, not where it refuses, the colour view alone).
 """
 
