@@ -22,7 +22,9 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    ``body_scene.fill_markings``) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
    soft shadow is below T); the connected component nearest the prediction (where that is over
    :data:`MAX_AREA_RATIO` of the body's area and another is the body's size: that one, a hand drawn back
-   after the release), with every component within two closing widths of it. The first frame's body is the
+   after the release), with every component within two closing widths of it; where that is over MAX_AREA_RATIO of
+   the body (a hand, a second pendulum's bob it meets), the prediction goes on from the body's own centre in it
+   (``body_scene.own_centre``), not the pair's. The first frame's body is the
    heaviest moving object above a quarter of its own contrast (its part at its thickest point), or the one at
    ``start_px``; its size, contrast and silhouette split are the first frame's, or, where that differs from the
    median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by more than
@@ -85,6 +87,7 @@ from pendulum.tracking.body_scene import (
     filled_warning,
     moving_objects,
     one_sided,
+    own_centre,
     reduced,
     rest_place_scene,
     sample_clip,
@@ -401,6 +404,7 @@ def track_body(
         x0, x1 = max(int(px - half), 0), min(int(px + half) + 1, width)
         y0, y1 = max(int(py - half), 0), min(int(py + half) + 1, height)
         flag, x, y, mass, bx, by = "lost", math.nan, math.nan, 0.0, math.nan, math.nan
+        own = None
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             diff = one_sided(signed - border_offset(signed), scene.polarity)
@@ -412,6 +416,9 @@ def track_body(
                     component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area)
             if component is not None:
                 _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
+                if np.count_nonzero(component) > MAX_AREA_RATIO * body_area:  # with a hand, another bob
+                    own = own_centre(component, scene.inner_radius_px, (px - x0, py - y0))
+                    own = None if own is None else (own[0] + x0, own[1] + y0)
                 sx, sy, mass, bx, by = soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
@@ -426,9 +433,10 @@ def track_body(
                     if not touches:
                         seen.add(len(rows), component, x0, y0, x, y)
         if math.isfinite(x):
+            sx, sy = (x, y) if own is None else own  # merged with something else: its own centre, not the pair's
             if lost_run == 0 and rows and rows[-1][6] != "lost":
-                vx, vy = x - x_prev, y - y_prev
-            x_prev, y_prev, lost_run = x, y, 0
+                vx, vy = sx - x_prev, sy - y_prev
+            x_prev, y_prev, lost_run = sx, sy, 0
         else:
             lost_run += 1
         rows.append([index, float(time_s), x, y, mass, mass, flag])

@@ -460,3 +460,16 @@ def body_core(component: np.ndarray, reach_px: float):
     kept = component & ((xx - cx) ** 2 + (yy - cy) ** 2 <= reach_px**2)
     ys, xs = np.nonzero(kept)
     return kept, (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
+
+
+def own_centre(component: np.ndarray, inner_radius_px: float, near) -> tuple[float, float] | None:
+    """The body's own centre in a component it forms with something else (a second pendulum's bob it meets, a
+    hand): of the component's thickest points (local maxima of its distance transform at least 0.7 of the body's
+    inner radius deep), the one nearest ``near``; None where there is none."""
+    depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
+    peaks = (depth >= 0.7 * inner_radius_px) & (depth >= cv2.dilate(depth, np.ones((5, 5), np.uint8)))
+    ys, xs = np.nonzero(peaks)
+    if not xs.size:
+        return None
+    k = int(np.argmin(np.hypot(xs - near[0], ys - near[1])))
+    return float(xs[k]), float(ys[k])
