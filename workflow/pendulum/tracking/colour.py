@@ -9,7 +9,8 @@ smaller or larger mid-swing: :func:`brightness_depends_on_wall`), the body is tr
     P = 255 − g · max(|U − U_w| + |V − V_w| − z, 0)
 
 on the luma grid: U, V the frame's chroma planes (4:2:0, sited as H.264's default: with the even columns,
-between the rows), U_w, V_w the wall's (their per-pixel median over the spread samples), z a dead zone of
+between the rows), U_w, V_w the wall's (their per-pixel median over the spread samples, moved by each frame's own
+white balance: :func:`_balanced`), z a dead zone of
 :data:`DEAD_ZONE_NOISE` × the chroma noise (a codec's chroma moves by whole blocks of a level or two), g
 putting the body's colour contrast C_c at :data:`COLOUR_CONTRAST` grey levels — by the same body tracker
 (:func:`pendulum.tracking.body.track_body` with ``view``), against a scene in which the wall's shading,
@@ -51,9 +52,22 @@ def chroma_planes(frame) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 def _distance(uv: np.ndarray, wall_uv: np.ndarray) -> np.ndarray:
-    """|U − U_w| + |V − V_w| (uint8, saturating at 255) of (h, w, 2) chroma planes."""
-    ad = cv2.absdiff(uv, wall_uv)
+    """|U − U_w| + |V − V_w| (uint8, saturating at 255) of (h, w, 2) chroma planes, the wall's chroma moved first by
+    the frame's own white balance (:func:`_balanced`)."""
+    ad = cv2.absdiff(uv, _balanced(uv, wall_uv))
     return cv2.add(ad[..., 0], ad[..., 1])
+
+
+def _balanced(uv: np.ndarray, wall_uv: np.ndarray) -> np.ndarray:
+    """The wall's chroma as this frame shows it: moved by the median of U − U_w and of V − V_w over the frame (every
+    fourth pixel; the wall fills most of it), rounded. A phone's automatic white balance moves the whole picture's
+    chroma by a few levels as it settles; unmoved, the wall itself would stand out of the view. Unchanged (the
+    same array) where the frame's white balance is the wall's."""
+    step = (uv[::4, ::4].astype(np.int16) - wall_uv[::4, ::4]).reshape(-1, 2)
+    shift = np.round(np.median(step, axis=0)).astype(np.int16)
+    if not shift.any():
+        return wall_uv
+    return np.clip(wall_uv.astype(np.int16) + shift, 0, 255).astype(np.uint8)
 
 
 def _chroma(frame) -> np.ndarray:
