@@ -208,3 +208,20 @@ def test_the_colour_view_is_kept_where_it_is_usable_in_more_frames_whatever_its_
     assert tried["body_by_colour"] == "usable in 99.5 % of the frames"
     assert _decided(monkeypatch, brightness_ok=950, colour_ok=950)[0] == "brightness"
     assert _decided(monkeypatch, brightness_ok=990, colour_ok=960)[0] == "brightness"
+
+
+def test_the_frame_s_white_balance_is_the_static_scene_s_however_much_of_it_the_body_covers():
+    """The wall's chroma moved by the most common difference near zero, not the frame's median: a coloured body
+    over half the frame (a close-up) does not move it (the median moved it by 39 levels at 60 % cover: the whole
+    wall then stood out of the view, a reviewer found)."""
+    from pendulum.tracking.colour import _balanced, _distance
+
+    rng = np.random.default_rng(5)
+    wall = np.dstack([np.full((180, 320), 120, np.uint8), np.full((180, 320), 135, np.uint8)])
+    for cover in (0.0, 0.3, 0.6):
+        uv = wall.astype(np.float64) + (4.0, -3.0) + rng.normal(0.0, 0.7, wall.shape)
+        uv[:, : int(cover * 320)] = (90.0, 180.0)  # the body's colour
+        uv = np.clip(np.round(uv), 0, 255).astype(np.uint8)
+        assert tuple(_balanced(uv, wall)[0, 0]) == (124, 132), cover
+        assert _distance(uv, wall)[:, int(cover * 320) :].mean() < 2.0, cover
+    assert _balanced(wall, wall) is wall  # a frame at the wall's own balance: the wall itself, not a copy

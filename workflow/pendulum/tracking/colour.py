@@ -58,16 +58,25 @@ def _distance(uv: np.ndarray, wall_uv: np.ndarray) -> np.ndarray:
     return cv2.add(ad[..., 0], ad[..., 1])
 
 
+BALANCE_REACH = 16  # levels: how far a phone's white balance is looked for in a frame's chroma
+
+
 def _balanced(uv: np.ndarray, wall_uv: np.ndarray) -> np.ndarray:
-    """The wall's chroma as this frame shows it: moved by the median of U − U_w and of V − V_w over the frame (every
-    fourth pixel; the wall fills most of it), rounded. A phone's automatic white balance moves the whole picture's
-    chroma by a few levels as it settles; unmoved, the wall itself would stand out of the view. Unchanged (the
-    same array) where the frame's white balance is the wall's."""
-    step = (uv[::4, ::4].astype(np.int16) - wall_uv[::4, ::4]).reshape(-1, 2)
-    shift = np.round(np.median(step, axis=0)).astype(np.int16)
-    if not shift.any():
+    """The wall's chroma as this frame shows it: moved by the most common U − U_w and V − V_w within
+    ±:data:`BALANCE_REACH` levels over the frame (every fourth pixel: the static scene's, however much of the frame
+    the body covers). A phone's automatic white balance moves the whole picture's chroma by a few levels as it
+    settles; unmoved, the wall itself would stand out of the view. Modelled as one shift for the whole frame
+    (a balance scales the colour with the light: a wall half as bright keeps about half of it). Unchanged (the same
+    array) where the frame's white balance is the wall's."""
+    step = uv[::4, ::4].astype(np.int16) - wall_uv[::4, ::4]
+    shift = []
+    for channel in (0, 1):
+        near = step[..., channel][np.abs(step[..., channel]) <= BALANCE_REACH] + BALANCE_REACH
+        counts = np.bincount(near, minlength=2 * BALANCE_REACH + 1)
+        shift.append(int(np.argmax(counts)) - BALANCE_REACH if near.size else 0)
+    if not any(shift):
         return wall_uv
-    return np.clip(wall_uv.astype(np.int16) + shift, 0, 255).astype(np.uint8)
+    return cv2.add(wall_uv, (float(shift[0]), float(shift[1]), 0.0, 0.0))
 
 
 def _chroma(frame) -> np.ndarray:
