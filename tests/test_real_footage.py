@@ -206,8 +206,10 @@ def test_a_hand_holding_the_apple_before_the_release_is_never_taken_for_it(apple
     (measured: 99.2 % of the frames after the release ok, within 0.28 px of the clip's track). Until 2026-11-29 the
     darker hand was followed out of the frame after the release and the apple lost for 70 frames (93.8 % ok after
     it), and a hold of 5 s or more taught the tracker a body of hand and apple (its radius 35 px, not 20; a two-tone
-    split): the held frames ``ok`` and the positions after the release up to 1.3 px off. Other hands:
-    docs/footage.md."""
+    split): the held frames ``ok`` and the positions after the release up to 1.3 px off. Since 2026-12-03 the
+    prediction goes on from the apple's own centre while the hand touches it (two pendulums whose bobs meet): the
+    window then takes in less of the forearm, and a held frame whose silhouette comes out just under 1.5 times the
+    apple's (1.497) is ``occluded`` rather than ``held``: never ``ok`` either way. Other hands: docs/footage.md."""
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import HANDS, make
 
@@ -219,7 +221,7 @@ def test_a_hand_holding_the_apple_before_the_release_is_never_taken_for_it(apple
     assert track.attrs["method"]["used"] == "body"
     assert abs(track.attrs["body"]["radius_px"] - 20.2) < 1.0, track.attrs["body"]  # the apple's, not the hand's
     held, after = track.iloc[:hold], track.iloc[hold:].reset_index(drop=True)
-    assert (held.flag == "held").all(), held.flag.value_counts().to_dict()
+    assert not (held.flag == "ok").any() and (held.flag == "held").mean() >= 0.97, held.flag.value_counts().to_dict()
     assert (after.flag == "ok").mean() >= 0.99, after.flag.value_counts().to_dict()
     both = (after.flag == "ok") & (clip.flag == "ok")
     off = np.hypot(after.x_px - clip.x_px, after.y_px - clip.y_px)[both]
