@@ -433,10 +433,10 @@ def track_body(
                     if not touches:
                         seen.add(len(rows), component, x0, y0, x, y)
         if math.isfinite(x):
-            sx, sy = (x, y) if own is None else own  # merged with something else: its own centre, not the pair's
+            ox, oy = (x, y) if own is None else own  # merged with something else: its own centre, not the pair's
             if lost_run == 0 and rows and rows[-1][6] != "lost":
-                vx, vy = sx - x_prev, sy - y_prev
-            x_prev, y_prev, lost_run = sx, sy, 0
+                vx, vy = ox - x_prev, oy - y_prev
+            x_prev, y_prev, lost_run = ox, oy, 0
         else:
             lost_run += 1
         rows.append([index, float(time_s), x, y, mass, mass, flag])
