@@ -365,6 +365,40 @@ def test_no_ghost_of_the_body_stays_in_the_scene_beside_its_rest_place(tmp_path,
     assert rms <= 0.03, track.attrs["body"]
 
 
+@pytest.mark.slow
+def test_a_swing_dying_to_rest_before_a_patterned_wall_is_tracked_to_its_rest(tmp_path):
+    """An apple-like body released at 20° with strong linear damping (c = 0.12 N·m·s: 0.95° left after 10 s)
+    before a patterned wall (12 grey levels SD): it is more than two radii from its rest place in only 30 % of
+    the frames, so the median scene holds it there, and every wide sample shows a ghost at its rest place. The
+    samples that show that place clear were left out with the ghost, and almost no sample showed it clear: a
+    refusal ("the wall around it is not plain enough to fill it in") for a record that can be measured. The
+    ghost is now found for what it is (:func:`pendulum.tracking.body_scene.scene_states`) and the scene there
+    taken from the wide samples: 100 % ok, 0.0046° on the render this was developed on (scenes 7200–7203: three
+    as before, this one refused before). Held out, scenes 7210–7225: 13 of 16 tracked before (3 refused so),
+    16 of 16 after, all ≥ 99.67 % ok and ≤ 0.0172°."""
+    from pendulum.synthetic.wall import random_wall_trial, write_wall_trial
+
+    base = random_wall_trial(7201)
+    spec = replace(
+        base.spec,
+        name="dying_7201",
+        duration_s=10.0,
+        hold_s=0.0,
+        release_deg=20.0,
+        truth={**base.spec.truth, "linear_damping_nm_s": 0.12},
+        effects=["quadratic_drag", "linear_damping"],
+    )
+    trial = replace(
+        base,
+        spec=spec,
+        body=replace(base.body, look="apple"),
+        wall=replace(base.wall, grain=12.0, start_s=0.0, creep_px=(0.0, 0.0)),
+    )
+    track, ok, rms = _narrow_record(*write_wall_trial(trial, tmp_path, tmp_path), trial.spec.camera)
+    assert ok >= 0.95, track.attrs["body"]
+    assert rms <= 0.02, track.attrs["body"]
+
+
 def _narrow_record(video, truth, cam):
     from pendulum.angles.record import angles_from_track
     from pendulum.tracking.body import track_body
@@ -512,6 +546,53 @@ def test_a_fill_of_the_unseen_scene_is_checked_where_the_scene_is_known():
         None,
     )
     assert unseen_behind(patterned, hidden, np.array([[40.0, 40.0]]), 20.0, 3.0) == ([], None)
+
+
+def _resting_samples(at_rest: int, n: int = 40, held: bool = False):
+    """n samples of a patterned wall (12 grey levels SD), a dark disk (radius 9, grey 60) on a swinging arc in
+    the first n − at_rest and at rest at (80, 60) in the last ``at_rest``; ``held``: at rest in the first instead,
+    as a hand holds a body before its release."""
+    import cv2
+
+    rng = np.random.default_rng(5)
+    grain = cv2.resize(rng.standard_normal((32, 42)).astype(np.float32), (160, 120))
+    wall = 150 + 12 * grain / grain.std()
+    images = []
+    for k in range(n):
+        resting = k < at_rest if held else k >= n - at_rest
+        x = 80.0 if resting else 80 + (25 + 2.3 * k) * (-1) ** k  # never twice at one place
+        image = wall + rng.normal(0, 1.0, wall.shape)
+        disk = np.zeros(wall.shape, np.uint8)
+        cv2.circle(disk, (int(round(x)), 60), 9, 1, -1)
+        images.append(np.clip(np.where(disk > 0, 60.0, image), 0, 255).astype(np.uint8))
+    return wall, images
+
+
+def test_a_body_at_rest_over_half_the_clip_leaves_no_ghost_in_the_scene():
+    """A body that swings wide in 15 of 40 samples and rests at one place in the other 25 is the median scene
+    there, and each wide sample shows a second "moving" object at its rest place: the wall, lighter than the
+    scene where the body beside it is darker. Before a wall calendar the ghost was heavier than the apple and
+    was followed (a swing dying to rest: 190 of its ok frames 20–127 px off). scene_states finds it (it recurs in
+    the wide samples, the body does not) and the scene there is the wide samples' median: the wall to within the
+    noise. A body held still in the first 15 samples (before its release) is the only object in them: the
+    scene stays the median."""
+    from pendulum.tracking.body_scene import scene_states
+    from pendulum.tracking.scene_stack import masked_median, median_scene
+
+    wall, images = _resting_samples(25)
+    stack = np.stack(images)
+    median = median_scene(stack)
+    rest = np.zeros(wall.shape, bool)
+    rest[54:67, 74:87] = True  # inside the disk at rest
+    assert np.abs(median[rest] - 60).max() <= 1  # the median holds the body
+    others = scene_states(images, stack, median, 5.0)
+    assert others is not None
+    scene = masked_median(stack, others, median)
+    assert np.abs(scene - wall)[rest].max() <= 3.0  # the wall (noise σ 1, median of 15)
+    assert np.abs(scene - median)[~others.any(axis=0)].max() == 0  # elsewhere as it was
+    _, held = _resting_samples(15, held=True)
+    stack = np.stack(held)
+    assert scene_states(held, stack, median_scene(stack), 5.0) is None
 
 
 def test_samples_of_a_plain_wall_keep_their_bob_s_contrast_when_brought_to_one_exposure():

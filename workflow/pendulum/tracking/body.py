@@ -12,7 +12,7 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    Static shadows, wall gradients and stripes are part of the scene; σ is the MAD of I − B.
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
    window's offset, a line in the row fitted to its border, which follows slow exposure drift and a light's
-   bands rolling down the frame: :func:`border_offset`), or for a one-sided body
+   bands rolling down the frame: :func:`pendulum.tracking.scene_stack.border_offset`), or for a one-sided body
    (``body_scene.body_polarity``: at least 80 % of its first-frame pixels' |I − B| on one side of the scene,
    an apple or a two-tone ball's dark half before a light wall, where that side alone finds the same body)
    that side's only, D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays
@@ -91,6 +91,7 @@ from pendulum.tracking.body_scene import (
     reduced,
     rest_place_scene,
     sample_clip,
+    scene_states,
     silhouette_fraction,
     soft_centroid,
     touches_border,
@@ -101,6 +102,7 @@ from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
 from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.scene_stack import (
     EnlargedMasks,
+    border_offset,
     masked_median,
     median_scene,
     noise_sigma,
@@ -174,31 +176,6 @@ def _body_close_size(inner_radius_px: float) -> int:
     return 2 * int(round(inner_radius_px / 4)) + 1
 
 
-def border_offset(signed: np.ndarray) -> np.ndarray | float:
-    """The window's offset from the scene as a line in the row, o(y) = a + b (y − ȳ), fitted to its border's
-    I − B (its left and right columns row by row, its top and bottom rows at their ends), twice, the second time
-    without the pixels more than 3 MAD (at least 1.5 grey levels) off the first (a string, a shadow); the median
-    where the window is too short. A level follows slow exposure drift; the slope, a light's bands rolling down a
-    rolling-shutter frame (mains flicker, with the samples' rows brought to one exposure:
-    :func:`pendulum.tracking.scene_stack.same_exposure`)."""
-    h = signed.shape[0]
-    rows = np.r_[np.arange(h), np.arange(h), np.zeros(signed.shape[1]), np.full(signed.shape[1], h - 1)]
-    values = np.r_[signed[:, 0], signed[:, -1], signed[0], signed[-1]].astype(np.float64)
-    if h < 8:
-        return float(np.median(values))
-    y = rows - 0.5 * (h - 1)
-    keep = np.ones(values.size, bool)
-    for _ in range(2):  # least squares in closed form (a call of np.polyfit per frame cost 4 % of a body's track)
-        ys, vs = y[keep], values[keep]
-        y_mean, v_mean = float(ys.mean()), float(vs.mean())
-        spread = float(((ys - y_mean) ** 2).sum())
-        slope = float(((ys - y_mean) * (vs - v_mean)).sum()) / spread if spread > 0 else 0.0
-        level = v_mean - slope * y_mean
-        residual = values - (level + slope * y)
-        keep = np.abs(residual) <= max(3 * 1.4826 * float(np.median(np.abs(residual))), 1.5)
-    return (level + slope * (np.arange(h) - 0.5 * (h - 1)))[:, None].astype(np.float32)
-
-
 def _open_size(inner_radius_px: float) -> int:
     """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
     return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
@@ -230,6 +207,10 @@ def find_body(
     small_stack = np.stack(small) if scale > 1 else stack
     small_first = reduced(first_pass, scale) if scale > 1 else first_pass
     small_threshold = max(NOISE_SIGMAS * noise_sigma(small, small_first), 4.0) if scale > 1 else threshold
+    others = scene_states(small, small_stack, small_first, small_threshold)
+    if others is not None:  # a body at rest over half the clip, in the median's scene: the samples that show it clear
+        small_first = masked_median(small_stack, others, small_first)
+        first_pass = masked_median(stack, EnlargedMasks(others, first_pass.shape), first_pass)
     small_background = small_first
     excluded = np.zeros(small_stack.shape, bool)
     for _ in range(SCENE_PASSES):

@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from pendulum.tracking.samples import spread_frames
-from pendulum.tracking.scene_stack import fill
+from pendulum.tracking.scene_stack import fill, min_clear_samples
 
 # closing disk that joins a body's patches across gaps of wall-coloured surface: 5 px at 360 lines, 15 at 1080
 CLOSE_FRACTION = 1 / 72
@@ -149,6 +149,53 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
     typical = float(np.median(areas)) if areas else 0.0
     seen = [(p, q) for area, p, q in pairs if area >= typical / 3]
     return excluded, moving, len(seen), seen
+
+
+ONE_SIDED_MEAN = 0.5  # mean(I − B) / mean|I − B| of an object lighter (or darker) than the scene in most of it
+
+
+def scene_states(images: list, stack: np.ndarray, background: np.ndarray, threshold: float) -> np.ndarray | None:
+    """Per sample, the pixels to leave out of the scene (as :func:`pendulum.tracking.scene_stack.masked_median`
+    takes them) where ``background`` holds a ghost that :func:`min_clear_samples` samples show clear; or None.
+
+    A body at rest over half the clip is the median scene at its rest place, and while it still swings wide every
+    sample shows the wall there: a second "moving" object, often heavier than the body (before a print, whose
+    grid the body covers), and taken for it in the first frame (a calendar on the wall: the track 20–127 px off in
+    190 of its 1,275 ok frames). Such a ghost recurs: its pixels are the same (median |I − I_k| ≤ ``threshold``)
+    in :func:`min_clear_samples` samples, where the body is elsewhere, and it is the body's negative: lighter than
+    the scene where a moving object beside it is darker (or the reverse), each in most of its pixels
+    (:data:`ONE_SIDED_MEAN`). There the sample shows the scene clear, and the samples without it are left out. A
+    body held still before its release recurs too, but no lighter object moves beside a dark one; a body of both
+    sides (a two-tone ball) is left as the median has it. ``stack``: the ``images`` as one (n, h, w) array."""
+    n = len(images)
+    clear = np.zeros(stack.shape, bool)
+    for k, image in enumerate(images):
+        diff = np.abs(image.astype(np.float32) - background)
+        labels, stats, masses = components(diff, threshold, 3, close_size(diff.shape))
+        order = [i for i in np.argsort(masses)[::-1] if i > 0 and stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
+        heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]][:4]
+        if len(heavy) < 2:
+            continue
+        recurring, sides = [], []
+        for i in heavy:
+            x, y, w, h, _ = (int(v) for v in stats[i])
+            own = labels[y : y + h, x : x + w] == i
+            values = stack[:, y : y + h, x : x + w][:, own].astype(np.float32)
+            same = np.median(np.abs(values - values[k]), axis=1) <= threshold
+            recurring.append(int(same.sum()) >= min_clear_samples(n))
+            signed = values[k] - background[y : y + h, x : x + w][own]
+            sides.append(float(signed.mean() / np.abs(signed).mean()))
+        # a ghost is the body's negative: the wall where the scene has the body, against the body where it has wall
+        moving = [s for r, s in zip(recurring, sides, strict=True) if not r and abs(s) >= ONE_SIDED_MEAN]
+        ghosts = [
+            i
+            for i, r, s in zip(heavy, recurring, sides, strict=True)
+            if r and abs(s) >= ONE_SIDED_MEAN and any(s * m < 0 for m in moving)
+        ]
+        if ghosts:
+            clear[k] = np.isin(labels, ghosts)
+    ghost = clear.sum(axis=0) >= min_clear_samples(n)
+    return ghost[None] & ~clear if ghost.any() else None
 
 
 def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:

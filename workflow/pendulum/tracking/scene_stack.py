@@ -51,6 +51,31 @@ def same_exposure(images: list[np.ndarray]) -> np.ndarray:
     return out
 
 
+def border_offset(signed: np.ndarray) -> np.ndarray | float:
+    """The window's offset from the scene as a line in the row, o(y) = a + b (y − ȳ), fitted to its border's
+    I − B (its left and right columns row by row, its top and bottom rows at their ends), twice, the second time
+    without the pixels more than 3 MAD (at least 1.5 grey levels) off the first (a string, a shadow); the median
+    where the window is too short. A level follows slow exposure drift; the slope, a light's bands rolling down a
+    rolling-shutter frame (mains flicker, with the samples' rows brought to one exposure:
+    :func:`pendulum.tracking.scene_stack.same_exposure`)."""
+    h = signed.shape[0]
+    rows = np.r_[np.arange(h), np.arange(h), np.zeros(signed.shape[1]), np.full(signed.shape[1], h - 1)]
+    values = np.r_[signed[:, 0], signed[:, -1], signed[0], signed[-1]].astype(np.float64)
+    if h < 8:
+        return float(np.median(values))
+    y = rows - 0.5 * (h - 1)
+    keep = np.ones(values.size, bool)
+    for _ in range(2):  # least squares in closed form (a call of np.polyfit per frame cost 4 % of a body's track)
+        ys, vs = y[keep], values[keep]
+        y_mean, v_mean = float(ys.mean()), float(vs.mean())
+        spread = float(((ys - y_mean) ** 2).sum())
+        slope = float(((ys - y_mean) * (vs - v_mean)).sum()) / spread if spread > 0 else 0.0
+        level = v_mean - slope * y_mean
+        residual = values - (level + slope * y)
+        keep = np.abs(residual) <= max(3 * 1.4826 * float(np.median(np.abs(residual))), 1.5)
+    return (level + slope * (np.arange(h) - 0.5 * (h - 1)))[:, None].astype(np.float32)
+
+
 ROW_BAND_SIGMAS = 5.0  # row offsets whose spread is this many times their own noise (and ≥ 1 grey level): bands
 
 
