@@ -4,7 +4,8 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
 (an apple on a string, a two-tone ball, a bauble, a vehicle on its rod):
 
 1. **Scene.** ≤ 2 × :data:`SCENE_SAMPLES` frames spread over the clip, each brought to one exposure
-   (gain and offset against their median: auto-exposure drift), and their per-pixel median; then
+   (gain and offset against their median: auto-exposure drift), and their per-pixel median (where it holds a
+   body at rest over half the clip, from the samples that show its ghost: ``body_scene.scene_states``); then
    again, up to :data:`SCENE_PASSES` times, with each sample's moving objects (by their hulls) left out;
    pixels almost no sample shows clear (a swing narrower than the body) filled from around them, refused
    where that fill is likely off by max(3σ, :data:`UNSEEN_FILL_SHARE` C) or cannot be checked, and warned
