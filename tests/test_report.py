@@ -655,6 +655,26 @@ def test_the_summary_says_what_the_videos_records_carry(documents):
     assert "records carry" not in documents.summary_box()
 
 
+def test_the_summary_says_a_knocked_camera_apart_from_its_creep(documents):
+    """A knock (a step of the pivot in the picture, corrected, its shaking flagged) is said with its time and size,
+    and the creep beside it without the step (the path's start-to-end motion holds both)."""
+    documents.docs[("t20", "tracks")] = {
+        "status": "ok",
+        "path": {
+            "corrected": True,
+            "creep": {
+                "degree": 2,
+                "motion_px": 18.7,
+                "start_to_end_px": [17.3, -6.5],
+                "knock": {"time_s": 9.5105, "shift_px": [10.4, 3.2], "stderr_px": 1.1, "from_s": 9.49, "to_s": 10.01},
+            },
+        },
+    }
+    box = documents.summary_box()
+    assert "<b>t20</b>: the pivot jumped by 11 px in the picture at 9.51 s (the camera knocked" in box
+    assert "the camera crept by 12 px (corrected)" in box  # |(17.3 − 10.4, −6.5 − 3.2)| = 11.9
+
+
 def test_a_record_without_a_release_is_labelled_by_its_first_swing_extremum(documents):
     """A clip that starts mid-swing: the † angle is the measured amplitude at its first extremum (the fitted angle at
     its first sample, −11° for a 15° swing passing through, said nothing of the swing)."""

@@ -22,7 +22,7 @@ from pendulum.report.format import (
     td,
     with_minus_sign,
 )
-from pendulum.tracking.timing import slip_counts, slip_sentence
+from pendulum.tracking.timing import slip_sentence
 
 # One note a line; the table within the page, its column 1400 px wide (in a 1120 px column a minimum of 14em cut the
 # notes mid-word and 10em made each real clip's row 1,000 px tall: two reviewers, 2026-12-02).
@@ -210,45 +210,6 @@ def misfits_together(warnings: list[str]) -> list[str]:
     first = warnings.index(found[0][0])
     rest = [w for w in warnings if w not in {w for w, _ in found}]
     return rest[:first] + [together] + rest[first:]
-
-
-def tracking_note(tracks: dict | None, angles: dict | None) -> str:
-    """A trial's path and timing findings in one clause ('' if none): a creeping camera (corrected), a path off
-    one circle (carried by the angles), a second harmonic in its angles (perspective), frames lost or repeated
-    under even stamps (times corrected), breaks in its track no slip explains (not corrected)."""
-    tracks = tracks or {}
-    if not is_ok(tracks):
-        return ""
-    parts = []
-    path = tracks.get("path") or {}
-    creep = path.get("creep") or {}
-    if path.get("corrected") and is_finite(creep.get("motion_px")):
-        parts.append(f"the camera crept by {fmt(creep['motion_px'], 2)} px (corrected)")
-    if path.get("departs") and is_finite(path.get("unexplained_angle_deg")):
-        parts.append(
-            f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
-            f"({fmt(path['unexplained_angle_deg'], 2)}°; not corrected, it stays in the angles)"
-        )
-    harmonic = (angles or {}).get("second_harmonic") or {}
-    if harmonic.get("present"):
-        parts.append(
-            f"its angles hold a second harmonic of {fmt(harmonic['amplitude_deg'], 2)}° (perspective: its "
-            "distance from the camera changes with the swing; not corrected, it stays in the fits' residuals: "
-            "film square-on to the swing plane, from farther away)"
-        )
-    lost, repeated, other = slip_counts(tracks.get("timing") or {})
-    counts = [f"{lost} frame(s) lost"] * bool(lost) + [f"{repeated} repeated"] * bool(repeated)
-    counts += [f"{other} slip(s) of the clock by part of a frame"] * bool(other)
-    parts += [
-        f"{', '.join(counts)} while the time stamps in the file stayed even (times corrected from the motion; "
-        "near a turning point the motion cannot check the correction)"
-    ] * bool(counts)
-    breaks = ", ".join(map(str, (tracks.get("timing") or {}).get("unexplained") or []))
-    parts += [
-        f"a break in its track at frame {breaks} no slip of the clock explains (not corrected: the frames "
-        "after it may be off in time, which biases its fits)"
-    ] * bool(breaks)
-    return ", ".join(parts)
 
 
 class CheckSections(ReportData):

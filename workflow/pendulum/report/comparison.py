@@ -13,7 +13,7 @@ import numpy as np
 from pendulum.design.tolerances import input_words, largest_input, split_key
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.outcomes import MISFIT_MARK
-from pendulum.report.checks import MANY_TRIALS, misfits_together, tracking_note
+from pendulum.report.checks import MANY_TRIALS, misfits_together
 from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
 from pendulum.report.format import (
     COEFFICIENTS,
@@ -28,6 +28,7 @@ from pendulum.report.format import (
     table_html,
     td,
 )
+from pendulum.report.track_notes import tracking_note
 
 TRADED = re.compile(r"(\w+) and (\w+) are (-?[0-9.]+) correlated")
 TRADED_LIMIT = 0.99  # |correlation| of two coefficients in a joint fit at which the records cannot tell them apart

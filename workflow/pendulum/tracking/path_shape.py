@@ -37,6 +37,15 @@ MIN_DEPARTURE_PX = 0.25  # ... and this: reported as a departure
 # NOT_CIRCLE_NOISE_RATIO × the noise and more than 1 px
 NOT_CIRCLE_SWING_FRACTION = 0.02
 NOT_CIRCLE_NOISE_RATIO = 3.0
+KNOCK_MARGIN = 30  # ok frames on either side of a step of the camera
+KNOCK_PASSES = 4
+KNOCK_RMS_RATIO = 3.0  # a step this many times the RMS left without it: a knock, not part of a slow departure
+HANDLED_RATIO, HANDLED_MAX_S = 3.0, 5.0  # a side of a knock this many times as far off the circle, this short:
+# the camera in the hand (set down after the recording started, or picked up before it stopped)
+SETTLE_S = 0.5  # the frames this long after a knock are flagged whatever their distance from the circle (a shake
+# along the path does not change it: the reviewer's 7 Hz ring moved θ by up to 0.27° there)
+RING_S = 1.0  # a knocked picture shakes for up to this long ...
+RING_NOISE, RING_RMS = 4.0, 3.0  # ... its frames off the circle by this × the noise and × the RMS left
 
 
 def arc_span_deg(x, y, centre) -> float:
@@ -56,43 +65,134 @@ def _design(t: np.ndarray, degree: int) -> tuple[np.ndarray, float, float]:
     return np.column_stack([tau ** (k + 1) for k in range(degree)]) if degree else np.zeros((t.size, 0)), centre, span
 
 
-def _fit(x, y, t, degree: int, start):
+def _basis(t: np.ndarray, degree: int, step_s: float | None = None) -> np.ndarray:
+    """The centre's motion terms at times t: τᵏ (k = 1 … degree) and, with ``step_s``, a step there (a knock)."""
+    basis, _, _ = _design(t, degree)
+    return basis if step_s is None else np.column_stack([basis, (t >= step_s).astype(float)])
+
+
+def _fit(x, y, t, degree: int, start, step_s: float | None = None):
     from scipy.optimize import least_squares  # here: the angles job imports arc_span_deg
 
-    basis, _, _ = _design(t, degree)
+    basis = _basis(t, degree, step_s)
+    k = basis.shape[1]
 
     def residual(p):
-        cx = p[0] + basis @ p[3 : 3 + degree]
-        cy = p[1] + basis @ p[3 + degree : 3 + 2 * degree]
+        cx = p[0] + basis @ p[3 : 3 + k]
+        cy = p[1] + basis @ p[3 + k : 3 + 2 * k]
         return np.hypot(x - cx, y - cy) - p[2]
 
-    p0 = np.r_[start, np.zeros(2 * degree)]
+    p0 = np.r_[start, np.zeros(2 * k)]
     sol = least_squares(residual, p0, x_scale="jac")
     res = sol.fun
     rho = float(np.clip(np.corrcoef(res[1:], res[:-1])[0, 1], 0.0, 0.99)) if res.size > 3 else 0.0
-    n_eff = max(res.size * (1 - rho) / (1 + rho), 2 * degree + 4.0)
+    n_eff = max(res.size * (1 - rho) / (1 + rho), 2 * k + 4.0)
     sigma2 = float(res @ res) / max(res.size - sol.x.size, 1)
     cov = np.linalg.pinv(sol.jac.T @ sol.jac) * sigma2 * res.size / n_eff
     return sol.x, cov, float(np.sqrt(np.mean(res**2)))
 
 
-def _motion(params: np.ndarray, cov: np.ndarray, degree: int, t: np.ndarray) -> tuple[np.ndarray, float, float]:
+def _motion(params: np.ndarray, cov: np.ndarray, degree: int, t: np.ndarray, step_s=None):
     """The centre's displacement at every t (n×2), its largest extent over the clip (px) and that extent's σ."""
-    basis, _, _ = _design(t, degree)
-    dx = basis @ params[3 : 3 + degree]
-    dy = basis @ params[3 + degree : 3 + 2 * degree]
+    basis = _basis(t, degree, step_s)
+    k = basis.shape[1]
+    dx = basis @ params[3 : 3 + k]
+    dy = basis @ params[3 + k : 3 + 2 * k]
     shift = np.column_stack([dx, dy])
     extent = np.hypot(*(shift.max(axis=0) - shift.min(axis=0)))
     # σ of the end-to-end displacement (first vs last frame), by the delta method
     ends = basis[-1] - basis[0]
     g = np.zeros((2, params.size))
-    g[0, 3 : 3 + degree] = ends
-    g[1, 3 + degree : 3 + 2 * degree] = ends
+    g[0, 3 : 3 + k] = ends
+    g[1, 3 + k : 3 + 2 * k] = ends
     end_to_end = g @ params
     c = g @ cov @ g.T
     norm = float(np.hypot(*end_to_end))
     sigma = float(math.sqrt(max(end_to_end @ c @ end_to_end, 0.0)) / norm) if norm > 0 else math.inf
     return shift, float(extent), sigma
+
+
+def _step_time(x, y, t, centre: np.ndarray, radius: float, margin: int) -> float | None:
+    """The time at which a step of the circle's centre best explains the distances of the points from a moving
+    ``centre`` (n×2) less ``radius``: a centre moved by Δ after frame k changes each later distance by −u·Δ (u: the
+    unit vector from the centre), so Δ_k = (Σ u uᵀ)⁻¹ Σ u r over the frames from k, and the squared residual it
+    removes, (Σ u r)ᵀ (Σ u uᵀ)⁻¹ (Σ u r), is largest at the step (sums from the end: one pass)."""
+    if x.size < 2 * margin + 2:
+        return None
+    dx, dy = x - centre[:, 0], y - centre[:, 1]
+    d = np.hypot(dx, dy)
+    ux, uy, r = dx / d, dy / d, d - radius
+    terms = np.column_stack([ux * ux, ux * uy, uy * uy, ux * r, uy * r])
+    a, b, c, s1, s2 = np.cumsum(terms[::-1], axis=0)[::-1].T  # sums over frames k … n − 1
+    det = a * c - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gain = np.where(det > 0, (c * s1 * s1 - 2 * b * s1 * s2 + a * s2 * s2) / det, 0.0)
+    gain[:margin] = gain[-margin:] = 0.0
+    k = int(np.argmax(gain))
+    return 0.5 * (t[k - 1] + t[k]) if gain[k] > 0 else None
+
+
+def _centre(params: np.ndarray, t: np.ndarray, degree: int, step_s=None, with_step: bool = True) -> np.ndarray:
+    """The fitted centre at times t (n×2); without its step where ``with_step`` is False."""
+    basis = _basis(t, degree, step_s)
+    k = basis.shape[1]
+    ax, ay = params[3 : 3 + k].copy(), params[3 + k : 3 + 2 * k].copy()
+    if step_s is not None and not with_step:
+        ax[-1] = ay[-1] = 0.0
+    return np.column_stack([params[0] + basis @ ax, params[1] + basis @ ay])
+
+
+def _knock(x, y, t, best: tuple, noise_px: float):
+    """A camera knocked once (its stand bumped: the picture jumps and settles): the best fit (``best``, as
+    :func:`path_departure` keeps it) with a step of the centre added at :func:`_step_time`, each polynomial
+    degree tried again with it. Kept where it cuts the RMS by :data:`MIN_RMS_GAIN`, and the step is at least
+    :data:`MIN_MOTION_PX`, :data:`MOTION_SIGMAS` σ and :data:`KNOCK_RMS_RATIO` times the RMS the fit without
+    it leaves (a sharp jump, not a share of a slow departure). Returns (best, step time, facts) or None; the
+    facts' ``from_s``–``to_s`` are the picture's shaking: from the frame before the step to :data:`SETTLE_S` after
+    it, or to the last frame within :data:`RING_S` after it whose distance from the circle is off by more than
+    :data:`RING_NOISE` × the noise, :data:`RING_RMS` × the RMS left and 0.3 px."""
+    fit, step_s = (best[0], best[1], best[2], best[3]), None
+    for _ in range(KNOCK_PASSES):  # the step's time, then the fit with it, until the time stays (a creep took part)
+        found = _step_time(x, y, t, _centre(fit[1], t, fit[0], step_s, False), fit[1][2], KNOCK_MARGIN)
+        if found is None or found == step_s:
+            break
+        step_s, fit = found, None
+        for degree in range(MAX_DEGREE + 1):
+            p, c, r = _fit(x, y, t, degree, best[1][:3], step_s)
+            if fit is None or r <= (1 - MIN_RMS_GAIN) * fit[3]:
+                fit = (degree, p, c, r)
+    if step_s is None:
+        return None
+    degree, p, c, r = fit
+    k = degree + 1
+    jump = np.array([p[2 + k], p[2 + 2 * k]])
+    size = float(np.hypot(*jump))
+    g = jump / size if size > 0 else np.zeros(2)
+    sigma = float(math.sqrt(max(g @ c[np.ix_([2 + k, 2 + 2 * k], [2 + k, 2 + 2 * k])] @ g, 0.0)))
+    if not (
+        r <= (1 - MIN_RMS_GAIN) * best[3]
+        and size >= max(MIN_MOTION_PX, MOTION_SIGMAS * sigma, KNOCK_RMS_RATIO * best[3])
+    ):
+        return None
+    basis = _basis(t, degree, step_s)
+    residual = np.hypot(x - p[0] - basis @ p[3 : 3 + k], y - p[1] - basis @ p[3 + k : 3 + 2 * k]) - p[2]
+    off = max(RING_NOISE * noise_px, RING_RMS * r, 0.3)
+    after = (t >= step_s) & (t <= step_s + RING_S) & (np.abs(residual) > off)
+    before = t[t < step_s]
+    facts = {
+        "time_s": round(float(step_s), 4),
+        "shift_px": [round(float(jump[0]), 3), round(float(jump[1]), 3)],
+        "stderr_px": round(sigma, 3),
+        "from_s": round(float(before[-1]) if before.size else float(step_s), 4),
+        "to_s": round(max(float(t[after][-1]) if after.any() else float(step_s), float(step_s) + SETTLE_S), 4),
+    }
+    # a camera in the hand before it was set down (or after it was picked up): its side shakes, the other does not
+    rms = [float(np.sqrt(np.mean(residual[side] ** 2))) for side in (t < step_s, t > facts["to_s"])]
+    if rms[0] > HANDLED_RATIO * max(rms[1], noise_px) and step_s - t[0] <= HANDLED_MAX_S:
+        facts.update(handled="before", from_s=round(float(t[0]), 4))
+    elif rms[1] > HANDLED_RATIO * max(rms[0], noise_px) and t[-1] - facts["to_s"] <= HANDLED_MAX_S:
+        facts.update(handled="after", to_s=round(float(t[-1]), 4))
+    return (degree, p, c, r, _motion(p, c, degree, t, step_s)), step_s, facts
 
 
 def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[pd.DataFrame, dict]:
@@ -128,9 +228,14 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
         if r > (1 - MIN_RMS_GAIN) * best[3] or extent < MIN_MOTION_PX or extent < MOTION_SIGMAS * sigma:
             continue  # the next degree is tried against the best so far (a creep that turns back is no line)
         best = (degree, p, c, r, (shift, extent, sigma))
+    knock = _knock(x, y, t, best, noise_px) if span >= MIN_ARC_SPAN_DEG else None
+    if knock is not None:
+        best, step_s, step = knock
+    else:
+        step_s, step = None, None
     degree, params, cov, rms_after, motion = best
     radius = float(params[2])
-    creep = {"degree": degree, "corrected": degree > 0, "rms_after_px": round(rms_after, 4)}
+    creep = {"degree": degree, "corrected": degree > 0 or step is not None, "rms_after_px": round(rms_after, 4)}
     if motion is not None:
         shift, extent, sigma = motion
         creep.update(
@@ -138,11 +243,37 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
             motion_stderr_px=round(sigma, 3),
             start_to_end_px=[round(float(shift[-1, 0] - shift[0, 0]), 3), round(float(shift[-1, 1] - shift[0, 1]), 3)],
         )
-        basis, _, _ = _design(track.time_s.to_numpy(float), degree)
+        basis = _basis(track.time_s.to_numpy(float), degree, step_s)
+        k = basis.shape[1]
         out["x_image_px"] = track.x_px
         out["y_image_px"] = track.y_px
-        out["x_px"] = track.x_px.to_numpy(float) - basis @ params[3 : 3 + degree]
-        out["y_px"] = track.y_px.to_numpy(float) - basis @ params[3 + degree : 3 + 2 * degree]
+        out["x_px"] = track.x_px.to_numpy(float) - basis @ params[3 : 3 + k]
+        out["y_px"] = track.y_px.to_numpy(float) - basis @ params[3 + k : 3 + 2 * k]
+    if step is not None:
+        creep["knock"] = step
+        ringing = (track.time_s >= step["from_s"]) & (track.time_s <= step["to_s"]) & (track.flag == "ok")
+        out.loc[ringing, "flag"] = "jump"  # the picture still shaking: off the swing's path, not the swing
+        timing = track.attrs.get("timing") or {}
+        at = dict(zip(track.frame.to_numpy(int), track.time_s.to_numpy(float), strict=True))
+        knocked = [f for f in timing.get("unexplained") or [] if step["from_s"] <= at.get(f, -1.0) <= step["to_s"]]
+        if knocked:  # a break in the track's timing the knock explains (timing.find_slips saw the jump)
+            rest = [f for f in timing["unexplained"] if f not in knocked]
+            out.attrs["timing"] = {**timing, "unexplained": rest, "knocked": knocked}
+        if step.get("handled"):  # the frames of a camera in the hand flagged: the path again without them
+            out = out.drop(columns=["x_image_px", "y_image_px"], errors="ignore")
+            out["x_px"], out["y_px"] = track.x_px, track.y_px
+            again, document = path_departure(out, noise_px)
+            document["handled"] = step
+            flagged = int((again.flag != track.flag).sum())
+            (sx, sy), when = step["shift_px"], step["time_s"]
+            span = f"to {step['to_s']:.2f} s" if step["handled"] == "before" else f"from {step['from_s']:.2f} s"
+            held = "until it was set down" if step["handled"] == "before" else "from when it was picked up"
+            document["verdict"] = (
+                f"the camera was in the hand {held} at {when:.2f} s (the picture jumped by ({sx:+.1f}, {sy:+.1f}) px "
+                f"and shook off the swing's circle): its {flagged} frames {span} are flagged jump; "
+                + document["verdict"]
+            )
+            return again, document
     unexplained = rms_after
     document.update(
         creep=creep,
@@ -152,8 +283,18 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
         unexplained_angle_deg=round(math.degrees(unexplained / radius), 4) if radius > 0 else None,
     )
     parts = [f"the path sits {rms:.2f} px RMS off one fixed circle (noise {noise_px:.3f} px)"]
-    if creep["corrected"]:
+    if step is not None:
+        (sx, sy), flagged = step["shift_px"], int((out.flag != track.flag).sum())
+        parts.append(
+            f"the pivot jumped by ({sx:+.1f}, {sy:+.1f}) px in the picture at {step['time_s']:.2f} s (± "
+            f"{step['stderr_px']:.1f} px: the camera knocked, or the thread slipping at the pivot), corrected, and "
+            f"the {flagged} frames of its shaking to "
+            f"{step['to_s']:.2f} s are flagged jump" + ("" if degree else f": {rms_after:.2f} px RMS after")
+        )
+    if degree:
         dx, dy = creep["start_to_end_px"]
+        if step is not None:  # the creep alone
+            dx, dy = dx - step["shift_px"][0], dy - step["shift_px"][1]
         parts.append(
             f"the pivot moves by ({dx:+.1f}, {dy:+.1f}) px from the first to the last frame (camera or stand "
             f"creeping; ± {creep['motion_stderr_px']:.1f} px), corrected: {rms_after:.2f} px RMS after"
