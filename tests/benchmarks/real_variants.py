@@ -370,6 +370,8 @@ def _in_colour(name: str, last: int | None = None) -> list:
     import cv2
 
     ys, us, vs = _colour_planes(last)
+    if name.startswith("caustics"):
+        return _caustics(ys, us, vs)
     wall = _wall(ys)
     shares = [_apple_share(image, wall) for image in ys]
     hard = "hard_band" in name
@@ -404,6 +406,38 @@ def _in_colour(name: str, last: int | None = None) -> list:
             chroma = [cv2.resize(p, (275, 155), interpolation=cv2.INTER_AREA) for p in chroma]
         width = image.shape[1]
         out.append(np.concatenate([image.reshape(-1), chroma[0].reshape(-1), chroma[1].reshape(-1)]).reshape(-1, width))
+    return out
+
+
+def _caustics(ys: list, us: list, vs: list, amp: float = 25.0, scale: float = 40.0, speed: float = 0.6) -> list:
+    """The clip as filmed in a lit water tank (a reviewer's variant): a rippling net of bright wavy lines, 0 to
+    ``amp`` grey levels of light on a surface of the wall's brightness, ``scale`` px apart, drifting ``speed`` px per
+    frame and changing as the surface moves (three plane waves, warped, their zero set sharpened into ridges),
+    falling on the wall and the apple alike: each pixel's light scaled by it, its chroma's distance from grey too.
+    Packed yuv420p."""
+    import cv2
+
+    h, w = ys[0].shape
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    rng = np.random.default_rng(0)
+    angles = rng.uniform(0, np.pi, 3) + np.array([0.0, 2.1, 4.2])
+    phases = rng.uniform(0, 2 * np.pi, 6)
+    s = scale / (2 * np.pi)
+    reference = float(np.median(ys[0])) - 16.0
+    out = []
+    for k, (y, u, v) in enumerate(zip(ys, us, vs, strict=True)):
+        x_, y_ = xx - 0.48 * speed * k / 0.6, yy - 0.36 * speed * k / 0.6
+        qx = x_ + 0.175 * scale * np.sin(y_ / (1.7 * s) + 0.135 * k + phases[0])
+        qy = y_ + 0.175 * scale * np.cos(x_ / (1.9 * s) - 0.105 * k + phases[1])
+        f = sum(
+            np.sin((qx * np.cos(a) + qy * np.sin(a)) / s + phases[2 + i] + 0.05 * k * (i - 1))
+            for i, a in enumerate(angles)
+        )
+        gain = 1 + amp * np.exp(-(f**2) / 0.12) / reference
+        gain_c = cv2.resize(gain, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+        planes = [16 + (y - 16.0) * gain, 128 + (u - 128.0) * gain_c, 128 + (v - 128.0) * gain_c]
+        packed = [np.clip(np.round(p), 0, 255).astype(np.uint8).reshape(-1) for p in planes]
+        out.append(np.concatenate(packed).reshape(-1, w))
     return out
 
 
@@ -453,6 +487,7 @@ def variants():
         "two_tone_shadow_band_colour_1080p": (None, 1, 0, 18),
         "two_tone_shadow_band_colour_550": (None, 1, 0, 18),
         "two_tone_hard_band_colour": (None, 1, 0, 18),
+        "caustics_colour": (None, 1, 0, 18),
         "hand_release": (None, 1, 0, 18),
         "hand_release_long_dark": (None, 1, 0, 18),
         "hand_release_fingers": (None, 1, 0, 18),

@@ -21,10 +21,18 @@ def tracking_note(tracks: dict | None, angles: dict | None) -> str:
     path = tracks.get("path") or {}
     creep = path.get("creep") or {}
     knock = creep.get("knock") or {}
+    handled = path.get("handled") or {}
+    if handled:
+        held = "until it was set down" if handled.get("handled") == "before" else "from when it was picked up"
+        parts.append(
+            f"the camera was in the hand {held} at {fmt(handled['time_s'], 3)} s (those frames flagged, the path "
+            "judged without them)"
+        )
     if knock:
         parts.append(
             f"the pivot jumped by {fmt(math.hypot(*knock['shift_px']), 2)} px in the picture at "
-            f"{fmt(knock['time_s'], 3)} s (the camera knocked, or the thread slipping; corrected, its shaking flagged)"
+            f"{fmt(knock['time_s'], 3)} s (the camera knocked or slid, or the thread slipping; corrected, its "
+            "shaking flagged)"
         )
         if creep.get("degree"):  # the creep without the jump, first frame to last
             (ex, ey), (kx, ky) = creep["start_to_end_px"], knock["shift_px"]

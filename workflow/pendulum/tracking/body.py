@@ -130,6 +130,8 @@ CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share o
 REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body that holds its place is refused
 MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
 FILLED_CLEAN_RATIO = 0.96  # mid_swing_area_ratio of a clean scene: 0.96–1.02; beyond, with a fill behind: a warning
+WIDE_SWING_RADII = 6.0  # a path this many body radii across hides no place of the scene in most frames
+MIN_SOLIDITY = 0.3  # a body fills more of its convex hull (even a slender vehicle: > 0.9; a tank's caustics 0.09)
 UNSEEN_FILL_SHARE = 0.8 * CONTRAST_FRACTION  # a scene filled in behind the body: off by less than the silhouette cut
 
 
@@ -283,6 +285,13 @@ def find_body(
         )
     if first.component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
+    hull = cv2.convexHull(cv2.findNonZero(first.component.astype(np.uint8)))  # its area over its hull's: solidity
+    if (solid := first.component.sum() / max(cv2.contourArea(hull), 1.0)) < MIN_SOLIDITY:  # not a body: its colour?
+        raise VideoError(
+            f"{path}: the heaviest moving object in the first frame is no compact body (it fills {100 * solid:.0f} % "
+            "of its outline's convex hull): the still scene moves (light rippling off water, caustics on a tank's "
+            "wall, a flickering or moving light); light the scene evenly, or give start_px at a marker dot"
+        )
     # the side of the scene the body lies on, voted by its own pixels in the first frame (not a rod's or a second
     # pendulum's) above a quarter of its contrast
     side = body_polarity([images[0]], background, [first.component], max(threshold, CONTRAST_FRACTION * first.contrast))
@@ -519,13 +528,21 @@ def track_body(
             "its contrast changes with the wall behind it, and its positions there may be biased by up to a few pixels"
         )
         return table
-    if held:
+    if held:  # not a refusal of the clip: its colour may do (method.py)
         where = "smaller mid-swing" if ratio < 1 else "larger mid-swing"
-        raise BodyError(
+        ok = table[table.flag == "ok"]
+        reach = np.ptp(np.hypot(ok.x_px - ok.x_px.median(), ok.y_px - ok.y_px.median())) / max(scene.radius_px, 1)
+        why = (
+            "the body covers the same place in most frames (a swing narrower than about twice the body's width), so "
+            "the scene behind it is never seen clearly and its positions would be biased; film a wider swing, or "
+            "give start_px at a marker dot on it"
+            if reach < WIDE_SWING_RADII
+            else f"the swing is {reach:.0f} body radii wide, so the still scene itself changes (light rippling off "
+            "water, caustics, a flickering or moving light) and its positions would be biased; light it evenly"
+        )
+        raise VideoError(
             f"{path}: the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {where} than at the ends of its swing, "
-            "also with the scene taken from the ends of the swing: the body covers the same place in most frames "
-            "(a swing narrower than about twice the body's width), so the scene behind it is never seen clearly "
-            "and its positions would be biased; film a wider swing, or give start_px at a marker dot on it"
+            f"also with the scene taken from the ends of the swing: {why}"
         )
     if unseen_facts and ratio is not None and not FILLED_CLEAN_RATIO <= ratio <= 1 / FILLED_CLEAN_RATIO:
         table.attrs["body"]["warning"] = filled_warning(ratio)

@@ -151,6 +151,7 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
     return excluded, moving, len(seen), seen
 
 
+OUTLINE_RATIO = 1.5  # a moving object outlined in the sample (its edge this much stronger there than in the scene)
 ONE_SIDED_MEAN = 0.5  # mean(I − B) / mean|I − B| of an object lighter (or darker) than the scene in most of it
 
 
@@ -162,9 +163,11 @@ def scene_states(images: list, stack: np.ndarray, background: np.ndarray, thresh
     sample shows the wall there: a second "moving" object, often heavier than the body (before a print, whose
     grid the body covers), and taken for it in the first frame (a calendar on the wall: the track 20–127 px off in
     190 of its 1,275 ok frames). Such a ghost recurs: its pixels are the same (median |I − I_k| ≤ ``threshold``)
-    in :func:`min_clear_samples` samples, where the body is elsewhere, and it is the body's negative: lighter than
+    in :func:`min_clear_samples` samples, where the body is elsewhere; it is the body's negative: lighter than
     the scene where a moving object beside it is darker (or the reverse), each in most of its pixels
-    (:data:`ONE_SIDED_MEAN`). There the sample shows the scene clear, and the samples without it are left out. A
+    (:data:`ONE_SIDED_MEAN`); and its outline is the scene's (:func:`_outline`: a body overlapping itself near its
+    turning points recurs too, outlined in the sample). There the sample shows the scene clear, and the samples
+    without it are left out. A
     body held still before its release recurs too, but no lighter object moves beside a dark one; a body of both
     sides (a two-tone ball) is left as the median has it. ``stack``: the ``images`` as one (n, h, w) array."""
     n = len(images)
@@ -176,7 +179,7 @@ def scene_states(images: list, stack: np.ndarray, background: np.ndarray, thresh
         heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]][:4]
         if len(heavy) < 2:
             continue
-        recurring, sides = [], []
+        recurring, sides, outlined = [], [], []
         for i in heavy:
             x, y, w, h, _ = (int(v) for v in stats[i])
             own = labels[y : y + h, x : x + w] == i
@@ -185,17 +188,36 @@ def scene_states(images: list, stack: np.ndarray, background: np.ndarray, thresh
             recurring.append(int(same.sum()) >= min_clear_samples(n))
             signed = values[k] - background[y : y + h, x : x + w][own]
             sides.append(float(signed.mean() / np.abs(signed).mean()))
-        # a ghost is the body's negative: the wall where the scene has the body, against the body where it has wall
+            outlined.append(_outline(image, background, labels == i, (x, y, w, h)))
+        # a ghost is the body's negative: the wall where the scene has the body, against the body where it has wall;
+        # its outline is the scene's, not the sample's (a body at a turning point recurs too, outlined in the sample)
         moving = [s for r, s in zip(recurring, sides, strict=True) if not r and abs(s) >= ONE_SIDED_MEAN]
         ghosts = [
             i
-            for i, r, s in zip(heavy, recurring, sides, strict=True)
-            if r and abs(s) >= ONE_SIDED_MEAN and any(s * m < 0 for m in moving)
+            for i, r, s, o in zip(heavy, recurring, sides, outlined, strict=True)
+            if r and o == "scene" and abs(s) >= ONE_SIDED_MEAN and any(s * m < 0 for m in moving)
         ]
         if ghosts:
             clear[k] = np.isin(labels, ghosts)
     ghost = clear.sum(axis=0) >= min_clear_samples(n)
     return ghost[None] & ~clear if ghost.any() else None
+
+
+def _outline(image: np.ndarray, scene: np.ndarray, mask: np.ndarray, box: tuple[int, int, int, int]) -> str:
+    """Whose edge runs along ``mask``'s border (within ``box``), by the mean gradient magnitude there: ``"image"``
+    where the image's is over :data:`OUTLINE_RATIO` times the scene's (a body in the sample: 199 against 1 grey
+    level per px on a reviewer's swing before a plain wall), else ``"scene"`` (a ghost: the body is in the scene
+    and the sample shows the wall; before a calendar both carry its print, 350 against 357)."""
+    x, y, w, h = box
+    y0, y1, x0, x1 = max(y - 2, 0), min(y + h + 2, mask.shape[0]), max(x - 2, 0), min(x + w + 2, mask.shape[1])
+    own = mask[y0:y1, x0:x1].astype(np.uint8)
+    border = (own - cv2.erode(own, np.ones((3, 3), np.uint8))).astype(bool)
+
+    def edge(picture):
+        crop = picture[y0:y1, x0:x1].astype(np.float32)
+        return float(np.hypot(cv2.Sobel(crop, cv2.CV_32F, 1, 0), cv2.Sobel(crop, cv2.CV_32F, 0, 1))[border].mean())
+
+    return "image" if edge(image) > OUTLINE_RATIO * edge(scene) else "scene"
 
 
 def _hulls(labels: np.ndarray, chosen: list) -> np.ndarray:

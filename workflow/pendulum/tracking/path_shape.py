@@ -112,13 +112,11 @@ def _motion(params: np.ndarray, cov: np.ndarray, degree: int, t: np.ndarray, ste
     return shift, float(extent), sigma
 
 
-def _step_time(x, y, t, centre: np.ndarray, radius: float, margin: int) -> float | None:
-    """The time at which a step of the circle's centre best explains the distances of the points from a moving
-    ``centre`` (n×2) less ``radius``: a centre moved by Δ after frame k changes each later distance by −u·Δ (u: the
-    unit vector from the centre), so Δ_k = (Σ u uᵀ)⁻¹ Σ u r over the frames from k, and the squared residual it
-    removes, (Σ u r)ᵀ (Σ u uᵀ)⁻¹ (Σ u r), is largest at the step (sums from the end: one pass)."""
-    if x.size < 2 * margin + 2:
-        return None
+def _step_gain(x, y, centre: np.ndarray, radius: float) -> np.ndarray:
+    """Per frame k, the squared residual a step of the circle's centre after it would remove from the distances of
+    the points from a moving ``centre`` (n×2) less ``radius``: a centre moved by Δ changes each later distance by
+    −u·Δ (u: the unit vector from the centre), so Δ_k = (Σ u uᵀ)⁻¹ Σ u r over the frames from k, and it removes
+    (Σ u r)ᵀ (Σ u uᵀ)⁻¹ (Σ u r) (sums from the end: one pass)."""
     dx, dy = x - centre[:, 0], y - centre[:, 1]
     d = np.hypot(dx, dy)
     ux, uy, r = dx / d, dy / d, d - radius
@@ -126,10 +124,20 @@ def _step_time(x, y, t, centre: np.ndarray, radius: float, margin: int) -> float
     a, b, c, s1, s2 = np.cumsum(terms[::-1], axis=0)[::-1].T  # sums over frames k … n − 1
     det = a * c - b * b
     with np.errstate(divide="ignore", invalid="ignore"):
-        gain = np.where(det > 0, (c * s1 * s1 - 2 * b * s1 * s2 + a * s2 * s2) / det, 0.0)
+        return np.where(det > 0, (c * s1 * s1 - 2 * b * s1 * s2 + a * s2 * s2) / det, 0.0)
+
+
+def _step_time(x, y, t, centre: np.ndarray, radius: float, margin: int) -> float | None:
+    """The time at which a step of the centre best explains the distances (:func:`_step_gain`), at least ``margin``
+    frames from either end (None at that margin's edge: a step beyond it, or none)."""
+    if x.size < 2 * margin + 2:
+        return None
+    gain = _step_gain(x, y, centre, radius)
     gain[:margin] = gain[-margin:] = 0.0
     k = int(np.argmax(gain))
-    return 0.5 * (t[k - 1] + t[k]) if gain[k] > 0 else None
+    if gain[k] <= 0 or k in (margin, x.size - margin - 1):
+        return None
+    return 0.5 * (t[k - 1] + t[k])
 
 
 def _centre(params: np.ndarray, t: np.ndarray, degree: int, step_s=None, with_step: bool = True) -> np.ndarray:
@@ -178,21 +186,40 @@ def _knock(x, y, t, best: tuple, noise_px: float):
     residual = np.hypot(x - p[0] - basis @ p[3 : 3 + k], y - p[1] - basis @ p[3 + k : 3 + 2 * k]) - p[2]
     off = max(RING_NOISE * noise_px, RING_RMS * r, 0.3)
     after = (t >= step_s) & (t <= step_s + RING_S) & (np.abs(residual) > off)
-    before = t[t < step_s]
+    # when the step may have been (3σ): a step along the path shows only where the path turns away from it
+    gain = _step_gain(x, y, _centre(p, t, degree, step_s, False), p[2])
+    may = t[gain >= gain.max() - 9 * r * r]
+    start, end = min(float(may[0]), step_s), max(float(may[-1]), step_s)
+    before = t[t < start]
     facts = {
         "time_s": round(float(step_s), 4),
         "shift_px": [round(float(jump[0]), 3), round(float(jump[1]), 3)],
         "stderr_px": round(sigma, 3),
-        "from_s": round(float(before[-1]) if before.size else float(step_s), 4),
-        "to_s": round(max(float(t[after][-1]) if after.any() else float(step_s), float(step_s) + SETTLE_S), 4),
+        "from_s": round(float(before[-1]) if before.size else start, 4),
+        "to_s": round(max(float(t[after][-1]) if after.any() else step_s, end + SETTLE_S), 4),
     }
-    # a camera in the hand before it was set down (or after it was picked up): its side shakes, the other does not
-    rms = [float(np.sqrt(np.mean(residual[side] ** 2))) for side in (t < step_s, t > facts["to_s"])]
-    if rms[0] > HANDLED_RATIO * max(rms[1], noise_px) and step_s - t[0] <= HANDLED_MAX_S:
-        facts.update(handled="before", from_s=round(float(t[0]), 4))
-    elif rms[1] > HANDLED_RATIO * max(rms[0], noise_px) and t[-1] - facts["to_s"] <= HANDLED_MAX_S:
-        facts.update(handled="after", to_s=round(float(t[-1]), 4))
+    # a camera in the hand before it was set down (or after it was picked up): that side alone is farther off the
+    # circle than a pendulum's path can be (NOT_CIRCLE_SWING_FRACTION of the swing, over 5 frames' means), and the
+    # other side keeps to it (a side merely farther off, a larger swing's departure or noise, is no hand: a
+    # reviewer's decaying swings)
+    smooth = np.convolve(residual, np.ones(5) / 5, mode="same")  # a hand's shake stays, frame-to-frame noise less
+    sides = (t < step_s, t > facts["to_s"])
+    rms = [_rms(smooth[side]) for side in sides]
+    along = np.column_stack([x, y]) - np.column_stack([x, y]).mean(axis=0)
+    swing_px = float(np.sqrt(np.linalg.eigvalsh(np.cov(along.T))[-1]))
+    for near, name, edge in ((0, "before", "from_s"), (1, "after", "to_s")):
+        span = step_s - t[0] if near == 0 else t[-1] - facts["to_s"]
+        far = rms[1 - near]
+        if span <= HANDLED_MAX_S and rms[near] > max(
+            HANDLED_RATIO * max(far, noise_px), NOT_CIRCLE_SWING_FRACTION * swing_px
+        ):
+            facts.update({"handled": name, edge: round(float(t[0] if near == 0 else t[-1]), 4)})
+            break
     return (degree, p, c, r, _motion(p, c, degree, t, step_s)), step_s, facts
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
 
 
 def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[pd.DataFrame, dict]:
@@ -254,7 +281,8 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
         ringing = (track.time_s >= step["from_s"]) & (track.time_s <= step["to_s"]) & (track.flag == "ok")
         out.loc[ringing, "flag"] = "jump"  # the picture still shaking: off the swing's path, not the swing
         timing = track.attrs.get("timing") or {}
-        at = dict(zip(track.frame.to_numpy(int), track.time_s.to_numpy(float), strict=True))
+        frames = track.frame.to_numpy() if "frame" in track else np.arange(len(track))
+        at = dict(zip(frames.tolist(), track.time_s.to_numpy(float).tolist(), strict=True))
         knocked = [f for f in timing.get("unexplained") or [] if step["from_s"] <= at.get(f, -1.0) <= step["to_s"]]
         if knocked:  # a break in the track's timing the knock explains (timing.find_slips saw the jump)
             rest = [f for f in timing["unexplained"] if f not in knocked]
@@ -287,8 +315,8 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
         (sx, sy), flagged = step["shift_px"], int((out.flag != track.flag).sum())
         parts.append(
             f"the pivot jumped by ({sx:+.1f}, {sy:+.1f}) px in the picture at {step['time_s']:.2f} s (± "
-            f"{step['stderr_px']:.1f} px: the camera knocked, or the thread slipping at the pivot), corrected, and "
-            f"the {flagged} frames of its shaking to "
+            f"{step['stderr_px']:.1f} px: the camera knocked or slid, or the thread slipping at the pivot), "
+            f"corrected, and the {flagged} frames of its shaking to "
             f"{step['to_s']:.2f} s are flagged jump" + ("" if degree else f": {rms_after:.2f} px RMS after")
         )
     if degree:
@@ -314,7 +342,7 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
             "not a rigid pendulum about a fixed pivot (an object that spins or twists on its thread, a swing far "
             "out of the image plane, or the wrong object followed): the tracked object does not move on a circle "
             f"about a fixed point; its path sits {unexplained:.1f} px "
-            f"RMS off the best circle{' about a creeping pivot' if creep['corrected'] else ''}, "
+            f"RMS off the best circle{' about a moving pivot' if creep['corrected'] else ''}, "
             f"{100 * unexplained / swing_px:.1f} % of its swing ({swing_px:.0f} px SD along the path; noise "
             f"{noise_px:.2f} px; a rigid pendulum's path, a creeping camera allowed for, stays under "
             f"{100 * NOT_CIRCLE_SWING_FRACTION:.0f} %)" + (", and that circle's centre lies below it" if below else "")
