@@ -13,7 +13,8 @@ band across the wall (on the wall only, or on the apple too), the apple's own so
 glossy apple, the apple made a two-tone ball (alone, before the band, and that at 1080p: as one of the
 held-out clips), the apple and the two-tone ball (its lower half dark blue) before the band in colour, as a
 phone films (``..._colour``, the ball also at 1080p and at 550×310, and before a lamp's hard-edged bluish shadow:
-``two_tone_hard_band_colour``; every other variant is the clip's luma), a
+``two_tone_hard_band_colour``; and the apple under a water tank's caustics, a drifting net of bright lines:
+``caustics_colour``; every other variant is the clip's luma), a
 release by hand in view (``hand_release``, a darker hand holding it for 10 s: ``hand_release_long_dark``, and
 fingers alone: ``hand_release_fingers``; their ``ok%`` counts the frames after the release), two pendulums
 side by side (with and without ``start_px``), a white dot on the apple (``dot_on_bob``; two such pendulums with
@@ -25,7 +26,7 @@ frames ``ok`` (and ``edge``), the vertical found, the angle record's period from
 against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
 The variants are real footage transformed, not renders: what they change is known exactly, and the rest
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
-Measured 2026-12-03: 43 of 45 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
+Measured 2026-12-03: 44 of 46 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
 front (90.8 % ok, every frame it hides part of the apple in flagged), nor the apple before a shadow band in grey
 (93.6 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
 """
