@@ -270,3 +270,30 @@ def test_the_frame_s_white_balance_is_the_static_scene_s_however_much_of_it_the_
         assert tuple(_balanced(uv, wall)[0, 0]) == (124, 132), cover
         assert _distance(uv, wall)[:, int(cover * 320) :].mean() < 2.0, cover
     assert _balanced(wall, wall) is wall  # a frame at the wall's own balance: the wall itself, not a copy
+
+
+def test_what_hides_the_body_in_its_brightness_hides_it_in_its_colour(monkeypatch):
+    """A dark, neutral bar of a tank's frame in front of the swing (a reviewer's tank variant): the brightness
+    silhouette finds it (``in_front``: the place the body is never seen though its path crosses it) and flags the
+    frames that reach it; in the colour view the bar does not stand out, and 50 `ok` frames with the body partly
+    behind it were 3–6.9 px off (θ up to 0.82°). Those frames are flagged in the colour view too."""
+    import pandas as pd
+
+    from pendulum.tracking import method
+    from pendulum.tracking.occluders import reaching_box
+    from pendulum.tracking.settings import TrackerSettings
+
+    x = np.linspace(100.0, 540.0, 200)
+    brightness = pd.DataFrame({"frame": range(200), "x_px": x, "y_px": 200.0, "flag": "ok"})
+    behind = reaching_box(x, np.full(200, 200.0), [300, 180, 20, 40], 19.0)
+    assert behind.sum() == 28  # centres within 21 px of the bar's columns 300–319: 279–340, 2.21 px apart
+    brightness.loc[behind, "flag"] = "occluded"
+    brightness.loc[:9, "flag"] = "lost"  # the brightness view loses a few more
+    brightness.attrs["body"] = {"in_front": {"hidden_px": 350, "box_px": [300, 180, 20, 40]}, "warning": "smaller"}
+    colour = pd.DataFrame({"frame": range(200), "x_px": x, "y_px": 200.0, "flag": "ok"})
+    colour.attrs["body"] = {"radius_px": 19.0, "view": "colour"}
+    monkeypatch.setattr(method, "track_by_colour", lambda path, settings, luma, progress=None: (colour, {}))
+    tried = {"body": method._usable(brightness)}
+    kept = method._by_colour("tank.mp4", TrackerSettings(), brightness, tried)
+    assert (colour.flag == "occluded").sum() == 28 and colour.attrs["body"]["in_front"]["seen_in"] == "brightness"
+    assert kept is colour  # still usable in more frames (10 fewer lost), its frames behind the bar not ok
