@@ -121,6 +121,12 @@ def reduced(image: np.ndarray, scale: int) -> np.ndarray:
     return cv2.resize(image, (image.shape[1] // scale, image.shape[0] // scale), interpolation=cv2.INTER_AREA)
 
 
+def _heavy(stats: np.ndarray, masses: np.ndarray, share: float = 0.1) -> list[int]:
+    """Moving components of ≥ :data:`MIN_BODY_AREA_PX`, heaviest first, down to ``share`` of the heaviest's Σ D."""
+    order = [i for i in np.argsort(masses)[::-1] if i > 0 and stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
+    return [i for i in order if masses[i] >= share * masses[order[0]]]
+
+
 def moving_objects(images: list, background: np.ndarray, threshold: float):
     """Per sample, the pixels of its heavier moving objects (each by its convex hull where that is compact:
     :func:`_hulls`; grown by 4 px); how many samples show one; how many show two far-apart objects of similar
@@ -131,7 +137,7 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
     for k, image in enumerate(images):
         diff = np.abs(image.astype(np.float32) - background)
         labels, stats, masses = components(diff, threshold, 3, close_size(diff.shape))
-        order = [i for i in np.argsort(masses)[::-1] if i > 0 and stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
+        order = _heavy(stats, masses, 0.0)
         if not order:
             continue
         moving += 1
@@ -167,16 +173,15 @@ def scene_states(images: list, stack: np.ndarray, background: np.ndarray, thresh
     the scene where a moving object beside it is darker (or the reverse), each in most of its pixels
     (:data:`ONE_SIDED_MEAN`); and its outline is the scene's (:func:`_outline`: a body overlapping itself near its
     turning points recurs too, outlined in the sample). There the sample shows the scene clear, and the samples
-    without it are left out. A
-    body held still before its release recurs too, but no lighter object moves beside a dark one; a body of both
-    sides (a two-tone ball) is left as the median has it. ``stack``: the ``images`` as one (n, h, w) array."""
+    without it are left out. A body held still before its release recurs too, but no lighter object moves beside
+    a dark one; a body of both sides (a two-tone ball) is left as the median has it. ``stack``: the ``images`` as
+    one (n, h, w) array."""
     n = len(images)
     clear = np.zeros(stack.shape, bool)
     for k, image in enumerate(images):
         diff = np.abs(image.astype(np.float32) - background)
         labels, stats, masses = components(diff, threshold, 3, close_size(diff.shape))
-        order = [i for i in np.argsort(masses)[::-1] if i > 0 and stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
-        heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]][:4]
+        heavy = _heavy(stats, masses)[:4]
         if len(heavy) < 2:
             continue
         recurring, sides, outlined = [], [], []
@@ -188,7 +193,7 @@ def scene_states(images: list, stack: np.ndarray, background: np.ndarray, thresh
             recurring.append(int(same.sum()) >= min_clear_samples(n))
             signed = values[k] - background[y : y + h, x : x + w][own]
             sides.append(float(signed.mean() / np.abs(signed).mean()))
-            outlined.append(_outline(image, background, labels == i, (x, y, w, h)))
+            outlined.append(_outline(image, background, labels, i, (x, y, w, h)))
         # a ghost is the body's negative: the wall where the scene has the body, against the body where it has wall;
         # its outline is the scene's, not the sample's (a body at a turning point recurs too, outlined in the sample)
         moving = [s for r, s in zip(recurring, sides, strict=True) if not r and abs(s) >= ONE_SIDED_MEAN]
@@ -203,14 +208,15 @@ def scene_states(images: list, stack: np.ndarray, background: np.ndarray, thresh
     return ghost[None] & ~clear if ghost.any() else None
 
 
-def _outline(image: np.ndarray, scene: np.ndarray, mask: np.ndarray, box: tuple[int, int, int, int]) -> str:
-    """Whose edge runs along ``mask``'s border (within ``box``), by the mean gradient magnitude there: ``"image"``
+def _outline(image: np.ndarray, scene: np.ndarray, labels: np.ndarray, i: int, box: tuple[int, int, int, int]) -> str:
+    """Whose edge runs along component ``i``'s border (``labels``, within ``box``), by the mean gradient magnitude
+    there: ``"image"``
     where the image's is over :data:`OUTLINE_RATIO` times the scene's (a body in the sample: 199 against 1 grey
     level per px on a reviewer's swing before a plain wall), else ``"scene"`` (a ghost: the body is in the scene
     and the sample shows the wall; before a calendar both carry its print, 350 against 357)."""
     x, y, w, h = box
-    y0, y1, x0, x1 = max(y - 2, 0), min(y + h + 2, mask.shape[0]), max(x - 2, 0), min(x + w + 2, mask.shape[1])
-    own = mask[y0:y1, x0:x1].astype(np.uint8)
+    y0, y1, x0, x1 = max(y - 2, 0), min(y + h + 2, labels.shape[0]), max(x - 2, 0), min(x + w + 2, labels.shape[1])
+    own = (labels[y0:y1, x0:x1] == i).astype(np.uint8)
     border = (own - cv2.erode(own, np.ones((3, 3), np.uint8))).astype(bool)
 
     def edge(picture):

@@ -182,8 +182,8 @@ def _knock(x, y, t, best: tuple, noise_px: float):
         and size >= max(MIN_MOTION_PX, MOTION_SIGMAS * sigma, KNOCK_RMS_RATIO * best[3])
     ):
         return None
-    basis = _basis(t, degree, step_s)
-    residual = np.hypot(x - p[0] - basis @ p[3 : 3 + k], y - p[1] - basis @ p[3 + k : 3 + 2 * k]) - p[2]
+    centre = _centre(p, t, degree, step_s)
+    residual = np.hypot(x - centre[:, 0], y - centre[:, 1]) - p[2]
     off = max(RING_NOISE * noise_px, RING_RMS * r, 0.3)
     after = (t >= step_s) & (t <= step_s + RING_S) & (np.abs(residual) > off)
     # when the step may have been (3σ): a step along the path shows only where the path turns away from it
@@ -205,8 +205,7 @@ def _knock(x, y, t, best: tuple, noise_px: float):
     smooth = np.convolve(residual, np.ones(5) / 5, mode="same")  # a hand's shake stays, frame-to-frame noise less
     sides = (t < step_s, t > facts["to_s"])
     rms = [_rms(smooth[side]) for side in sides]
-    along = np.column_stack([x, y]) - np.column_stack([x, y]).mean(axis=0)
-    swing_px = float(np.sqrt(np.linalg.eigvalsh(np.cov(along.T))[-1]))
+    swing_px = _swing_sd(x, y)
     for near, name, edge in ((0, "before", "from_s"), (1, "after", "to_s")):
         span = step_s - t[0] if near == 0 else t[-1] - facts["to_s"]
         far = rms[1 - near]
@@ -216,6 +215,12 @@ def _knock(x, y, t, best: tuple, noise_px: float):
             facts.update({"handled": name, edge: round(float(t[0] if near == 0 else t[-1]), 4)})
             break
     return (degree, p, c, r, _motion(p, c, degree, t, step_s)), step_s, facts
+
+
+def _swing_sd(x: np.ndarray, y: np.ndarray) -> float:
+    """The path's SD along its main direction (px)."""
+    along = np.column_stack([x, y]) - np.column_stack([x, y]).mean(axis=0)
+    return float(np.sqrt(np.linalg.eigvalsh(np.cov(along.T))[-1]))
 
 
 def _rms(values: np.ndarray) -> float:
@@ -327,8 +332,7 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
             f"the pivot moves by ({dx:+.1f}, {dy:+.1f}) px from the first to the last frame (camera or stand "
             f"creeping; ± {creep['motion_stderr_px']:.1f} px), corrected: {rms_after:.2f} px RMS after"
         )
-    along = np.column_stack([x, y]) - np.column_stack([x, y]).mean(axis=0)
-    swing_px = float(np.sqrt(np.linalg.eigvalsh(np.cov(along.T))[-1]))  # SD along the path's main direction
+    swing_px = _swing_sd(x, y)
     document["swing_sd_px"] = round(swing_px, 3)
     below = float(np.median(y)) < float(params[1])  # the circle's centre lies below the body
     not_circle = (
