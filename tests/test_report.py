@@ -644,6 +644,10 @@ def test_the_summary_says_what_the_videos_records_carry(documents):
     box = documents.summary_box()
     assert "<b>t20</b>: the camera crept by 13 px (corrected)" in box
     assert "off one circle by 0.44 px RMS (0.045°; not corrected, it stays in the angles)" in box
+    assert "elliptical" not in box
+    documents.docs[("t20", "tracks")]["path"]["out_of_plane"] = {"rms_left_px": 0.2}
+    assert "its swing is elliptical, out of the picture" in documents.summary_box()
+    del documents.docs[("t20", "tracks")]["path"]["out_of_plane"]
     assert (
         "1 frame(s) lost, 1 repeated, 1 slip(s) of the clock by part of a frame while the time stamps in the file"
         in box

@@ -41,7 +41,9 @@ def tracking_note(tracks: dict | None, angles: dict | None) -> str:
         parts.append(f"the camera crept by {fmt(creep['motion_px'], 2)} px (corrected)")
     if path.get("departs") and is_finite(path.get("unexplained_angle_deg")):
         parts.append(
-            f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
+            "its swing is elliptical, out of the picture's plane (the path moves with the swing's speed), and "
+            * bool(path.get("out_of_plane"))
+            + f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
             f"({fmt(path['unexplained_angle_deg'], 2)}°; not corrected, it stays in the angles)"
         )
     harmonic = (angles or {}).get("second_harmonic") or {}
