@@ -168,6 +168,24 @@ def test_an_off_frame_pivot_is_found_with_its_uncertainty():
     assert geometry["angle_offset_stderr_deg"] == pytest.approx(
         math.degrees(geometry["pivot_stderr_px"][0] / geometry["circle"]["radius_px"]), rel=1e-3
     )
+    assert geometry["angle_scale_stderr_pct"] < 0.1 and geometry["warnings"] == []
+
+
+def test_a_clock_s_short_arc_says_its_angles_scale_is_uncertain():
+    """A clock's swing of ±3° on a 700 px arm (a reviewer's clock clips: arcs of 4–8°, their pivots 60 px to 7,600 px
+    off along the arm, every angle scaled 0.15–1.6× with nothing said). Along the arm the pivot's σ is R's: the
+    angles' scale is uncertain by that share, said with the arc and what to do; over 40 noise seeds the fitted arm
+    is within 1.96 of its σ of the true 700 px in ≥ 36 (P(≤ 35) = 0.048 at 95 % coverage: binomial)."""
+    inside = 0
+    for seed in range(40):
+        track = swing_track(3.0, pivot=(320.0, -500.0), arm=700.0, noise_px=0.3, decay_s=60.0, seed=2000 + seed)
+        geometry = estimate_rig_geometry({"t": track})
+        scale = geometry["angle_scale_stderr_pct"] / 100
+        radius = geometry["circle"]["radius_px"]
+        inside += int(abs(radius - 700.0) < 1.96 * scale * radius)  # σ of R: its share of R
+        assert scale > 0.02 and "every angle's scale is uncertain by" in " ".join(geometry["warnings"]), geometry
+        assert "give pivot_px" in geometry["warnings"][-1]
+    assert binom.cdf(inside, 40, 0.95) > 0.05, inside
 
 
 def test_pivot_standard_errors_cover_the_truth():

@@ -334,17 +334,25 @@ def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None) -> tu
     return own, f"{problem}: its {what} estimated from its own track instead"
 
 
+MAX_ANGLE_SCALE_STDERR_PCT = 2.0  # an estimated pivot that leaves the angles' scale more uncertain: said
+
+
 def pivot_uncertainty(pivot_covariance_px2, radius_px: float, vertical_deg: float) -> dict:
     """Standard errors of an estimated pivot and the angle offset they cause.
 
     A pivot error δp moves every angle by the component of δp across the arm at
     rest, divided by the arm: σ_θ = √(eᵀ C e) / R with e = (cos φ, −sin φ), φ the
-    vertical's image angle (a constant offset, absorbed by the fits' rest offset).
+    vertical's image angle (a constant offset, absorbed by the fits' rest offset); its
+    component along the arm, a = (sin φ, cos φ), scales every angle by R / (R + δp·a):
+    ``angle_scale_stderr_pct`` = 100 √(aᵀ C a) / R (a short arc's pivot is known across the arm far
+    better than along it).
     """
     cov = np.asarray(pivot_covariance_px2, float)
     phi = math.radians(vertical_deg)
     e = np.array([math.cos(phi), -math.sin(phi)])
+    a = np.array([math.sin(phi), math.cos(phi)])
     return {
+        "angle_scale_stderr_pct": float(100 * math.sqrt(max(a @ cov @ a, 0.0)) / radius_px),
         "pivot_stderr_px": [float(math.sqrt(max(cov[0, 0], 0.0))), float(math.sqrt(max(cov[1, 1], 0.0)))],
         "angle_offset_stderr_deg": float(math.degrees(math.sqrt(max(e @ cov @ e, 0.0)) / radius_px)),
     }
@@ -412,4 +420,14 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
     result["vertical_deg"] = float(vertical_deg)
     if result.get("circle") and result["pivot_covariance_px2"] is not None:
         result.update(pivot_uncertainty(result["pivot_covariance_px2"], result["circle"]["radius_px"], vertical_deg))
+        scale = result["angle_scale_stderr_pct"]
+        if scale > MAX_ANGLE_SCALE_STDERR_PCT:
+            circle = result["circle"]
+            result["warnings"].append(
+                f"the pivot, {circle['radius_px']:.0f} px from the swing's arc of {circle['arc_span_deg']:.1f}°, is "
+                f"known along the arm only to ± {scale * circle['radius_px'] / 100:.0f} px: every angle's scale is "
+                f"uncertain by ± {scale:.1f} % (1σ of the circle fit; a track's slow bias can make it more), and the "
+                "amplitude-dependent coefficients with it (drag, friction): give pivot_px (the pivot's place in the "
+                "picture, measured in a frame that shows it) or film a wider swing"
+            )
     return result
