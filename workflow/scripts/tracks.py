@@ -16,6 +16,7 @@ import _setup  # noqa: F401
 from pendulum.camera.video import VideoError, track_over_sheet
 from pendulum.io import script_logger, write_csv, write_json, write_png
 from pendulum.status import empty_table, failure_image, require_ok, run_stage
+from pendulum.tracking.camera_motion import steady_camera
 from pendulum.tracking.method import track_trial, usable_fraction
 from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
@@ -53,7 +54,10 @@ def work():
     track = track_trial(video, settings, progress=log.info)
     method = track.attrs.get("method", {})
     log.info("%s: tracked the %s (%s)", video, method.get("used"), method.get("reason"))
-    track, path = path_departure(track)
+    measured_track = track
+    track, path = path_departure(measured_track)
+    if path.get("not_a_pendulum"):  # a camera in the hand? its motion from the still scene, taken out
+        track, path = steady_camera(video, measured_track, path)
     log.info("%s: %s", video, path["verdict"])
     if path.get("not_a_pendulum"):
         measured.update(method=method, path=path, body=track.attrs.get("body"), marker=track.attrs.get("marker"))

@@ -23,14 +23,14 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    ``body_scene.fill_markings``) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
    soft shadow is below T); the connected component nearest the prediction (where that is over
    :data:`MAX_AREA_RATIO` of the body's area and another is the body's size: that one, a hand drawn back
-   after the release), with every component within two closing widths of it; where that is over MAX_AREA_RATIO of
-   the body (a hand, a second pendulum's bob it meets), the prediction goes on from the body's own centre in it
-   (``body_scene.own_centre``), not the pair's. The first frame's body is the
-   heaviest moving object above a quarter of its own contrast (its part at its thickest point), or the one at
-   ``start_px``; its size, contrast and silhouette split are the first frame's, or, where that differs from the
-   median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by more than
-   :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the body's
-   contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
+   after the release), with every component within two closing widths of it and within 1.3 × the body's reach of
+   the prediction (a part of it, not a light blinking beside it); where that is over MAX_AREA_RATIO of the body (a
+   hand, a second bob it meets), the prediction goes on from the body's own centre in it (``body_parts.own_centre``).
+   The first frame's body is the heaviest moving object above a quarter of its own contrast (its part at its
+   thickest point), or the one at ``start_px``; its size, contrast and silhouette split are the first frame's,
+   or, where that differs from the median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by
+   more than :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the
+   body's contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
    again above ¼ of its own contrast there.
 3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
    contrast C_f fixed for the clip (``body_scene.silhouette_fraction``: ¼, or the Otsu split of a
@@ -62,8 +62,7 @@ behind it, a two-tone ball's light half before a shadow band): then a one-sided 
 
 ``view`` (in :func:`find_body` and :func:`track_body`): the image taken of each frame, its luma by default
 (:func:`pendulum.tracking.colour.colour_view`: its colour's difference from the wall's). ECC alignment of the
-body's look was measured and not taken (docs/footage.md).
-"""
+body's look was measured and not taken (docs/footage.md)."""
 
 from __future__ import annotations
 
@@ -77,25 +76,28 @@ import numpy as np
 import pandas as pd
 
 from pendulum.camera.video import VideoError, iter_luma
-from pendulum.tracking.body_scene import (
+from pendulum.tracking.body_parts import (
     MAX_AREA_RATIO,
     MIN_AREA_RATIO,
-    STRONG_FRACTION,
     body_component,
     body_core,
+    body_reach,
+    own_centre,
+    touches_border,
+)
+from pendulum.tracking.body_scene import (
+    STRONG_FRACTION,
     body_polarity,
     close_size,
     filled_warning,
     moving_objects,
     one_sided,
-    own_centre,
     reduced,
     rest_place_scene,
     sample_clip,
     scene_states,
     silhouette_fraction,
     soft_centroid,
-    touches_border,
     unseen_behind,
 )
 from pendulum.tracking.checks import flag_jumps, held_still_runs, robust_outliers
@@ -156,6 +158,7 @@ class BodyScene:
     polarity: str = "both"  # measured by |I − B| ("both"), −(I − B) ("dark") or I − B ("bright")
     one_sided: str | None = None  # the side of the scene the first-frame body lies on (body_polarity)
     unseen: np.ndarray | None = field(default=None, repr=False, compare=False)  # pixels no sample shows clear
+    reach_px: float | None = None  # its silhouette's farthest pixel from its centre (body_parts.body_reach)
 
     def to_dict(self) -> dict:
         return {
@@ -170,6 +173,7 @@ class BodyScene:
             "polarity": self.polarity,
             "one_sided": self.one_sided,
             "rest_place_clear": self.rest_place_clear,
+            "reach_px": None if self.reach_px is None else round(self.reach_px, 2),
         }
 
 
@@ -314,8 +318,8 @@ def find_body(
         unseen=hidden,
         silhouette_fraction=whole.fraction,
         polarity=polarity,
-        # the vote above a quarter of the body's contrast, not its soft shadow nor the noise around it
-        one_sided=side,
+        one_sided=side,  # the vote above a quarter of the body's contrast, not its soft shadow nor the noise
+        reach_px=body_reach(whole.component),
         # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
         # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body
         rest_place_clear=None
@@ -382,13 +386,10 @@ def track_body(
     open_px = _open_size(scene.inner_radius_px)
     close_px = max(close_size(background.shape), _body_close_size(scene.inner_radius_px))
     edge_px = EDGE_REACH * scene.inner_radius_px + 2
-    reach = 2.5 * scene.radius_px + 12
-    body_area = math.pi * scene.radius_px**2
-    rows = []
+    reach, body_area, extent = 2.5 * scene.radius_px + 12, math.pi * scene.radius_px**2, scene.reach_px
     x_prev, y_prev = scene.start_px
-    vx = vy = 0.0
-    lost_run = 0
-    binary, report, seen = [], {}, SilhouetteCounts(background.shape, scene.radius_px)
+    vx, vy, lost_run = 0.0, 0.0, 0
+    rows, binary, report, seen = [], [], {}, SilhouetteCounts(background.shape, scene.radius_px)
     for index, time_s, image in iter_luma(path, report=report, view=view):
         half = reach + 2.0 * math.hypot(vx, vy) + 6 * lost_run
         px, py = x_prev + vx, y_prev + vy
@@ -399,12 +400,12 @@ def track_body(
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             diff = one_sided(signed - border_offset(signed), scene.polarity)
-            component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area)
+            component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
                 here = float(np.percentile(diff[component], 90))
                 if here < FAINT_CONTRAST * contrast:  # before a darker (or lighter) patch of wall: its own contrast
                     low = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * here)
-                    component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area)
+                    component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
                 _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
                 if np.count_nonzero(component) > MAX_AREA_RATIO * body_area:  # with a hand, another bob

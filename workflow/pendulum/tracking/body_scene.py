@@ -388,7 +388,6 @@ def one_sided(signed: np.ndarray, polarity: str) -> np.ndarray:
     return np.abs(signed)
 
 
-MAX_AREA_RATIO, MIN_AREA_RATIO = 1.5, 0.5  # the body with something else, or a part of it: its area's range
 STRONG_FRACTION = 0.25  # the silhouette: pixels differing by more than this fraction of the body's contrast, filled
 
 
@@ -456,65 +455,6 @@ def soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = STR
     return float(ww @ xx / total), float(ww @ yy / total), total, float(xs.mean()), float(ys.mean())
 
 
-def body_component(diff: np.ndarray, threshold: float, open_px: int, close_px: int, near=None, area_px=None):
-    """The moving pixels to take for the body: the component nearest ``near`` (else the heaviest) with every
-    component whose box lies within 2 closing widths of it (a print's patches, a body cut by a wall-coloured
-    band): ``(mask, (x, y, w, h))``, or ``(None, None)``. With the body's ``area_px``: where the nearest is over
-    :data:`MAX_AREA_RATIO` of it (the body with what held it) and another is the body's size, that one (the body
-    let go, the hand drawn back)."""
-    labels, stats, masses = components(diff, threshold, open_px, close_px)
-    ids = [i for i in range(1, len(masses)) if stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
-    if not ids:
-        return None, None
-    if near is None:
-        first = max(ids, key=lambda i: masses[i])
-    else:
-        nx, ny = near
-
-        def distance(i):
-            x0, y0, w, h = stats[i, :4]
-            dx = max(x0 - nx, 0, nx - (x0 + w - 1))
-            dy = max(y0 - ny, 0, ny - (y0 + h - 1))
-            return math.hypot(dx, dy), -masses[i]
-
-        first = min(ids, key=distance)
-        if area_px and stats[first, cv2.CC_STAT_AREA] > MAX_AREA_RATIO * area_px:
-            sized = [i for i in ids if MIN_AREA_RATIO <= stats[i, cv2.CC_STAT_AREA] / area_px <= MAX_AREA_RATIO]
-            first = min(sized, key=distance, default=first)
-    box = [int(v) for v in stats[first, :4]]
-    group, gap = {first}, 2 * close_px
-    grown = True
-    while grown:
-        grown = False
-        for i in ids:
-            x0, y0, w, h = stats[i, :4]
-            if i in group or x0 > box[0] + box[2] + gap or x0 + w < box[0] - gap:
-                continue
-            if y0 > box[1] + box[3] + gap or y0 + h < box[1] - gap:
-                continue
-            group.add(i)
-            right, bottom = max(box[0] + box[2], x0 + w), max(box[1] + box[3], y0 + h)
-            box[0], box[1] = min(box[0], x0), min(box[1], y0)
-            box[2], box[3] = right - box[0], bottom - box[1]
-            grown = True
-    mask = labels == first if len(group) == 1 else np.isin(labels, list(group))
-    return mask, tuple(box)
-
-
-def touches_border(component: np.ndarray, cut=None, frame_shape=None) -> bool:
-    """Whether a body's pixels reach the frame's outermost rows or columns (part of it out of view); for a
-    component of a cut-out ``cut = (y0, y1, x0, x1)`` of a frame of ``frame_shape``, only its sides that are the
-    frame's."""
-    y0, y1, x0, x1 = cut if cut is not None else (0, component.shape[0], 0, component.shape[1])
-    h, w = frame_shape if frame_shape is not None else component.shape
-    return bool(
-        (y0 == 0 and component[0].any())
-        or (y1 == h and component[-1].any())
-        or (x0 == 0 and component[:, 0].any())
-        or (x1 == w and component[:, -1].any())
-    )
-
-
 def filled_warning(ratio: float) -> str:
     """The warning for a body whose path crosses a filled-in scene (:func:`unseen_behind`) and whose silhouette is
     ``ratio`` as large mid-swing as at the ends of its swing, beyond a clean scene's."""
@@ -523,28 +463,3 @@ def filled_warning(ratio: float) -> str:
         f"{abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} mid-swing than at the ends of its "
         "swing: what is followed may not be the body alone (a rod, a ghost of it), and its positions may be biased"
     )
-
-
-def body_core(component: np.ndarray, reach_px: float):
-    """The body without what sticks out of it: the component's pixels within ``reach_px`` of its thickest
-    point (the maximum of its distance transform), and their box ``(x, y, w, h)``: whether the body itself
-    touches the frame's border, not a rod or thread leaving it."""
-    dist = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 3)
-    cy, cx = np.unravel_index(int(np.argmax(dist)), dist.shape)
-    yy, xx = np.ogrid[: component.shape[0], : component.shape[1]]
-    kept = component & ((xx - cx) ** 2 + (yy - cy) ** 2 <= reach_px**2)
-    ys, xs = np.nonzero(kept)
-    return kept, (int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1))
-
-
-def own_centre(component: np.ndarray, inner_radius_px: float, near) -> tuple[float, float] | None:
-    """The body's own centre in a component it forms with something else (a second pendulum's bob it meets, a
-    hand): of the component's thickest points (local maxima of its distance transform at least 0.7 of the body's
-    inner radius deep), the one nearest ``near``; None where there is none."""
-    depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
-    peaks = (depth >= 0.7 * inner_radius_px) & (depth >= cv2.dilate(depth, np.ones((5, 5), np.uint8)))
-    ys, xs = np.nonzero(peaks)
-    if not xs.size:
-        return None
-    k = int(np.argmin(np.hypot(xs - near[0], ys - near[1])))
-    return float(xs[k]), float(ys[k])

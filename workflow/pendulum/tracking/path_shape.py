@@ -380,9 +380,9 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
     document["not_a_pendulum"] = bool(not_circle)
     if not_circle:
         document["verdict"] = (
-            "not a rigid pendulum about a fixed pivot (an object that spins or twists on its thread, a swing far "
-            "out of the image plane, or the wrong object followed): the tracked object does not move on a circle "
-            f"about a fixed point; its path sits {unexplained:.1f} px "
+            "not a rigid pendulum about a fixed pivot (an object that spins or twists on its thread, a swing far out "
+            "of the image plane, a camera held in the hand or shaken, or the wrong object followed): the tracked "
+            f"object does not move on a circle about a fixed point; its path sits {unexplained:.1f} px "
             f"RMS off the best circle{' about a moving pivot' if creep['corrected'] else ''}, "
             f"{100 * unexplained / swing_px:.1f} % of its swing ({swing_px:.0f} px SD along the path; noise "
             f"{noise_px:.2f} px; a rigid pendulum's path, a creeping camera allowed for, stays under "

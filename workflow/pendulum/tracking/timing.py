@@ -47,6 +47,8 @@ UNEXPLAINED = 100.0  # a break this × the usual misfit that no shift mends: sai
 PICTURE_SHARE = 0.5  # turning points that move across a slip by this share of what it implies: the picture moved
 ROUNDING_SHARE = 0.05  # of a frame period: corrected stamps may run back by this much (stamps rounded to ticks)
 PICTURE_USUAL = 3.0  # ... and by this many times their usual movement from one swing to the next
+PLACE_SLIPS = 3  # slips at least this many at one place of the path (both ways through it) are the scene's ...
+PLACE_SHARE, PLACE_MIN_PX = 0.05, 3.0  # ... within this share of the path's spread (SD), at least this, of each other
 
 
 def _window_misfits(tau: np.ndarray, x: np.ndarray, y: np.ndarray, b: np.ndarray, shift) -> np.ndarray:
@@ -230,6 +232,7 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
         "repeated": [],
         "picture_steps": [],
         "unexplained": [],
+        "scene_places": [],
         "checked_fraction": 0.0,
         "shift_periods": shift,
     }
@@ -252,6 +255,7 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
     idx = idx[~repeated_mask]
     turning = _turning_points(stamp_s[idx] / period, x[idx], y[idx])
     refused: set[int] = set()  # boundaries (usable frame after them) where the picture moved, not the clock
+    applied_at: list[tuple[int, float]] = []  # (usable frame after the boundary, periods) of each slip applied
     for round_ in range(MAX_ROUNDS):
         tau = stamp_s[idx] / period + shift[idx]
         b = _boundaries(tau)
@@ -284,9 +288,14 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
                 result["picture_steps"].append([int(frame[idx[j + 1]]), [round(float(v), 2) for v in moved]])
                 continue
             shift[idx[j + 1] :] += periods
+            applied_at.append((int(idx[j + 1]), periods))
             applied += 1
         if not applied:
             break
+    for i, periods, place in _at_one_place(applied_at, x, y, idx):  # the scene there biases the track: no slip
+        shift[i:] -= periods
+        refused.add(i)
+        result["scene_places"].append([int(frame[i]), place])
     # breaks in the motion that no shift explains (two slips within a window, more frames lost than MAX_SHIFT):
     # the frames after them may be off by a period or more; said, not mended
     tau = stamp_s[idx] / period + shift[idx]
@@ -308,6 +317,22 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
             result["slips"].append([int(frame[i]), round(periods, 2)])
     result["shift_periods"] = shift
     return result
+
+
+def _at_one_place(applied: list[tuple[int, float]], x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> list:
+    """Of the slips ``applied`` (frame index after each, periods), those at one place of the path: at least
+    :data:`PLACE_SLIPS` within max(:data:`PLACE_SHARE` × the path's spread, :data:`PLACE_MIN_PX`) of each other.
+    A phone's lost frames fall anywhere in the swing; breaks in the motion where the body passes the same place,
+    both ways (its track pulled there by an edge or a reflection behind it, a clock's case), are the scene's.
+    Returns ``(index, periods, [x, y])`` of each."""
+    if len(applied) < PLACE_SLIPS:
+        return []
+    at = np.array([[x[i], y[i]] for i, _ in applied])
+    reach = max(PLACE_SHARE * float(np.hypot(np.std(x[idx]), np.std(y[idx]))), PLACE_MIN_PX)
+    near = np.hypot(*(at[:, None, :] - at[None, :, :]).transpose(2, 0, 1)) <= reach
+    crowded = near.sum(axis=1) >= PLACE_SLIPS
+    chosen = crowded | near[crowded].any(axis=0) if crowded.any() else crowded
+    return [(i, p, [round(float(v), 1) for v in at[k]]) for k, (i, p) in enumerate(applied) if chosen[k]]
 
 
 def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
@@ -412,7 +437,7 @@ def break_sentence(timing: dict) -> str:
 def slip_sentence(timing: dict) -> str:
     """What :func:`correct_slips` found, in one sentence ('' when nothing)."""
     slips, repeated = timing.get("slips") or [], timing.get("repeated") or []
-    others = [_picture_sentence(timing.get("picture_steps") or []), break_sentence(timing)]
+    others = [_picture_sentence(timing.get("picture_steps") or []), _place_sentence(timing), break_sentence(timing)]
     checked = timing.get("checked_fraction")
     if checked is not None and float(checked) < UNCHECKED_FRACTION and not slips and not repeated:
         others.append(
@@ -448,4 +473,17 @@ def _picture_sentence(steps: list) -> str:
     return (
         f"the picture itself moved by {where} (a knock or the camera's stabiliser, not its clock): the positions "
         "after it are off by that much, which the angles carry"
+    )
+
+
+def _place_sentence(timing: dict) -> str:
+    """The breaks at one place of the path (:func:`_at_one_place`) in words, or ''."""
+    places = timing.get("scene_places") or []
+    if not places:
+        return ""
+    (px, py) = np.mean([p for _, p in places], axis=0)
+    return (
+        f"the track's motion breaks {len(places)} times where the body passes one place of its path (about "
+        f"({px:.0f}, {py:.0f}) px; frame {', '.join(str(f) for f, _ in places)}): something behind it there biases its "
+        "positions (an edge, a reflection), not the camera's clock; not taken for lost frames"
     )
