@@ -648,6 +648,9 @@ def test_the_summary_says_what_the_videos_records_carry(documents):
     documents.docs[("t20", "tracks")]["path"]["out_of_plane"] = {"rms_left_px": 0.2}
     assert "its swing is elliptical, out of the picture" in documents.summary_box()
     del documents.docs[("t20", "tracks")]["path"]["out_of_plane"]
+    documents.docs[("t20", "tracks")]["path"]["camera_motion"] = {"rms_px": 2.79, "max_turn_deg": 0.07}
+    assert "the camera moved in the hand by 2.8 px RMS (measured from the still scene" in documents.summary_box()
+    del documents.docs[("t20", "tracks")]["path"]["camera_motion"]
     assert (
         "1 frame(s) lost, 1 repeated, 1 slip(s) of the clock by part of a frame while the time stamps in the file"
         in box

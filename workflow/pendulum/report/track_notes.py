@@ -22,6 +22,11 @@ def tracking_note(tracks: dict | None, angles: dict | None) -> str:
     creep = path.get("creep") or {}
     knock = creep.get("knock") or {}
     handled = path.get("handled") or {}
+    if moved := path.get("camera_motion"):
+        parts.append(
+            f"the camera moved in the hand by {fmt(moved['rms_px'], 2)} px RMS (measured from the still scene and "
+            "taken out)"
+        )
     if handled:
         held = "until it was set down" if handled.get("handled") == "before" else "from when it was picked up"
         parts.append(
