@@ -469,7 +469,9 @@ def track_video(
         raise VideoError(
             f"{path}: no marker found in any of its {n_frames} frames ({score}; a marker needs "
             f"{settings.min_acquire_score:g}); check tracking polarity ({settings.polarity}) and marker_radius_px "
-            f"({settings.marker_radius_px:.3g}), or give start_px in the trial's sidecar{seen}"
+            f"({settings.marker_radius_px:.3g})"
+            + (", or give start_px in the trial's sidecar" if settings.start_px is None else ", and start_px (given)")
+            + seen
         )
     # The first frames of each measurement kind set its reference signal; recompute their ratios against it.
     for row, kind, signal in first_signals:
