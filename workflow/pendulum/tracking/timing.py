@@ -17,9 +17,11 @@ than its twelve frames (flagged or lost frames inside it): a polynomial through 
 follow the swing, and a shift would be found where only the curve is missed.
 A slip whose turning points moved across it (both sides, along the motion, by half the distance it implies
 and three times their usual move) is the picture moving, not the clock (a knock, a stabiliser): it is not applied
-and ``picture_steps`` says so. A repeated frame (no motion from the frame before where the motion is fast) is
-taken out first and flagged ``duplicate``. Near the turning points, where the pendulum hardly moves during one frame
-period, a slip cannot be seen: the figures say how much of the record was checked.
+and ``picture_steps`` says so; nor are :data:`PLACE_SLIPS` or more at one place of the path (the body passing it both
+ways: something behind it there pulls its track), which ``scene_places`` lists. A repeated frame (no motion from
+the frame before where the motion is fast) is taken out first and flagged ``duplicate``. Near the turning points,
+where the pendulum hardly moves during one frame period, a slip cannot be seen: the figures say how much of the
+record was checked.
 
 Implemented: ``time_s`` of frame k becomes t_k + Δ·m_k (m_k: the frames lost minus the frames repeated
 before k, Δ the stamps' regular step (:func:`frame_period`)); the stamps are those of the frames summary.
@@ -48,7 +50,8 @@ PICTURE_SHARE = 0.5  # turning points that move across a slip by this share of w
 ROUNDING_SHARE = 0.05  # of a frame period: corrected stamps may run back by this much (stamps rounded to ticks)
 PICTURE_USUAL = 3.0  # ... and by this many times their usual movement from one swing to the next
 PLACE_SLIPS = 3  # slips at least this many at one place of the path (both ways through it) are the scene's ...
-PLACE_SHARE, PLACE_MIN_PX = 0.05, 3.0  # ... within this share of the path's spread (SD), at least this, of each other
+PLACE_SHARE, PLACE_MIN_PX = 0.05, 3.0  # ... within this share of the path's spread (SD), at least this, of each other,
+PLACE_PASSES = 0.5  # ... at this share of the body's passes through that place or more
 
 
 def _window_misfits(tau: np.ndarray, x: np.ndarray, y: np.ndarray, b: np.ndarray, shift) -> np.ndarray:
@@ -321,17 +324,29 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
 
 def _at_one_place(applied: list[tuple[int, float]], x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> list:
     """Of the slips ``applied`` (frame index after each, periods), those at one place of the path: at least
-    :data:`PLACE_SLIPS` within max(:data:`PLACE_SHARE` × the path's spread, :data:`PLACE_MIN_PX`) of each other.
-    A phone's lost frames fall anywhere in the swing; breaks in the motion where the body passes the same place,
-    both ways (its track pulled there by an edge or a reflection behind it, a clock's case), are the scene's.
+    :data:`PLACE_SLIPS` within max(:data:`PLACE_SHARE` × the path's spread, two frames' step there,
+    :data:`PLACE_MIN_PX`) of each other, found at :data:`PLACE_PASSES` or more of the body's passes through that
+    place. A phone's lost frames fall anywhere in the fast part of the swing, at a few of its passes; breaks in the
+    motion at most passes through one place, both ways (its track pulled there by an edge or a reflection behind
+    it, a clock's case), are the scene's.
     Returns ``(index, periods, [x, y])`` of each."""
     if len(applied) < PLACE_SLIPS:
         return []
     at = np.array([[x[i], y[i]] for i, _ in applied])
-    reach = max(PLACE_SHARE * float(np.hypot(np.std(x[idx]), np.std(y[idx]))), PLACE_MIN_PX)
+    path = np.column_stack([x[idx], y[idx]])
+    centred = path - path.mean(axis=0)
+    axis = np.linalg.svd(centred, full_matrices=False)[2][0]  # the path's main direction
+    # a slip is seen at the frame after the break, up to a frame's motion beyond the place that causes it, either way
+    step = float(np.median([np.hypot(x[i] - x[i - 1], y[i] - y[i - 1]) if i > 0 else 0.0 for i, _ in applied]))
+    reach = max(PLACE_SHARE * float(np.hypot(*centred.std(axis=0))), 2 * step, PLACE_MIN_PX)
     near = np.hypot(*(at[:, None, :] - at[None, :, :]).transpose(2, 0, 1)) <= reach
-    crowded = near.sum(axis=1) >= PLACE_SLIPS
-    chosen = crowded | near[crowded].any(axis=0) if crowded.any() else crowded
+    chosen = np.zeros(len(applied), bool)
+    for k in np.flatnonzero(near.sum(axis=1) >= PLACE_SLIPS):
+        members = near[k] & ~chosen
+        along = centred @ axis - float((at[k] - path.mean(axis=0)) @ axis)
+        passes = int(np.count_nonzero(np.diff(np.sign(along[along != 0])) != 0))
+        if members.sum() >= PLACE_SLIPS and members.sum() >= PLACE_PASSES * passes:
+            chosen |= members
     return [(i, p, [round(float(v), 1) for v in at[k]]) for k, (i, p) in enumerate(applied) if chosen[k]]
 
 
