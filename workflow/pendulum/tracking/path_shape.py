@@ -46,7 +46,9 @@ SETTLE_S = 0.5  # the frames this long after a knock are flagged whatever their 
 # along the path does not change it: the reviewer's 7 Hz ring moved θ by up to 0.27° there)
 RING_S = 1.0  # a knocked picture shakes for up to this long ...
 RING_NOISE, RING_RMS = 4.0, 3.0  # ... its frames off the circle by this × the noise and × the RMS left
-OUT_OF_PLANE_GAIN = 0.5  # the swing's speed terms must halve what the circle leaves to name an elliptical swing
+OUT_OF_PLANE_GAIN = 0.5  # the swing's speed terms must halve what the circle leaves to name an elliptical swing,
+MAX_OUT_OF_PLANE_SHARE = 0.035  # ... and that be under this share of the swing (a bob circling: 4 %, a 15 % ellipse
+# seen from the arm's distance 2.5 %, with a creeping camera 30–50 % ellipses 2.3–3.0 %)
 
 
 def arc_span_deg(x, y, centre) -> float:
@@ -374,7 +376,11 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
     )
     if not_circle:  # an elliptical swing: what the swing's speed explains is a pendulum's, seen out of plane
         left = _out_of_plane(x, y, t, degree, params, step_s)
-        if left is not None and left <= OUT_OF_PLANE_GAIN * unexplained:
+        if (
+            left is not None
+            and left <= OUT_OF_PLANE_GAIN * unexplained
+            and unexplained <= MAX_OUT_OF_PLANE_SHARE * swing_px
+        ):
             document["out_of_plane"] = {"rms_left_px": round(left, 4)}
             not_circle = left > NOT_CIRCLE_SWING_FRACTION * swing_px
     document["not_a_pendulum"] = bool(not_circle)
@@ -403,8 +409,9 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
                 "not a circle about a fixed or creeping pivot, and most of it follows the swing's speed "
                 f"({left:.2f} px RMS left where the circle moves and scales with it): "
                 "an elliptical swing, out of the image plane, the body nearing the camera on one half swing and "
-                "leaving it on the other; its angles are the swing's projection on the picture, off by about as much "
-                "along the path, and the angle record carries it (release the body without a sideways push; film "
+                "leaving it on the other (or a string that stretches with the swing); its angles are the swing's "
+                "projection on the picture: the period holds, but its amplitudes, and the coefficients that depend on "
+                "them, may be biased beyond this, as its pivot is (release the body without a sideways push; film "
                 "square-on, from farther away)"
             )
     else:

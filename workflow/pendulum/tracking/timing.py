@@ -340,12 +340,16 @@ def _at_one_place(applied: list[tuple[int, float]], x: np.ndarray, y: np.ndarray
     step = float(np.median([np.hypot(x[i] - x[i - 1], y[i] - y[i - 1]) if i > 0 else 0.0 for i, _ in applied]))
     reach = max(PLACE_SHARE * float(np.hypot(*centred.std(axis=0))), 2 * step, PLACE_MIN_PX)
     near = np.hypot(*(at[:, None, :] - at[None, :, :]).transpose(2, 0, 1)) <= reach
+    direction = np.array(
+        [(x[i] - x[i - 1]) * axis[0] + (y[i] - y[i - 1]) * axis[1] if i > 0 else 0.0 for i, _ in applied]
+    )
     chosen = np.zeros(len(applied), bool)
     for k in np.flatnonzero(near.sum(axis=1) >= PLACE_SLIPS):
         members = near[k] & ~chosen
         along = centred @ axis - float((at[k] - path.mean(axis=0)) @ axis)
         passes = int(np.count_nonzero(np.diff(np.sign(along[along != 0])) != 0))
-        if members.sum() >= PLACE_SLIPS and members.sum() >= PLACE_PASSES * passes:
+        ways = {int(np.sign(direction[m])) for m in np.flatnonzero(members)}  # passing the place both ways
+        if members.sum() >= PLACE_SLIPS and members.sum() >= PLACE_PASSES * passes and ways >= {-1, 1}:
             chosen |= members
     return [(i, p, [round(float(v), 1) for v in at[k]]) for k, (i, p) in enumerate(applied) if chosen[k]]
 
