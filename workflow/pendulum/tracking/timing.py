@@ -337,12 +337,12 @@ def _at_one_place(applied: list[tuple[int, float]], x: np.ndarray, y: np.ndarray
     centred = path - path.mean(axis=0)
     axis = np.linalg.svd(centred, full_matrices=False)[2][0]  # the path's main direction
     # a slip is seen at the frame after the break, up to a frame's motion beyond the place that causes it, either way
-    step = float(np.median([np.hypot(x[i] - x[i - 1], y[i] - y[i - 1]) if i > 0 else 0.0 for i, _ in applied]))
-    reach = max(PLACE_SHARE * float(np.hypot(*centred.std(axis=0))), 2 * step, PLACE_MIN_PX)
-    near = np.hypot(*(at[:, None, :] - at[None, :, :]).transpose(2, 0, 1)) <= reach
-    direction = np.array(
-        [(x[i] - x[i - 1]) * axis[0] + (y[i] - y[i - 1]) * axis[1] if i > 0 else 0.0 for i, _ in applied]
+    moves = np.array([[x[i] - x[i - 1], y[i] - y[i - 1]] if i > 0 else [0.0, 0.0] for i, _ in applied])
+    reach = max(
+        PLACE_SHARE * float(np.hypot(*centred.std(axis=0))), 2 * float(np.median(np.hypot(*moves.T))), PLACE_MIN_PX
     )
+    near = np.hypot(*(at[:, None, :] - at[None, :, :]).transpose(2, 0, 1)) <= reach
+    direction = moves @ axis  # the way each passes the place
     chosen = np.zeros(len(applied), bool)
     for k in np.flatnonzero(near.sum(axis=1) >= PLACE_SLIPS):
         members = near[k] & ~chosen
