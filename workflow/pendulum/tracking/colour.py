@@ -24,6 +24,7 @@ with too few frames usable, not where it refuses, the colour view alone).
 from __future__ import annotations
 
 from contextlib import closing
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -31,6 +32,7 @@ import pandas as pd
 
 from pendulum.camera.video import VideoError, iter_luma, plane_8bit
 from pendulum.tracking.body import SCENE_SAMPLES, track_body
+from pendulum.tracking.marker import track_video
 from pendulum.tracking.samples import spread_frames
 from pendulum.tracking.settings import TrackerSettings
 
@@ -175,4 +177,99 @@ def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame | 
     if body.get("warning"):  # the colour view's silhouette, not the brightness one's
         body["warning"] = "in its colour view, " + body["warning"]
     track.attrs["body"] = body
+    return track, facts
+
+
+# A coloured marker dot (a red sticker on a brass clock bob): its colour against its surround, not its brightness.
+MARKER_BASE = 48.0  # the surround's level in the marker's colour view, grey levels
+MARKER_MIN_CONTRAST = 12.0  # chroma levels between the dot and its surround below which there is no colour view
+MARKER_MIN_SNR = 8.0  # … or below this many times the robust spread of the surround's colour along the same line
+MARKER_MAX_REACH = 16.0  # chroma pixels (32 luma px) within which the dot's edge is looked for
+
+
+class MarkerColourView:
+    """A decoded frame → P = B + g ((U − U_s) d_u + (V − V_s) d_v) on the luma grid, uint8: the chroma planes
+    projected on the unit line d from the marker's surround's colour (U_s, V_s) to the marker's, g putting the
+    marker at :data:`COLOUR_CONTRAST` grey levels above the surround's B = :data:`MARKER_BASE`, smoothed by
+    [1 2 1]/4 across and along on the chroma grid (the chroma's noise, magnified by g, would otherwise widen and
+    narrow the dot from frame to frame beyond what the marker's checks allow). Shading, a highlight or a shadow
+    moves a shiny bob's brightness much more than its colour."""
+
+    def __init__(self, matrix: np.ndarray):
+        self.matrix = np.asarray(matrix, np.float32).reshape(1, 3)
+        self.key = ("marker colour", *(round(float(v), 6) for v in self.matrix.ravel()))
+
+    def __call__(self, frame) -> np.ndarray:
+        planes = chroma_planes(frame)
+        if planes is None:
+            raise VideoError("a frame without the clip's colour planes: no colour view")
+        # [1 2 1]/4 in each direction on the chroma grid: the chroma noise ×0.375, the dot ~1 luma px softer
+        shown = cv2.GaussianBlur(cv2.transform(np.dstack(planes), self.matrix), (3, 3), 0)
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+        size = (int(frame.width), int(frame.height))
+        return cv2.warpAffine(shown, _TO_CHROMA, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+
+
+def marker_colour_view(path, start_px, radius_px: float | None = None) -> tuple[MarkerColourView | None, dict]:
+    """The colour view (:class:`MarkerColourView`) of the marker dot at ``start_px`` in the first frame and its facts
+    (``marker_radius_px``, ``colour_contrast``: |c_dot − c_s| in chroma levels, ``surround_spread``); None where the
+    clip has no 4:2:0 colour or the dot's colour does not stand out of its surround's.
+
+    c_dot is the chroma at the dot's centre (bilinear); without ``radius_px`` the dot's edge is where the median of
+    |U − U_dot| + |V − V_dot| over rings about it first reaches half its largest value within
+    :data:`MARKER_MAX_REACH`; c_s is the median chroma over the ring 1–2.5 chroma px beyond that edge."""
+    with closing(iter_luma(path, view=_chroma)) as frames:
+        first = next(frames, (0, 0.0, np.zeros((0, 0, 2), np.uint8)))[2]
+    if first.size == 0:
+        return None, {"colour": "the video carries no 4:2:0 colour planes"}
+    uv = first.astype(np.float32)
+    cx, cy = _TO_CHROMA @ np.array([start_px[0], start_px[1], 1.0])
+    centre = np.array([cv2.getRectSubPix(uv[..., c], (1, 1), (float(cx), float(cy)))[0, 0] for c in (0, 1)])
+    h, w = uv.shape[:2]
+    yy, xx = np.mgrid[0:h, 0:w]
+    rho = np.hypot(xx - cx, yy - cy)
+    if radius_px is None:
+        distance = np.abs(uv - centre).sum(axis=2)
+        steps = np.arange(0.5, MARKER_MAX_REACH, 0.5)
+        profile = np.array([np.median(distance[(rho >= s - 0.5) & (rho < s)]) for s in steps])
+        if profile.max() < MARKER_MIN_CONTRAST:
+            return None, {"colour": "no coloured dot at start_px: its colour does not differ from around it"}
+        k = int(np.argmax(profile >= 0.5 * profile.max()))
+        edge = steps[k] - 0.25 - 0.5 * (profile[k] - 0.5 * profile.max()) / max(profile[k] - profile[k - 1], 1e-6)
+        radius_px = 2.0 * float(max(edge, 0.5)) if k else 1.0
+    edge = radius_px / 2.0
+    ring = (rho > edge + 1.0) & (rho <= edge + 2.5)
+    if np.count_nonzero(ring) < 8:
+        return None, {"colour": "the marker's surround is outside the picture"}
+    surround = np.median(uv[ring], axis=0)
+    line = centre - surround
+    contrast = float(np.hypot(*line))
+    along = uv[ring] @ (line / max(contrast, 1e-6))
+    spread = 1.4826 * float(np.median(np.abs(along - np.median(along))))
+    facts = {
+        "marker_radius_px": round(float(radius_px), 2),
+        "colour_contrast": round(contrast, 1),
+        "surround_spread": round(spread, 2),
+    }
+    if contrast < max(MARKER_MIN_CONTRAST, MARKER_MIN_SNR * spread):
+        return None, {**facts, "colour": "the dot's colour does not stand out from its surround's"}
+    gain = COLOUR_CONTRAST / contrast
+    d = line / contrast
+    matrix = [gain * d[0], gain * d[1], MARKER_BASE - gain * float(d @ surround)]
+    return MarkerColourView(matrix), facts
+
+
+def track_marker_by_colour(path, settings: TrackerSettings, start_px, progress=None):
+    """The marker dot at ``start_px`` tracked in its colour view (:func:`marker_colour_view`): ``(track or None,
+    what it gave)``; the track's ``attrs["marker"]`` says ``view: colour`` and the view's facts."""
+    facts: dict = {}
+    try:
+        view, facts = marker_colour_view(path, start_px, settings.marker_radius_px)
+        if view is None:
+            return None, facts
+        spot = replace(settings, polarity="bright", marker_radius_px=facts["marker_radius_px"], start_px=start_px)
+        track = track_video(path, spot, progress=progress, view=view)
+    except VideoError as error:
+        return None, {**facts, "colour": f"failed: {error}"}
+    track.attrs["marker"] = {**track.attrs["marker"], "found_by": "its colour at start_px", "view": "colour", **facts}
     return track, facts

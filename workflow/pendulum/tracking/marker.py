@@ -145,6 +145,7 @@ def track_video(
     progress_every: int = 200,
     detection=None,
     abandon_below: float | None = None,
+    view=None,
 ) -> pd.DataFrame:
     """Track the marker through the whole video in one decode pass.
 
@@ -180,6 +181,9 @@ def track_video(
     (:func:`pendulum.tracking.samples.frame_count`) and more frames than the rest of that share allows are already
     not ``ok`` (a flag set in the pass is final, and only an ``ok`` frame becomes a ``jump`` after it), the pass
     stops with :class:`MarkerAbandoned`, which holds the most the whole pass could have had ``ok``.
+
+    ``view``: the image the marker is measured in (its luma when None; a colour view of a coloured dot:
+    :class:`pendulum.tracking.colour.MarkerColourView`), with the marker given (no detection).
     """
     found_by = "detection" if detection is not None or settings.needs_detection else "given in the settings"
     if detection is None:
@@ -236,7 +240,7 @@ def track_video(
     total = frame_count(path) if abandon_below is not None else None
     allowed = math.inf if total is None else (1.0 - abandon_below) * total  # frames that may be not ok
     not_ok = counted = 0
-    for index, t, image in iter_luma(path, damaged=True, report=video_report):
+    for index, t, image in iter_luma(path, damaged=True, report=video_report, view=view):
         not_ok += sum(row[6] != "ok" for row in rows[counted:])
         counted = len(rows)
         if not_ok > allowed:

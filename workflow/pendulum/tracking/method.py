@@ -16,7 +16,7 @@ import pandas as pd
 from pendulum.camera.video import VideoError
 from pendulum.tracking import samples
 from pendulum.tracking.body import BodyError, track_body
-from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour
+from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour, track_marker_by_colour
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.occluders import reaching_box
 from pendulum.tracking.settings import TrackerSettings
@@ -49,8 +49,19 @@ def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
 def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
     method = settings.method
     if method == "marker":
-        track = track_video(path, settings, progress=progress)
-        track.attrs["method"] = {"used": "marker", "reason": "method: marker given in the settings", "tried": {}}
+        try:
+            track = track_video(path, settings, progress=progress)
+        except VideoError as error:
+            tried = {"marker": f"failed: {error}"}
+            track = _marker_by_colour(path, settings, None, tried, progress)
+            if track is None:
+                raise
+        else:
+            tried = {"marker": _usable(track)}
+            track = _marker_by_colour(path, settings, track, tried, progress) or track
+        colour = track.attrs.get("marker", {}).get("view") == "colour"
+        reason = "method: marker given in the settings" + ("; " + _colour_reason(tried) if colour else "")
+        track.attrs["method"] = {"used": "marker", "reason": reason, "tried": tried if colour else {}}
         return track
     if method == "body":
         tried = {}
@@ -83,6 +94,10 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
                 "tried": tried,
             }
             return marker
+    colour = _marker_by_colour(path, settings, marker, tried, progress)
+    if colour is not None and usable_fraction(colour) >= MARKER_USABLE_FRACTION:
+        colour.attrs["method"] = {"used": "marker", "reason": _colour_reason(tried), "tried": tried}
+        return colour
     if progress:
         progress(f"{path}: marker {tried['marker']}; tracking the swinging body itself")
     try:
@@ -96,27 +111,31 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
             body, facts = track_by_colour(path, settings, None, progress)  # its colour, where its brightness fails
             tried["body_by_colour"] = facts.get("colour", "") if body is None else _usable(body)
     if body is None:
-        if stopped is not None:  # the whole marker pass after all: its record, or why there is none
+        if _might_beat(stopped, colour):  # the whole marker pass after all: its record, or why there is none
             marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
+        marker = _more_usable(marker, colour)
         if marker is not None:
             marker.attrs["method"] = {
                 "used": "marker",
-                "reason": f"the body could not be tracked; the marker is {tried['marker']}",
+                "reason": f"the body could not be tracked; the marker is {tried['marker']}" + _dot_view(marker, tried),
                 "tried": tried,
             }
             return marker
         raise VideoError(
             f"{path}: neither a marker disk nor the body could be followed. Marker: {tried['marker'][8:]} "
             f"Body: {tried['body'][8:]}"
+            + (f" The dot by its colour: {tried['marker_by_colour']}." if "marker_by_colour" in tried else "")
             + (f" By its colour: {tried['body_by_colour']}" if "body_by_colour" in tried else "")
         )
     body_fraction = usable_fraction(body)
-    if stopped is not None and stopped.most_usable >= body_fraction:  # the marker might do as well: its whole pass
+    if _might_beat(stopped, colour) and stopped.most_usable >= body_fraction:  # the marker might do as well
         marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
+    marker = _more_usable(marker, colour)
     if marker is not None and usable_fraction(marker) >= body_fraction:
         marker.attrs["method"] = {
             "used": "marker",
-            "reason": f"the marker disk is usable in as many frames as the body ({tried['marker']})",
+            "reason": f"the marker disk is usable in as many frames as the body ({tried['marker']})"
+            + _dot_view(marker, tried),
             "tried": tried,
         }
         return marker
@@ -159,6 +178,47 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
         colour.attrs["body"]["brightness"] = {"usable": tried["body"], "warning": body.attrs["body"].get("warning")}
         return colour
     return body
+
+
+def _marker_by_colour(path, settings: TrackerSettings, marker, tried: dict, progress=None):
+    """The dot at the given ``start_px`` tracked by its colour (:func:`track_marker_by_colour`) where its brightness
+    track is not usable in :data:`MARKER_USABLE_FRACTION` of the frames (or stopped before), and kept (returned)
+    where usable in more frames than that track; None otherwise. A coloured sticker on a shiny bob (a clock's) is
+    lost in the bob's shading and highlight in its brightness, not in its colour. Tried only where the user pointed
+    at the dot: a spot detection found alone may be the body itself.
+    What it gave goes into ``tried`` as ``marker_by_colour``."""
+    if settings.start_px is None or (marker is not None and usable_fraction(marker) >= MARKER_USABLE_FRACTION):
+        return None
+    colour, facts = track_marker_by_colour(path, settings, settings.start_px, progress)
+    if colour is None:
+        tried["marker_by_colour"] = facts.get("colour", "not taken")
+        return None
+    tried["marker_by_colour"] = _usable(colour)
+    return colour if marker is None or usable_fraction(colour) > usable_fraction(marker) else None
+
+
+def _might_beat(stopped: MarkerAbandoned | None, colour: pd.DataFrame | None) -> bool:
+    """Whether a stopped marker pass, run whole, could be usable in more frames than the dot's colour track."""
+    return stopped is not None and (colour is None or stopped.most_usable > usable_fraction(colour))
+
+
+def _more_usable(marker: pd.DataFrame | None, colour: pd.DataFrame | None) -> pd.DataFrame | None:
+    """The marker's track usable in more frames: by its brightness, or (where usable in more) by its colour."""
+    if colour is None or (marker is not None and usable_fraction(marker) >= usable_fraction(colour)):
+        return marker
+    return colour
+
+
+def _colour_reason(tried: dict) -> str:
+    return (
+        f"the marker dot at start_px measured by its colour against its surround's, {tried['marker_by_colour']} "
+        f"(by its brightness: {tried['marker']})"
+    )
+
+
+def _dot_view(marker: pd.DataFrame, tried: dict) -> str:
+    """The reason's clause for a marker measured by its colour (empty for its brightness)."""
+    return "; " + _colour_reason(tried) if marker.attrs.get("marker", {}).get("view") == "colour" else ""
 
 
 def _silhouette(tried: dict) -> str:
