@@ -164,6 +164,14 @@ def test_the_dot_is_read_from_its_colour_against_the_brass_around_it(tmp_path):
     assert abs(image[y, x] - (MARKER_BASE + COLOUR_CONTRAST)) <= 20
     assert abs(np.median(image[y - 14 : y + 15, x + 9 : x + 14]) - MARKER_BASE) <= 15  # the brass beside it
 
+    # a click a few pixels off the dot, or between the chroma samples (an odd x: none within ½ chroma px), finds
+    # the same dot and its centre (a reviewer's clicks 1 px off were refused until 2026-12-03)
+    for dx, dy in ((1.0, 0.0), (-1.0, 0.0), (3.0, 0.0), (0.0, 3.0), (-2.0, 2.0), (2.5, -1.5)):
+        click = (round(truth[0][0][0]) + dx, round(truth[0][0][1]) + dy)
+        view, facts = marker_colour_view(path, click)
+        assert view is not None, (click, facts)
+        assert math.dist(facts["start_px"], truth[0][0]) <= 0.5, (click, facts)
+        assert abs(facts["marker_radius_px"] - DOT_PX) <= 1.5, (click, facts)
     # a grey dot on the brass: what stands out by its colour at start_px is the bob itself, and so it is measured
     plain = tmp_path / "grey_dot.mp4"
     truth = _clip(plain, coloured=False, n_frames=4)

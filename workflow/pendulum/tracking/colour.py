@@ -23,6 +23,7 @@ with too few frames usable, not where it refuses, the colour view alone).
 
 from __future__ import annotations
 
+import math
 from contextlib import closing
 from dataclasses import replace
 
@@ -183,7 +184,7 @@ def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame | 
 # A coloured marker dot (a red sticker on a brass clock bob): its colour against its surround, not its brightness.
 MARKER_BASE = 48.0  # the surround's level in the marker's colour view, grey levels
 MARKER_MIN_CONTRAST = 12.0  # chroma levels between the dot and its surround below which there is no colour view
-MARKER_MIN_SNR = 8.0  # … or below this many times the robust spread of the surround's colour along the same line
+MARKER_MIN_SNR = 5.0  # … or below this many times the robust spread of the surround's colour along the same line
 MARKER_MAX_REACH = 16.0  # chroma pixels (32 luma px) within which the dot's edge is looked for
 
 
@@ -212,51 +213,113 @@ class MarkerColourView:
 
 def marker_colour_view(path, start_px, radius_px: float | None = None) -> tuple[MarkerColourView | None, dict]:
     """The colour view (:class:`MarkerColourView`) of the marker dot at ``start_px`` in the first frame and its facts
-    (``marker_radius_px``, ``colour_contrast``: |c_dot − c_s| in chroma levels, ``surround_spread``); None where the
-    clip has no 4:2:0 colour or the dot's colour does not stand out of its surround's.
+    (``marker_radius_px``, ``start_px``: the dot's centre found there, ``colour_contrast``: |c_dot − c_s| in chroma
+    levels, ``surround_spread``); None where the clip has no 4:2:0 colour or the dot's colour does not stand out of
+    its surround's (the reason in ``facts["colour"]``).
 
-    c_dot is the chroma at the dot's centre (bilinear); without ``radius_px`` the dot's edge is where the median of
-    |U − U_dot| + |V − V_dot| over rings about it first reaches half its largest value within
-    :data:`MARKER_MAX_REACH`; c_s is the median chroma over the ring 1–2.5 chroma px beyond that edge."""
+    Measured (:func:`_dot_at`) about each chroma point within 1.5 chroma px of ``start_px`` (a click a few pixels
+    off, or between the chroma samples), the one whose colour stands out most kept, and its centre moved to the
+    centroid of what is nearer the dot's colour than the surround's until it stays (≤ 3 times, while its colour
+    contrast keeps 90 % of the best)."""
     with closing(iter_luma(path, view=_chroma)) as frames:
         first = next(frames, (0, 0.0, np.zeros((0, 0, 2), np.uint8)))[2]
     if first.size == 0:
         return None, {"colour": "the video carries no 4:2:0 colour planes"}
-    uv = first.astype(np.float32)
     cx, cy = _TO_CHROMA @ np.array([start_px[0], start_px[1], 1.0])
-    centre = np.array([cv2.getRectSubPix(uv[..., c], (1, 1), (float(cx), float(cy)))[0, 0] for c in (0, 1)])
-    h, w = uv.shape[:2]
-    yy, xx = np.mgrid[0:h, 0:w]
-    rho = np.hypot(xx - cx, yy - cy)
-    if radius_px is None:
-        distance = np.abs(uv - centre).sum(axis=2)
-        steps = np.arange(0.5, MARKER_MAX_REACH, 0.5)
-        profile = np.array([np.median(distance[(rho >= s - 0.5) & (rho < s)]) for s in steps])
-        if profile.max() < MARKER_MIN_CONTRAST:
-            return None, {"colour": "no coloured dot at start_px: its colour does not differ from around it"}
-        k = int(np.argmax(profile >= 0.5 * profile.max()))
-        edge = steps[k] - 0.25 - 0.5 * (profile[k] - 0.5 * profile.max()) / max(profile[k] - profile[k - 1], 1e-6)
-        radius_px = 2.0 * float(max(edge, 0.5)) if k else 1.0
-    edge = radius_px / 2.0
-    ring = (rho > edge + 1.0) & (rho <= edge + 2.5)
-    if np.count_nonzero(ring) < 8:
-        return None, {"colour": "the marker's surround is outside the picture"}
-    surround = np.median(uv[ring], axis=0)
-    line = centre - surround
-    contrast = float(np.hypot(*line))
-    along = uv[ring] @ (line / max(contrast, 1e-6))
-    spread = 1.4826 * float(np.median(np.abs(along - np.median(along))))
+    reach = int(MARKER_MAX_REACH + 4)  # the window about start_px that is measured
+    x0, y0 = max(int(cx) - reach, 0), max(int(cy) - reach, 0)
+    uv = first[y0 : int(cy) + reach + 1, x0 : int(cx) + reach + 1].astype(np.float32)
+    if uv.shape[0] < 4 or uv.shape[1] < 4:
+        return None, {"colour": "start_px is outside the picture"}
+    grid = np.mgrid[0 : uv.shape[0], 0 : uv.shape[1]].astype(np.float32)[::-1]  # x, y of each chroma sample
+    offsets = [
+        (dx, dy) for dx in np.arange(-1.5, 1.6, 0.5) for dy in np.arange(-1.5, 1.6, 0.5) if dx * dx + dy * dy <= 2.25
+    ]
+    found = [_dot_at(uv, grid, (cx - x0 + dx, cy - y0 + dy), radius_px) for dx, dy in offsets]
+    found = [f for f in found if f is not None]
+    if not found:
+        return None, {"colour": "no coloured dot at start_px: its colour does not differ from around it"}
+    best = max(found, key=lambda f: f["contrast"] / max(f["spread"], 1.0))
+    for _ in range(3):  # its centre: the centroid of what is nearer the dot's colour than the surround's
+        line = best["centre_uv"] - best["surround_uv"]
+        rho = np.hypot(grid[0] - best["x"], grid[1] - best["y"])
+        nearer = ((uv - best["surround_uv"]) @ (line / best["contrast"]) >= 0.5 * best["contrast"]) & (
+            rho <= best["edge"] + 1.0
+        )
+        if not nearer.any():
+            break
+        moved = _dot_at(uv, grid, (float(grid[0][nearer].mean()), float(grid[1][nearer].mean())), radius_px)
+        if moved is None or moved["contrast"] < 0.9 * best["contrast"]:  # the centroid wandered off the dot
+            break
+        done = math.dist((moved["x"], moved["y"]), (best["x"], best["y"])) < 0.1
+        best = moved
+        if done:
+            break
+    contrast, spread = best["contrast"], best["spread"]
     facts = {
-        "marker_radius_px": round(float(radius_px), 2),
+        "marker_radius_px": round(2.0 * best["edge"], 2),
+        "start_px": [round(2.0 * float(best["x"] + x0), 2), round(2.0 * float(best["y"] + y0) + 0.5, 2)],
         "colour_contrast": round(contrast, 1),
         "surround_spread": round(spread, 2),
     }
     if contrast < max(MARKER_MIN_CONTRAST, MARKER_MIN_SNR * spread):
-        return None, {**facts, "colour": "the dot's colour does not stand out from its surround's"}
-    gain = COLOUR_CONTRAST / contrast
-    d = line / contrast
-    matrix = [gain * d[0], gain * d[1], MARKER_BASE - gain * float(d @ surround)]
+        return None, {
+            **facts,
+            "colour": f"the dot's colour does not stand out from its surround's: {contrast:.1f} chroma levels apart, "
+            f"under max({MARKER_MIN_CONTRAST:g}, {MARKER_MIN_SNR:g} × the surround's spread {spread:.1f}); "
+            "a dot whose colour differs more from the bob's, or start_px at the dot's centre",
+        }
+    line = best["centre_uv"] - best["surround_uv"]
+    gain, d = COLOUR_CONTRAST / contrast, line / contrast
+    matrix = [gain * d[0], gain * d[1], MARKER_BASE - gain * float(d @ best["surround_uv"])]
     return MarkerColourView(matrix), facts
+
+
+def _dot_at(uv: np.ndarray, grid: np.ndarray, at, radius_px: float | None) -> dict | None:
+    """The dot seen from the chroma point ``at`` (x, y on the chroma grid): c_dot, the chroma there (bilinear); its
+    edge (chroma px: ``radius_px`` / 2, or :func:`_dot_edge`); c_s, the median chroma over the ring 1–2.5 chroma px
+    beyond the edge; |c_dot − c_s| and the robust spread of the ring's chroma along that line. None where no edge."""
+    x, y = at
+    centre = np.array([cv2.getRectSubPix(uv[..., c], (1, 1), (float(x), float(y)))[0, 0] for c in (0, 1)])
+    rho = np.hypot(grid[0] - x, grid[1] - y)
+    edge = radius_px / 2.0 if radius_px is not None else _dot_edge(np.abs(uv - centre).sum(axis=2), rho)
+    if edge is None:
+        return None
+    ring = (rho > edge + 1.0) & (rho <= edge + 2.5)
+    if np.count_nonzero(ring) < 8:
+        return None
+    surround = np.median(uv[ring], axis=0)
+    contrast = float(np.hypot(*(centre - surround)))
+    along = uv[ring] @ ((centre - surround) / max(contrast, 1e-6))
+    spread = 1.4826 * float(np.median(np.abs(along - np.median(along))))
+    return {
+        "x": x,
+        "y": y,
+        "edge": edge,
+        "centre_uv": centre,
+        "surround_uv": surround,
+        "contrast": contrast,
+        "spread": spread,
+    }
+
+
+def _dot_edge(distance: np.ndarray, rho: np.ndarray) -> float | None:
+    """The dot's edge (chroma px) from the colour distance to its centre: the median over rings 1 chroma px wide,
+    every ½ px, first reaching half its first plateau (a ring at which it grows by under 10 % over the next 1 px,
+    and at least :data:`MARKER_MIN_CONTRAST`); None where it never reaches that contrast."""
+    steps = np.arange(0.5, MARKER_MAX_REACH, 0.5)
+    profile = np.array([np.median(distance[np.abs(rho - s) < 0.5]) for s in steps])  # each ring holds samples
+    rising = np.nonzero(profile >= MARKER_MIN_CONTRAST)[0]
+    if rising.size == 0:
+        return None
+    k = int(rising[0])
+    while k + 2 < len(profile) and profile[k + 2] > 1.1 * profile[k]:
+        k += 1
+    half = 0.5 * profile[k]
+    j = int(np.argmax(profile >= half))
+    if j == 0:
+        return 0.5
+    return float(steps[j] - 0.5 * (profile[j] - half) / max(profile[j] - profile[j - 1], 1e-6))
 
 
 def track_marker_by_colour(path, settings: TrackerSettings, start_px, progress=None):
@@ -267,7 +330,8 @@ def track_marker_by_colour(path, settings: TrackerSettings, start_px, progress=N
         view, facts = marker_colour_view(path, start_px, settings.marker_radius_px)
         if view is None:
             return None, facts
-        spot = replace(settings, polarity="bright", marker_radius_px=facts["marker_radius_px"], start_px=start_px)
+        start = tuple(facts["start_px"])  # the dot's centre found about the given start_px
+        spot = replace(settings, polarity="bright", marker_radius_px=facts["marker_radius_px"], start_px=start)
         track = track_video(path, spot, progress=progress, view=view)
     except VideoError as error:
         return None, {**facts, "colour": f"failed: {error}"}
