@@ -304,6 +304,21 @@ def test_the_tracking_table_says_whether_the_marker_was_detected_or_given():
     assert marker_text({"status": "ok", "flags": {"ok": 660}}) == "—"  # a track from before the field existed
     colour = {"method": {"used": "body", "reason": "..."}, "body": {"radius_px": 14.5, "view": "colour"}}
     assert marker_text(colour) == "body by colour, r 14.5 px, auto"
+    dot = {"method": {"used": "marker"}, "marker": {"polarity": "bright", "marker_radius_px": 5.3, "view": "colour"}}
+    assert marker_text(dot) == "dot by colour, r 5.3 px, at start_px"
+
+
+def test_the_tracking_table_says_a_dot_was_followed_by_its_colour_and_what_its_brightness_gave():
+    from pendulum.report.checks import dot_colour_note
+
+    stopped = "usable in under 95 % of the frames: detection's disk-like spot (dark, radius 6.0 px: …) was not …"
+    method = {"used": "marker", "tried": {"marker": stopped, "marker_by_colour": "usable in 99.8 % of the frames"}}
+    assert dot_colour_note(method) == (
+        "tracked the dot at start_px by its colour, usable in 99.8 % of the frames; by its brightness usable in "
+        "under 95 % of the frames"
+    )
+    failed = {"tried": {"marker": "failed: no disk-like spot", "marker_by_colour": "usable in 100.0 % of the frames"}}
+    assert dot_colour_note(failed).endswith("by its brightness it could not be followed")
 
 
 def test_the_tracking_table_says_a_body_was_tracked_and_its_warning(tmp_path):

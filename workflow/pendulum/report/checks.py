@@ -66,6 +66,8 @@ def marker_text(tracks: dict) -> str:
         return "—"
     radius = marker.get("marker_radius_px")
     size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
+    if marker.get("view") == "colour":  # the colour view's polarity is its own, and start_px the user's
+        return f"dot by colour{size}, at start_px"
     return f"{marker.get('polarity', '?')}{size}, " + ("detected" if tracks.get("detection") else "given")
 
 
@@ -119,6 +121,15 @@ def method_note(method: dict, body: dict) -> str:
     if marker:
         note += "; a marker disk " + ("could not be found" if marker.startswith("failed") else marker.split(":")[0])
     return note
+
+
+def dot_colour_note(method: dict) -> str:
+    """The tracking table's note for a marker dot tracked by its colour (the method's full reason is its tooltip)."""
+    tried = method.get("tried") or {}
+    brightness = tried.get("marker", "")
+    return f"tracked the dot at start_px by its colour, {tried.get('marker_by_colour', '')}; by its brightness " + (
+        "it could not be followed" if brightness.startswith("failed") else brightness.split(":")[0]
+    )
 
 
 def period_text(angles: dict) -> str:
@@ -411,6 +422,9 @@ class CheckSections(ReportData):
                     notes.append(esc(tracks["body"]["warning"]))
                 if box := ((tracks or {}).get("body") or {}).get("in_front", {}).get("box_px"):
                     notes.append(esc(in_front_text(box)))
+            if kind == "video" and is_ok(tracks) and ((tracks or {}).get("marker") or {}).get("view") == "colour":
+                short = dot_colour_note(method)
+                notes.append(f'{NEUTRAL}<span title="{esc(method.get("reason", ""))}">{esc(short)}</span>')
             if kind == "video" and is_ok(tracks) and slip_sentence((tracks or {}).get("timing") or {}):
                 notes.append(esc(slip_sentence(tracks["timing"])))
             notes += [esc(w) for w in (angles.get("warnings") or [])] if is_ok(angles) else []
