@@ -245,3 +245,16 @@ def test_the_dot_by_its_colour_competes_with_the_marker_and_the_body_by_usable_f
         assert "measured by its colour" in chosen.attrs["method"]["reason"]
     else:
         assert (chosen.flag == "ok").sum() == 88 and chosen.attrs["marker"]["view"] is None
+
+
+def test_the_reason_for_a_dot_by_its_colour_drops_the_brightness_pass_advice():
+    """Where the colour view followed the dot, "check start_px" (the brightness pass's advice) would mislead."""
+    from pendulum.tracking.method import _colour_reason
+
+    failed = (
+        "failed: clip.mp4: no marker found in any of its 480 frames (no disk-like spot at all; a marker needs 0.75); "
+        "check tracking polarity (dark) and marker_radius_px (6.04), and start_px (given)"
+    )
+    reason = _colour_reason({"marker": failed, "marker_by_colour": "usable in 100.0 % of the frames"})
+    assert reason.endswith("(no disk-like spot at all; a marker needs 0.75))")
+    assert "check" not in reason and "usable in 100.0 % of the frames" in reason

@@ -11,6 +11,8 @@ is taken. Either way the track's ``attrs["method"]`` says which, and why.
 
 from __future__ import annotations
 
+import re
+
 import pandas as pd
 
 from pendulum.camera.video import VideoError
@@ -210,9 +212,12 @@ def _more_usable(marker: pd.DataFrame | None, colour: pd.DataFrame | None) -> pd
 
 
 def _colour_reason(tried: dict) -> str:
+    """Why the dot was measured by its colour: what its colour and its brightness gave, the brightness pass's advice
+    ("; check start_px …", "; film it …") left out: the colour view followed the dot there."""
+    brightness = re.sub(r"; (check|give|film|widen)\b.*$", "", tried["marker"])
     return (
         f"the marker dot at start_px measured by its colour against its surround's, {tried['marker_by_colour']} "
-        f"(by its brightness: {tried['marker']})"
+        f"(by its brightness: {brightness})"
     )
 
 
