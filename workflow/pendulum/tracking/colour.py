@@ -91,6 +91,19 @@ def _chroma(frame) -> np.ndarray:
 _chroma.key = "chroma"
 
 
+def _on_luma_grid(shown: np.ndarray, frame) -> np.ndarray:
+    """An image on the frame's chroma grid, resampled (bilinear) onto its luma grid at H.264's chroma sites."""
+    size = (int(frame.width), int(frame.height))
+    flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+    return cv2.warpAffine(shown, _TO_CHROMA, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+
+
+def _first_chroma(path) -> np.ndarray:
+    """The clip's first frame's U and V planes (:func:`_chroma`); empty where it carries no 4:2:0 colour."""
+    with closing(iter_luma(path, view=_chroma)) as frames:
+        return next(frames, (0, 0.0, np.zeros((0, 0, 2), np.uint8)))[2]
+
+
 class ColourView:
     """A decoded frame → its colour view P (module docstring), uint8 (height, width)."""
 
@@ -105,9 +118,7 @@ class ColourView:
             raise VideoError("a frame without the clip's colour planes: no colour view")
         difference = cv2.subtract(_distance(np.dstack(planes), self.wall), self.dead_zone)
         shown = cv2.bitwise_not(cv2.convertScaleAbs(difference, alpha=self.gain))
-        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        size = (int(frame.width), int(frame.height))
-        return cv2.warpAffine(shown, _TO_CHROMA, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        return _on_luma_grid(shown, frame)
 
 
 def colour_view(path, luma_track: pd.DataFrame | None) -> tuple[ColourView | None, dict]:
@@ -118,8 +129,7 @@ def colour_view(path, luma_track: pd.DataFrame | None) -> tuple[ColourView | Non
     over the samples where it was tracked ``ok`` (without a track: each sample's most coloured 3 × 3 patch, the
     body where it is the only coloured thing that moves); the noise: the mean of the same difference over the
     samples."""
-    with closing(iter_luma(path, view=_chroma)) as frames:  # the first frame first: a grey video ends here
-        first = next(frames, (0, 0.0, np.zeros((0, 0, 2), np.uint8)))[2]
+    first = _first_chroma(path)  # the first frame first: a grey video ends here
     if first.size == 0:
         return None, {"colour": "the video carries no 4:2:0 colour planes"}
     if int(first.max()) - int(first.min()) <= GREY_SPREAD:
@@ -206,9 +216,7 @@ class MarkerColourView:
             raise VideoError("a frame without the clip's colour planes: no colour view")
         # [1 2 1]/4 in each direction on the chroma grid: the chroma noise ×0.375, the dot ~1 luma px softer
         shown = cv2.GaussianBlur(cv2.transform(np.dstack(planes), self.matrix), (3, 3), 0)
-        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        size = (int(frame.width), int(frame.height))
-        return cv2.warpAffine(shown, _TO_CHROMA, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        return _on_luma_grid(shown, frame)
 
 
 def marker_colour_view(path, start_px, radius_px: float | None = None) -> tuple[MarkerColourView | None, dict]:
@@ -221,8 +229,7 @@ def marker_colour_view(path, start_px, radius_px: float | None = None) -> tuple[
     off, or between the chroma samples), the one whose colour stands out most kept, and its centre moved to the
     centroid of what is nearer the dot's colour than the surround's until it stays (≤ 3 times, while its colour
     contrast keeps 90 % of the best)."""
-    with closing(iter_luma(path, view=_chroma)) as frames:
-        first = next(frames, (0, 0.0, np.zeros((0, 0, 2), np.uint8)))[2]
+    first = _first_chroma(path)
     if first.size == 0:
         return None, {"colour": "the video carries no 4:2:0 colour planes"}
     cx, cy = _TO_CHROMA @ np.array([start_px[0], start_px[1], 1.0])
