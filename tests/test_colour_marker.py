@@ -11,6 +11,7 @@ not by the project's renderer, and encoded as a phone does (H.264, 4:2:0).
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -94,8 +95,9 @@ def _frame_planes(k: int, coloured: bool, brass_uv, wall_y: np.ndarray) -> list[
     return [y, u, v]
 
 
-def _clip(path, coloured: bool = True, n_frames: int = N_FRAMES, seed: int = 0, brass_uv=BRASS_UV):
-    """The clip and each clock's dot centre per frame."""
+def _clip(path, coloured: bool = True, n_frames: int = N_FRAMES, seed: int = 0, brass_uv=BRASS_UV, repeat=()):
+    """The clip and each clock's dot centre per frame; ``repeat``: frames that show the frame before's picture (a
+    camera's repeated frame)."""
     from pendulum.synthetic.experiment import write_video
 
     rng = np.random.default_rng(seed)
@@ -106,6 +108,8 @@ def _clip(path, coloured: bool = True, n_frames: int = N_FRAMES, seed: int = 0, 
         y, u, v = _frame_planes(k, coloured, brass_uv, wall_y)
         planes = [y + rng.normal(0, 1.5, y.shape), u + rng.normal(0, 0.7, u.shape), v]
         frames.append(np.concatenate([np.round(p).reshape(-1) for p in planes]).clip(0, 255).astype(np.uint8))
+        if k in repeat:
+            frames[k] = frames[k - 1]
     write_video([f.reshape(-1, W) for f in frames], path, FPS, 16, "veryfast", colour=True)
     return [[_centre(c, k) for k in range(n_frames)] for c in range(len(CLOCKS))]
 
@@ -139,6 +143,31 @@ def test_a_coloured_dot_on_a_shiny_bob_is_followed_by_its_colour_where_its_brigh
     off -= off.mean(axis=0)
     assert np.sqrt(np.mean(np.sum(off**2, axis=1))) <= 0.25  # its swing measured to a quarter pixel
     assert abs(track.attrs["marker"]["marker_radius_px"] - DOT_PX) <= 1.5
+
+
+@pytest.mark.slow
+def test_a_dot_slow_about_its_turning_points_is_no_repeated_frame_and_a_repeat_is(tmp_path, monkeypatch):
+    """Zoomed in 1.6× (a dot of 9.6 px, the same swing in pixels): about a turning point the dot moves 0.1 px a
+    frame and its colour view, nearly noise-free, hardly changes or not at all; a step expected from the last
+    three positions, their noise (0.2 px) amplified 3.7 times, exceeded 0.5 px there and frame 256 of 300 was
+    flagged ``duplicate`` (from six positions: 1.0 times). Frames the camera repeats mid-swing are."""
+    from dataclasses import replace
+
+    from pendulum.tracking.method import track_trial
+    from pendulum.tracking.settings import TrackerSettings
+
+    zoom, module = 1.6, sys.modules[__name__]
+    for name in ("BOB_PX", "DOT_PX", "ARM_PX"):
+        monkeypatch.setattr(module, name, getattr(module, name) * zoom)
+    monkeypatch.setattr(module, "PIVOT_Y", 150.0 - module.ARM_PX)
+    monkeypatch.setattr(module, "CLOCKS", tuple((x0, a / zoom, p, phase) for x0, a, p, phase in CLOCKS))
+    repeated = [90, 151]  # one and a half and two and a half periods of the left clock: mid-swing, 2.3 px a frame
+    truth = _clip(tmp_path / "zoomed.mp4", n_frames=300, repeat=repeated)
+    settings = replace(TrackerSettings(), polarity="auto", marker_radius_px=None, start_px=truth[0][0])
+    track = track_trial(tmp_path / "zoomed.mp4", settings)
+    assert track.attrs["marker"]["view"] == "colour", track.attrs["method"]
+    assert track.frame[track.flag != "ok"].tolist() == repeated
+    assert (track.flag[repeated] == "duplicate").all()
 
 
 def test_the_dot_is_read_from_its_colour_against_the_brass_around_it(tmp_path):

@@ -138,6 +138,12 @@ class MarkerAbandoned(VideoError):
         self.settings, self.detection = settings, detection  # as resolved: the whole pass without detecting again
 
 
+# The next step of a parabola fitted to six consecutive positions (least squares), as weights on them: about a
+# turning point, where the marker moves 0.1 px a frame, the positions' noise alone (0.2 px in a dot's colour view)
+# made the three-point step exceed 0.5 px and a still frame was taken for a repeat.
+STEP_WEIGHTS = np.linalg.pinv(np.vander(np.arange(-5.0, 1.0), 3, increasing=True))[1:].sum(axis=0)  # b + c
+
+
 def track_video(
     path,
     settings: TrackerSettings,
@@ -348,12 +354,15 @@ def track_video(
                     guess = (x1 + vx * gap, y1 + vy * gap)
                 cap = max(6.0 * r, 1.5 * max_step + 2.0 * r)
                 speed = min(step + settings.max_lost_step_radii * (gap - 1) * r, cap)
-            if window is not None and window[0] == index - 1 and len(history) == 3 and history[0][0] == f1 - 2:
+            if window is not None and window[0] == index - 1 and len(history) >= 3 and history[-3][0] == f1 - 2:
                 # The marker should have moved (constant-acceleration step ≥ 0.5 px), yet its window
                 # did not change: a repeated frame (re-encoded, so not bit-identical), whose content
                 # belongs to the previous time stamp.
-                xm, ym = history[0][1], history[0][2]
-                expected = math.hypot(2 * vx - (x0 - xm), 2 * vy - (y0 - ym))
+                if len(history) == 6 and history[0][0] == f1 - 5:  # the step of a parabola through six
+                    expected = math.hypot(*(STEP_WEIGHTS @ np.array([h[1:] for h in history])))
+                else:  # through three: 3.7 times the positions' noise (1.0 times through six)
+                    xm, ym = history[-3][1], history[-3][2]
+                    expected = math.hypot(2 * vx - (x0 - xm), 2 * vy - (y0 - ym))
                 if expected >= 0.5:
                     duplicate |= float(np.abs(image[window[1]].astype(np.float32) - window[2]).mean()) < 0.5
         coverage_expected = scene_behind is not None and marker_grey is not None
@@ -436,7 +445,7 @@ def track_video(
                 if history and history[-1][0] == index - 1:
                     max_step = max(max_step, math.hypot(x - history[-1][1], y - history[-1][2]))
                 history.append((index, x, y))
-                del history[:-3]
+                del history[:-6]
                 if flag == "ok":
                     arc.add(x, y)
                     signal_curves[kind].add(x, y, m.signal)
