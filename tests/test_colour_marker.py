@@ -149,8 +149,8 @@ def test_a_coloured_dot_on_a_shiny_bob_is_followed_by_its_colour_where_its_brigh
 def test_a_dot_slow_about_its_turning_points_is_no_repeated_frame_and_a_repeat_is(tmp_path, monkeypatch):
     """Zoomed in 1.6× (a dot of 9.6 px, the same swing in pixels): about a turning point the dot moves 0.1 px a
     frame and its colour view, nearly noise-free, hardly changes or not at all; a step expected from the last
-    three positions, their noise (0.2 px) amplified 3.7 times, exceeded 0.5 px there and frame 256 of 300 was
-    flagged ``duplicate`` (from six positions: 1.0 times). Frames the camera repeats mid-swing are."""
+    three positions, their noise (0.2 px) amplified 3.7 times, exceeded 0.5 px there and frames 255 and 286 of
+    this clip were flagged ``duplicate`` (from six positions: 1.0 times). Frames the camera repeats mid-swing are."""
     from dataclasses import replace
 
     from pendulum.tracking.method import track_trial
