@@ -237,11 +237,13 @@ def _blob_rows(stack: np.ndarray, scale: int) -> tuple[np.ndarray, float, dict[f
         BACKGROUND_QUANTILE: [(dog_pyramid(low), (1,)), (dog_pyramid(high), (-1,))],
     }
     rows: dict[float, list] = {q: [] for q in searches}
+    foreground = None  # one frame's foreground pyramid, its images reused by the next
     for k in range(n):
         frame = dog_pyramid(stack[k].astype(np.float32))
         for quantile, references in searches.items():
             for reference, signs in references:
-                for sign, x, y, r, s in dog_blobs(foreground_pyramid(frame, reference), scale, threshold, 8, signs):
+                foreground = foreground_pyramid(frame, reference, foreground)
+                for sign, x, y, r, s in dog_blobs(foreground, scale, threshold, 8, signs):
                     rows[quantile].append((k, sign, x, y, r, s))
     return background, threshold, rows
 

@@ -41,24 +41,26 @@ def sample_frames(path, max_samples: int, max_full: int, max_frames: int):
     return small, full, scale, first
 
 
-def _peak_offsets(response: np.ndarray, ys: np.ndarray, xs: np.ndarray, sign: int) -> tuple[np.ndarray, np.ndarray]:
-    """Sub-sample offsets of peaks of ``sign`` × ``response`` at (xs, ys): per axis, the vertex of the parabola
-    through each peak and its two neighbours, δ = (f₋ − f₊) / (2 (f₋ − 2 f₀ + f₊)), within ±0.5 (0 at the border
-    or where the three do not curve down).
+def _peak_place(dogs: list[np.ndarray], y: int, x: int, sign: int) -> tuple[int, float, float]:
+    """The scale a peak at (x, y) of ``sign`` × DoG responds most to (the first of equals) and its sub-sample
+    offsets there: per axis, the vertex of the parabola through the peak and its two neighbours,
+    δ = (f₋ − f₊) / (2 (f₋ − 2 f₀ + f₊)), within ±0.5 (0 at the border or where the three do not curve down).
 
     On a coarse pyramid level a sample is 4–8 px of the frame: without it, the blobs of a large marker on a
-    small swing lie on a grid, and a circle through them cannot show the arc's 2 px sagitta."""
-    h, w = response.shape
-    inside = (ys > 0) & (ys < h - 1) & (xs > 0) & (xs < w - 1)
-    y, x = np.where(inside, ys, 1), np.where(inside, xs, 1)
+    small swing lie on a grid, and a circle through them cannot show the arc's 2 px sagitta. One peak at a
+    time (a level has at most a few): the same float32 responses and float64 vertex as whole-array code."""
+    responses = [sign * dog[y, x] for dog in dogs]
+    which = max(range(len(dogs)), key=lambda k: (responses[k], -k))
+    dog = dogs[which]
+    h, w = dog.shape
+    if not (0 < y < h - 1 and 0 < x < w - 1):
+        return which, 0.0, 0.0
     offsets = []
-    for dy, dx in ((0, 1), (1, 0)):
-        lo, mid, hi = (sign * response[y + k * dy, x + k * dx].astype(np.float64) for k in (-1, 0, 1))
+    for lo, mid, hi in ((dog[y, x - 1], dog[y, x], dog[y, x + 1]), (dog[y - 1, x], dog[y, x], dog[y + 1, x])):
+        lo, mid, hi = sign * float(lo), sign * float(mid), sign * float(hi)
         curvature = lo - 2.0 * mid + hi
-        bent = inside & (curvature < 0)
-        vertex = np.divide(0.5 * (lo - hi), curvature, out=np.zeros_like(curvature), where=bent)
-        offsets.append(np.clip(vertex, -0.5, 0.5))
-    return offsets[0], offsets[1]
+        offsets.append(min(max(0.5 * (lo - hi) / curvature, -0.5), 0.5) if curvature < 0 else 0.0)
+    return which, offsets[0], offsets[1]
 
 
 def dog_pyramid(image: np.ndarray) -> list[list[np.ndarray]]:
@@ -100,12 +102,9 @@ def dog_blobs(fg, scale: int, threshold: float, per_sign: int, signs: tuple[int,
             if ys.size > per_sign:
                 keep = np.argsort(best[ys, xs])[-per_sign:]
                 ys, xs = ys[keep], xs[keep]
-            responses = np.stack([d[ys, xs] for d in dogs])
-            which = np.argmax(sign * responses, axis=0)
-            dx, dy = np.zeros(ys.size), np.zeros(ys.size)
-            for k in np.unique(which).tolist():  # each peak placed on the DoG level it responds most to
-                at = which == k
-                dx[at], dy[at] = _peak_offsets(dogs[k], ys[at], xs[at], sign)
+            places = [_peak_place(dogs, y, x, sign) for y, x in zip(ys.tolist(), xs.tolist(), strict=True)]
+            which, dx, dy = np.array(places).T  # each peak placed on the DoG level it responds most to
+            which = which.astype(np.intp)
             sigma = np.asarray(PYRAMID_SIGMAS)[which] * 1.22
             found.extend(
                 zip(
@@ -129,9 +128,18 @@ def dog_blobs(fg, scale: int, threshold: float, per_sign: int, signs: tuple[int,
     return out
 
 
-def foreground_pyramid(frame: list[list[np.ndarray]], reference: list[list[np.ndarray]]) -> list[list[np.ndarray]]:
-    """The DoG pyramid of I − B from those of I and B (:func:`dog_pyramid`)."""
-    return [[cv2.subtract(a, b) for a, b in zip(fa, fb, strict=True)] for fa, fb in zip(frame, reference, strict=True)]
+def foreground_pyramid(
+    frame: list[list[np.ndarray]], reference: list[list[np.ndarray]], out: list[list[np.ndarray]] | None = None
+) -> list[list[np.ndarray]]:
+    """The DoG pyramid of I − B from those of I and B (:func:`dog_pyramid`), written into ``out`` (a pyramid of
+    the same shapes, reused from frame to frame: not allocating its images anew is a third of the cost) when
+    given."""
+    if out is None:
+        out = [[np.empty_like(a) for a in fa] for fa in frame]
+    for fa, fb, fo in zip(frame, reference, out, strict=True):
+        for a, b, o in zip(fa, fb, fo, strict=True):
+            cv2.subtract(a, b, dst=o)
+    return out
 
 
 def scene_quantiles(stack: np.ndarray, quantile: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
