@@ -14,7 +14,8 @@ import pandas as pd
 import pytest
 from scipy.stats import binom
 
-from pendulum.tracking.timing import correct_slips, find_slips, slip_sentence
+from pendulum.tracking.settings import TrackerSettings
+from pendulum.tracking.timing import at_capture_rate, correct_slips, find_slips, slip_sentence
 
 
 def swing_track(rng, slips=(), fps=60.0, duration_s=8.0, noise_px=0.05):
@@ -328,3 +329,22 @@ def test_a_break_no_slip_explains_is_said_and_a_rough_track_is_not():
     for seed in range(40):
         track, _, _ = swing_track(np.random.default_rng(100 + seed), fps=[30.0, 60.0][seed % 2])
         assert not correct_slips(track).attrs["timing"]["unexplained"], seed
+
+
+def test_a_slow_motion_clip_is_timed_at_the_rate_the_camera_filmed():
+    """A phone's slow-motion clip: filmed at 240 fps, stored to play at 30 (every stamp 8 × the moment it was
+    taken), one frame lost on the way. With ``capture_fps`` 240 its times are the moments the frames were taken
+    (the lost frame put right as at any rate), the file's stamps kept beside them; without, as the file says."""
+    rng = np.random.default_rng(11)
+    track, taken, _ = swing_track(rng, slips=[(700, 1.0)], fps=240.0, duration_s=6.0)
+    track["time_s"] = np.arange(len(track)) / 30.0  # the file: 30 fps stamps
+    timed = correct_slips(track)
+    assert at_capture_rate(timed, None) is timed
+    filmed = at_capture_rate(timed, 240.0)
+    assert filmed.attrs["time_base"] == {"capture_fps": 240.0, "file_fps": 30.0, "scale": pytest.approx(0.125)}
+    assert np.abs(filmed.time_s - taken).max() <= 0.1 / 240  # measured 0.02 of a period (the slip found as 0.98)
+    assert np.abs(timed.time_s - taken).max() > 20  # the file's times: 8 × too slow (50 s against 6 s)
+    assert np.array_equal(filmed.stamp_s, timed.stamp_s) and filmed.stamp_s.iloc[-1] == pytest.approx(1439 / 30)
+    assert [f for f, _ in filmed.attrs["timing"]["slips"]] == [700]
+    with pytest.raises(ValueError, match="capture_fps"):
+        TrackerSettings(capture_fps=0.0)

@@ -148,9 +148,10 @@ def test_apple_frames_lost_and_repeated_by_the_phone_are_found_and_put_right(app
     assert abs(at_half[138] - slips[276] / 2) <= 0.1 and abs(at_half[232] - slips[463] / 2) <= 0.1
 
 
-def restamped(path: Path, out: Path, ticks_per_s: int) -> Path:
+def restamped(path: Path, out: Path, ticks_per_s: int, slowed: int = 1) -> Path:
     """The clip's packets, not decoded, stored again with every time stamp rounded to 1/``ticks_per_s`` s (a
-    Matroska or WebM file's milliseconds, an iPhone's 1/600 s)."""
+    Matroska or WebM file's milliseconds, an iPhone's 1/600 s), after multiplying it by ``slowed`` (a phone's
+    slow-motion file, stored to play that many times slower than it was filmed)."""
     from fractions import Fraction
 
     import av
@@ -165,7 +166,7 @@ def restamped(path: Path, out: Path, ticks_per_s: int) -> Path:
                 continue
             for name in ("pts", "dts"):
                 value = getattr(packet, name)
-                setattr(packet, name, None if value is None else round(value * stream.time_base / tick))
+                setattr(packet, name, None if value is None else round(slowed * value * stream.time_base / tick))
             packet.time_base, packet.stream = tick, copy
             target.mux(packet)
     return out
@@ -192,6 +193,28 @@ def test_the_apple_stamped_in_a_coarse_tick_is_timed_as_the_clip_itself(apple, t
     assert np.abs(again.time_s - track.time_s)[both].max() <= 0.1 * timing["period_s"]
     assert zero_crossing_period(again.time_s.to_numpy(), np.where(both, again.x_px, np.nan)) == pytest.approx(
         zero_crossing_period(track.time_s.to_numpy(), np.where(both, track.x_px, np.nan)), rel=1e-4
+    )
+
+
+@pytest.mark.slow
+def test_the_apple_as_a_slow_motion_file_is_timed_at_the_cameras_rate_given(apple, tmp_path):
+    """The clip's own packets stamped 8 times further apart (a slow-motion file: filmed at 59.94 fps, playing at
+    7.49), tracked with ``capture_fps`` 59.94: the same frames, flags and positions as the clip itself, its times
+    within a millionth of a second, the same period; the file's own stamps kept in ``stamp_s``."""
+    from pendulum.tracking.method import track_trial
+
+    track, _, _, _ = apple
+    video = restamped(APPLE, tmp_path / "apple_slow.mov", 60000, slowed=8)
+    fps = 60000 / 1001
+    again = track_trial(video, replace(default_settings(), capture_fps=fps))
+    assert again.attrs["time_base"]["file_fps"] == pytest.approx(fps / 8, rel=1e-4)
+    assert again.flag.tolist() == track.flag.tolist()
+    assert np.allclose(again.x_px, track.x_px, atol=1e-9, equal_nan=True)
+    assert np.abs(again.time_s - track.time_s).max() <= 1e-6
+    assert again.stamp_s.iloc[-1] == pytest.approx(8 * track.stamp_s.iloc[-1], rel=1e-6)
+    ok = (track.flag == "ok").to_numpy()
+    assert zero_crossing_period(again.time_s.to_numpy(), np.where(ok, again.x_px, np.nan)) == pytest.approx(
+        zero_crossing_period(track.time_s.to_numpy(), np.where(ok, track.x_px, np.nan)), rel=1e-6
     )
 
 

@@ -27,7 +27,7 @@ RIG_KEYS = (
 )
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined in a sidecar must give these
-TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method")
+TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method", "capture_fps")
 ANGLE_TABLE_EXTENSIONS = (".csv",)
 NOT_IN_A_NAME = re.compile(r"[^A-Za-z0-9_.+-]+")  # spaces, brackets, accents, …: each run becomes one _
 # a number as YAML 1.2 (and a person) writes it; PyYAML (YAML 1.1) leaves 5e-05 or 1e3 as text

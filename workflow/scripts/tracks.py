@@ -77,6 +77,14 @@ def work():
         100 * usable_fraction(track),
         f"; {held} more held by hand before the release or after a catch" if held else "",
     )
+    if base := track.attrs.get("time_base"):
+        log.info(
+            "%s: times put at the camera's %g fps (the file plays at %g fps: each stamp × %.6g)",
+            video,
+            base["capture_fps"],
+            base["file_fps"],
+            base["scale"],
+        )
     warnings = []  # what may be wrong in the track (trials.csv and the report list them)
     if track.attrs.get("video", {}).get("stopped_early"):
         log.warning("%s", track.attrs["video"]["stopped_early"])
@@ -101,6 +109,9 @@ def work():
             "method": method,  # marker or body, why, and what each tried gave
             "path": path,  # departure from one circle, a creeping pivot (corrected), what is left
             "timing": track.attrs.get("timing"),  # frames lost or repeated under even stamps, found from the motion
+            "time_base": track.attrs.get(
+                "time_base"
+            ),  # the camera's rate where the file plays at another (capture_fps)
             "exposure_fraction": track.attrs.get("exposure_fraction"),
             "marker": track.attrs.get("marker"),  # polarity, radius and start used (given or detected)
             "detection": track.attrs.get("detection"),  # what detection found (None: all given)

@@ -113,7 +113,8 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
     elif added_mass["value"] > 5 * rig.mass_kg:
         out.append(
             f"fitted added mass is {added_mass['value'] / rig.mass_kg:.0f}× the body mass (period {measured:.4g} s "
-            f"against {bare:.4g} s for the rig alone): check length_m, mass_kg and the record's time base"
+            f"against {bare:.4g} s for the rig alone): check length_m, mass_kg and the record's time base (a "
+            "slow-motion clip plays slower than it was filmed: give the camera's capture_fps in the trial's sidecar)"
         )
     return out
 

@@ -380,9 +380,11 @@ class CheckSections(ReportData):
             else:
                 fps = frames.get("mean_fps") if is_finite(frames.get("mean_fps")) else frames.get("nominal_fps")
                 variable = ' <span class="warn">variable</span>' if frames.get("variable_frame_rate") else ""
+                base = (tracks or {}).get("time_base") or {}  # a slow-motion clip: the camera's rate (capture_fps)
+                filmed = f" (filmed at {esc(fmt(base['capture_fps'], 4))})" if base.get("capture_fps") else ""
                 frame_cells = [
                     td(str(frames.get("n_frames", "—")), "num"),
-                    td(esc(fmt(fps, 4)) + variable, "num"),
+                    td(esc(fmt(fps, 4)) + variable + filmed, "num"),
                     td(
                         str(frames.get("dropped_frames", "—")),
                         "num" + (" fail" if frames.get("dropped_frames") else ""),

@@ -22,7 +22,7 @@ from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.occluders import reaching_box
 from pendulum.tracking.settings import TrackerSettings
-from pendulum.tracking.timing import correct_slips
+from pendulum.tracking.timing import at_capture_rate, correct_slips
 
 MARKER_USABLE_FRACTION = 0.95  # issue 23: a record ≥ 95 % usable; below it the body is tried too, the better kept
 
@@ -37,13 +37,14 @@ def usable_fraction(track: pd.DataFrame) -> float:
 def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
     """The track by ``settings.method`` (module docstring); ``attrs["method"]``: ``used``, ``reason``, ``tried``.
     Its ``time_s`` is put right where the camera lost or repeated frames under even time stamps
-    (:func:`pendulum.tracking.timing.correct_slips`; ``attrs["timing"]``).
+    (:func:`pendulum.tracking.timing.correct_slips`; ``attrs["timing"]``), then put at the camera's
+    ``settings.capture_fps`` where the file plays at another rate (:func:`~pendulum.tracking.timing.at_capture_rate`).
 
     Raises :class:`~pendulum.camera.video.VideoError` when no method gives a record; the message holds
     what each one said. The clip's sampled frames, shared by the searches, are let go at the end.
     """
     try:
-        return correct_slips(_track_trial(path, settings, progress))
+        return at_capture_rate(correct_slips(_track_trial(path, settings, progress)), settings.capture_fps)
     finally:
         samples.release()
 

@@ -41,6 +41,9 @@ class TrackerSettings:
     # "marker": a marker disk; "body": the swinging object's silhouette (pendulum.tracking.body); "auto": the marker
     # where a good one is found, else the body (pendulum.tracking.method)
     method: str = "auto"
+    # the camera's frame rate where the file plays at another (a phone's slow-motion clip: filmed at 240 fps,
+    # stored at 30): the record's times are put at it (pendulum.tracking.timing.at_capture_rate); None: the file's
+    capture_fps: float | None = None
 
     def __post_init__(self):
         if self.method not in ("auto", "marker", "body"):
@@ -51,6 +54,8 @@ class TrackerSettings:
             raise ValueError(f"centroid must be 'linear' or 'threshold', got {self.centroid!r}")
         if self.marker_radius_px is not None and not self.marker_radius_px > 0:
             raise ValueError("marker_radius_px must be positive")
+        if self.capture_fps is not None and not self.capture_fps > 0:
+            raise ValueError("capture_fps must be positive")
         if not 0 < self.min_acquire_score < 1:
             raise ValueError("min_acquire_score must be between 0 and 1")
 

@@ -399,6 +399,27 @@ def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def at_capture_rate(track: pd.DataFrame, capture_fps: float | None) -> pd.DataFrame:
+    """``track`` with its times at the rate the camera filmed, where the file plays at another rate: a phone's
+    slow-motion clip (filmed at 240 fps, stored to play at 30) stamps its frames 8 times too far apart, and every
+    period and decay of its record comes out 8 times too slow. ``time_s`` × 1 / (capture_fps · Δ), Δ the stamps'
+    regular step (:func:`frame_period`); ``stamp_s`` keeps the file's stamps (the contact sheet's times, and those
+    of ``attrs["timing"]``); ``attrs["time_base"]`` says what was done. ``capture_fps`` None: ``track`` as it is."""
+    if capture_fps is None or track.empty:
+        return track
+    stamp = (track["stamp_s"] if "stamp_s" in track else track.time_s).to_numpy(float)
+    step = frame_period(stamp)
+    if not step > 0:  # one frame: no time to scale
+        return track
+    scale = 1.0 / (capture_fps * step)
+    out = track.copy()
+    out.attrs = dict(track.attrs)
+    out["stamp_s"] = stamp
+    out["time_s"] = track.time_s.to_numpy(float) * scale
+    out.attrs["time_base"] = {"capture_fps": float(capture_fps), "file_fps": round(1.0 / step, 4), "scale": scale}
+    return out
+
+
 def _clear_jumps(out: pd.DataFrame, found: dict) -> list[int]:
     """``jump`` frames within two frames of a slip or a repeat whose position now lies on the local polynomial
     (fitted to the ok frames around them in corrected time; residual under 4× theirs): made ``ok``."""
