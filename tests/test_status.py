@@ -9,12 +9,13 @@ import pandas as pd
 import pytest
 
 from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot, trial_geometry
-from pendulum.fit.checks import misfit_warning
+from pendulum.fit.checks import misfit_warning, rig_checks
 from pendulum.fit.uncertainty import jacobian_rank_warnings
 from pendulum.freeze import trial_outcomes
 from pendulum.outcomes import (
     failure_summary,
     misfit_trials,
+    rig_mismatch_trials,
     skipped_status,
     status_table,
     trial_status,
@@ -163,6 +164,28 @@ def test_a_trial_that_succeeded_carries_its_warnings_and_a_model_that_misses_it_
     (said,) = misfit_warning(record, np.radians(0.2) * np.sin(2 * np.pi * t / 2.078))
     real = [("angles", "a.log", {"status": "ok"}), ("fit:quadratic", "q.log", {"status": "ok", "warnings": [said]})]
     assert misfit_trials(status_table([trial_status("apple", "a", "air", real)])) == ["apple"]
+
+
+def test_trials_whose_period_and_rig_values_disagree_are_listed_from_the_fits_own_words():
+    """A slow-motion clip timed by its file (the demo swing 8 times too slow: an added mass 108 times the body's)
+    and a period shorter than the rig allows: each listed for the run's last lines, from the warnings
+    :func:`pendulum.fit.checks.rig_checks` writes; a trial whose fit only misses its record is not."""
+    from pendulum.model.rig import Rig
+
+    rig = Rig(mass_kg=3.53, length_m=0.76, frontal_area_m2=0.0322, displaced_volume_m3=0.0025)
+    slow = rig_checks(rig, {"at_bound": False, "value": 382.0}, [{"period_s": 33.95}])
+    fast = rig_checks(rig, {"at_bound": True, "value": 0.0}, [{"period_s": 2.0}])
+    assert len(slow) == 1 and "capture_fps" in slow[0] and len(fast) == 1
+    assert rig_checks(rig, {"at_bound": False, "value": 2.5}, [{"period_s": 4.25}]) == []
+    rows = [
+        trial_status(name, name, "paper", [("angles", "a.log", {"status": "ok"}), ("fit:q", "q.log", fit)])
+        for name, fit in (
+            ("slowmo", {"status": "ok", "warnings": slow}),
+            ("short", {"status": "ok", "warnings": fast}),
+            ("fine", {"status": "ok", "warnings": ["trial fine: residual RMS 0.4° misses a systematic effect"]}),
+        )
+    ]
+    assert rig_mismatch_trials(status_table(rows)) == ["short", "slowmo"]
 
 
 def test_a_trial_skipped_by_its_sidecar_is_listed_with_why_and_fails_nothing(tmp_path):

@@ -38,6 +38,8 @@ MODEL_NOTE_MARKS = (
     "the record hardly separates them",
 )
 EVERY_VARIANT = "fit (every variant): "
+# the fits' warnings that the measured period and the rig values cannot both be right (pendulum.fit.checks.rig_checks)
+RIG_MISMATCH_MARKS = ("× the body mass (period", "shorter than the rig values allow")
 
 
 def for_the_terminal(warning: str) -> bool:
@@ -181,6 +183,18 @@ def misfit_trials(table: pd.DataFrame) -> list[str]:
     ]
 
 
+def rig_mismatch_trials(table: pd.DataFrame) -> list[str]:
+    """Trials that succeeded but whose fits say their period and the rig values cannot both be right (an added mass
+    many times the body's, or below zero): a wrong rig value, or a record on another time base (a slow-motion clip)."""
+    if "warnings" not in table.columns:
+        return []
+    return [
+        str(r.trial)
+        for r in table[table.status == "ok"].itertuples()
+        if any(mark in str(r.warnings) for mark in RIG_MISMATCH_MARKS)
+    ]
+
+
 def mark_copies(rows: list[dict], digests: dict[str, str | None]) -> None:
     """Warn on each trial whose angle record is an earlier-named trial's, sample for sample (``record_sha256``, the
     angles documents'): the group fits count it once (:func:`pendulum.status.fitted_trials`, by the same
@@ -239,9 +253,10 @@ def print_outcome(log_path, since_s: float) -> None:
 
 def outcome_logged(log_path, since_s: float) -> str | None:
     """What ``check_trials`` logged in this run (its log written at or after ``since_s``), its entries' messages in
-    order: the trials no variant fits (WARNING), then the failed trials one per line (ERROR) or the count of those
-    ok and skipped (INFO); None where the log is older (the run ended before the check). The Snakefile's
-    ``onsuccess`` and ``onerror`` print it after Snakemake's own lines, where a user reads last."""
+    order: the trials no variant fits and those whose period and rig values disagree (WARNING), then the failed
+    trials one per line (ERROR) or the count of those ok and skipped (INFO); None where the log is older (the run
+    ended before the check). The Snakefile's ``onsuccess`` and ``onerror`` print it after Snakemake's own lines,
+    where a user reads last."""
     path = Path(log_path)
     if not path.exists() or path.stat().st_mtime < since_s:
         return None

@@ -10,7 +10,7 @@ import pandas as pd
 
 import _setup  # noqa: F401
 from pendulum.io import script_logger, write_text
-from pendulum.outcomes import failure_summary, misfit_trials
+from pendulum.outcomes import failure_summary, misfit_trials, rig_mismatch_trials
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "check_trials")
@@ -23,6 +23,14 @@ if wrong:  # built and ok, but no variant fits: said at the end of a run that su
         f"{len(wrong)} trial(s) ok whose every model variant misses the record far beyond its noise (what it "
         "misses may bias the coefficients, and their intervals do not cover it; the warnings in "
         f"results/status/trials.csv): {', '.join(wrong)}"
+    )
+    log.warning("%s", note)
+mismatched = rig_mismatch_trials(table)
+if mismatched:  # built and ok, but the coefficients cannot be right: said at the end of a run that succeeded too
+    note = (
+        f"{len(mismatched)} trial(s) ok whose period and rig values cannot both be right (an added mass many times "
+        "the body's, or below zero: check the rig values, and the time base of a slow-motion clip, capture_fps; "
+        f"the warnings in results/status/trials.csv): {', '.join(mismatched)}"
     )
     log.warning("%s", note)
 if problem:

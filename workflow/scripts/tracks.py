@@ -109,9 +109,7 @@ def work():
             "method": method,  # marker or body, why, and what each tried gave
             "path": path,  # departure from one circle, a creeping pivot (corrected), what is left
             "timing": track.attrs.get("timing"),  # frames lost or repeated under even stamps, found from the motion
-            "time_base": track.attrs.get(
-                "time_base"
-            ),  # the camera's rate where the file plays at another (capture_fps)
+            "time_base": track.attrs.get("time_base"),  # capture_fps: the camera's rate where the file plays slower
             "exposure_fraction": track.attrs.get("exposure_fraction"),
             "marker": track.attrs.get("marker"),  # polarity, radius and start used (given or detected)
             "detection": track.attrs.get("detection"),  # what detection found (None: all given)

@@ -114,7 +114,8 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
         out.append(
             f"fitted added mass is {added_mass['value'] / rig.mass_kg:.0f}× the body mass (period {measured:.4g} s "
             f"against {bare:.4g} s for the rig alone): check length_m, mass_kg and the record's time base (a "
-            "slow-motion clip plays slower than it was filmed: give the camera's capture_fps in the trial's sidecar)"
+            "slow-motion clip plays slower than it was filmed: give the rate the camera filmed at in the trial's "
+            "sidecar, data/raw/<trial>.yaml, e.g. capture_fps: 240)"
         )
     return out
 
@@ -139,7 +140,8 @@ def drag_checks(rig: Rig, drag_coefficient: dict) -> list[str]:
         f"({low:g}–{high:g}): check the rig values it comes through: fluid_density_kg_m3 "
         f"({rig.fluid_density_kg_m3:g} kg/m³ here; water's 1000 is the default, air is 1.2), frontal_area_m2 "
         f"({rig.frontal_area_m2:g} m² here) and mass_kg ({rig.mass_kg:g} kg here: the swing's inertia sets how "
-        "much drag a decay means; a mass in grams leaves an air pendulum's period as it is)"
+        "much drag a decay means; a mass in grams leaves an air pendulum's period as it is), and the record's time "
+        "base (a slow-motion clip: capture_fps)"
     ]
 
 

@@ -131,9 +131,9 @@ def dog_blobs(fg, scale: int, threshold: float, per_sign: int, signs: tuple[int,
 def foreground_pyramid(
     frame: list[list[np.ndarray]], reference: list[list[np.ndarray]], out: list[list[np.ndarray]] | None = None
 ) -> list[list[np.ndarray]]:
-    """The DoG pyramid of I − B from those of I and B (:func:`dog_pyramid`), written into ``out`` (a pyramid of
-    the same shapes, reused from frame to frame: not allocating its images anew is a third of the cost) when
-    given."""
+    """The DoG pyramid of I − B from those of I and B (:func:`dog_pyramid`), written into ``out`` when given (a
+    pyramid of the same shapes, reused from frame to frame and background to background: its images are not
+    allocated anew for each)."""
     if out is None:
         out = [[np.empty_like(a) for a in fa] for fa in frame]
     for fa, fb, fo in zip(frame, reference, out, strict=True):
