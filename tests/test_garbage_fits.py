@@ -181,6 +181,32 @@ def test_one_recording_under_two_names_is_counted_once_in_the_joint_fit_and_disc
     assert fitted_trials(["a", "a_copy"], info, fits, logging.getLogger("test"), "rig r")[0] == ["a", "a_copy"]
 
 
+def test_a_trial_whose_period_the_rig_cannot_give_among_trials_whose_it_can_is_left_out_of_the_joint_fit():
+    """A slow-motion clip timed by its file, beside clips of the same rig (a new user's mix): its fit's warning that
+    the rig values cannot give its period (:func:`pendulum.fit.checks.rig_checks`' own words) leaves it out of the
+    pooled fits, which it moved to an added mass of 69 kg for 2.5 (a reviewer's run, 2026-12-04); where every
+    trial's fit says so, the rig values are what is wrong, and all stay (each fit says so)."""
+    import logging
+
+    from pendulum.fit.checks import rig_checks
+    from pendulum.model.rig import Rig
+    from pendulum.status import fitted_trials
+
+    rig = Rig(mass_kg=3.53, length_m=0.76, frontal_area_m2=0.0322, displaced_volume_m3=0.0025)
+    slow = rig_checks(rig, {"at_bound": False, "value": 382.0}, [{"period_s": 33.95}])
+    fits = {
+        "demo": {"status": "ok", "reliable": True, "warnings": []},
+        "slowmo": {"status": "ok", "reliable": True, "warnings": slow},
+        "demo2": {"status": "ok", "reliable": True, "warnings": ["a note on the model"]},
+    }
+    info = {name: {"status": "ok"} for name in fits}
+    names, excluded = fitted_trials(list(fits), info, fits, logging.getLogger("test"), "rig r")
+    assert names == ["demo", "demo2"] and list(excluded) == ["slowmo"]
+    assert "rig values cannot both be right" in excluded["slowmo"] and "capture_fps" in excluded["slowmo"]
+    every = {name: {**doc, "warnings": slow} for name, doc in fits.items()}
+    assert fitted_trials(list(fits), info, every, logging.getLogger("test"), "rig r") == (sorted(fits), {})
+
+
 def test_a_period_the_rig_values_cannot_give_is_named():
     """Another rig's values (a new user's first clip): the record swings faster than the rig can at the
     least added mass. T_min = 2π √(m L² / ((m − ρV) g L)) for the paper's point-mass rig: 3.238 s."""

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from pendulum.status import copies_of, is_failed, same_record
+from pendulum.status import RIG_MISMATCH_MARKS, copies_of, is_failed, same_record
 
 STATUS_COLUMNS = [
     "trial",
@@ -38,8 +38,6 @@ MODEL_NOTE_MARKS = (
     "the record hardly separates them",
 )
 EVERY_VARIANT = "fit (every variant): "
-# the fits' warnings that the measured period and the rig values cannot both be right (pendulum.fit.checks.rig_checks)
-RIG_MISMATCH_MARKS = ("× the body mass (period", "shorter than the rig values allow")
 
 
 def for_the_terminal(warning: str) -> bool:

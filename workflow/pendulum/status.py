@@ -56,6 +56,16 @@ def require_ok(document: dict, what: str) -> dict:
     return document
 
 
+# the per-trial fits' warnings that the measured period and the rig values cannot both be right
+# (pendulum.fit.checks.rig_checks): an added mass many times the body's, or at its bound of 0
+RIG_MISMATCH_MARKS = ("× the body mass (period", "shorter than the rig values allow")
+
+
+def rig_mismatch(fit: dict) -> bool:
+    """Whether a per-trial fit document warns that its period and the rig values cannot both be right."""
+    return any(mark in str(w) for w in fit.get("warnings") or [] for mark in RIG_MISMATCH_MARKS)
+
+
 def fitted_trials(
     names, angle_info: dict[str, dict], fits: dict[str, dict], log: logging.Logger, context: str
 ) -> tuple[list[str], dict[str, str]]:
@@ -63,7 +73,8 @@ def fitted_trials(
 
     A fit marked ``reliable: false`` (its record failed the garbage checks of
     :func:`pendulum.fit.checks.record_checks`) is left out too: one mis-tracked video
-    must not move the coefficients of every trial it would be pooled with. So is a trial whose
+    must not move the coefficients of every trial it would be pooled with. So is a trial whose fit says its period and
+    the rig values cannot both be right where other trials' fits do not (:func:`rig_mismatch`), and one whose
     angle record is another's, sample for sample (``record_sha256``): counted twice, one recording
     would narrow the intervals and pass its own held-out check.
     """
@@ -78,6 +89,17 @@ def fitted_trials(
             ]
             excluded[name] = "unreliable record: " + (problems[0] if problems else "see its fit's warnings")
         if name in excluded:
+            log.warning("%s: %s left out (%s)", context, name, excluded[name])
+    # a trial whose period the rig values cannot give, where others' they can: another rig's, or a slow-motion clip
+    # timed by its file; pooled, it would move every coefficient (the others' alone are a measurement)
+    kept = [n for n in sorted(names) if n not in excluded]
+    off = [n for n in kept if rig_mismatch(fits[n])]
+    if off and len(off) < len(kept):
+        for name in off:
+            excluded[name] = (
+                "its period and the rig values cannot both be right, unlike the other trials' (its fit's warnings: "
+                "another rig's values, or a slow-motion clip's time base, capture_fps)"
+            )
             log.warning("%s: %s left out (%s)", context, name, excluded[name])
     # one recording under two names (a video copied or exported twice, tracked alike) is one measurement
     kept = [n for n in names if n not in excluded]
