@@ -48,7 +48,8 @@ def _peak_place(dogs: list[np.ndarray], y: int, x: int, sign: int) -> tuple[int,
 
     On a coarse pyramid level a sample is 4–8 px of the frame: without it, the blobs of a large marker on a
     small swing lie on a grid, and a circle through them cannot show the arc's 2 px sagitta. One peak at a
-    time (a level has at most a few): the same float32 responses and float64 vertex as whole-array code."""
+    time in plain floats (a level keeps at most 8: array steps on so few points cost more than the arithmetic);
+    the responses are float32, the vertex float64."""
     responses = [sign * dog[y, x] for dog in dogs]
     which = max(range(len(dogs)), key=lambda k: (responses[k], -k))
     dog = dogs[which]
