@@ -223,6 +223,62 @@ def test_the_reference_along_the_arc_follows_a_smooth_curve_and_holds_beyond_it(
     assert ArcReference(arc, r, enabled=False).ratio(*at(0.3)) == 1.0
 
 
+def test_the_flag_band_widens_to_a_noisy_signals_own_spread_and_not_for_a_steady_one():
+    """``SignalSpread`` over 200 seeds of 60 ok frames each: a signal steady to 0.4 % (the demo's 0.2–0.4 %) keeps
+    the settings' band [0.9, 1.12] in every seed; one that varies by σ = 5 % (a small dot in a colour view) gets
+    1 ± 4 σ̂, σ̂ within 30 % of σ in at least 180 of 200 seeds (its standard error is about 15 %: 95 % expected);
+    a tenth of those frames at 0.8 (a shadow band the flags missed) moves σ̂ by under 0.3 σ in at least 180 (its
+    median shift 0.11 σ)."""
+    from pendulum.tracking.marker_arc import SignalSpread
+
+    kept = close = robust = 0
+    for seed in range(200):
+        rng = np.random.default_rng(seed)
+        steady = SignalSpread(0.9, 1.12)
+        for ratio in 1.0 + rng.normal(0.0, 0.004, 60):
+            steady.add(ratio)
+        kept += (steady.low, steady.high) == (0.9, 1.12)
+        noisy, shaded = SignalSpread(0.9, 1.12), SignalSpread(0.9, 1.12)
+        draws = 1.0 + rng.normal(0.0, 0.05, 60)
+        for k, ratio in enumerate(draws):
+            noisy.add(ratio)
+            shaded.add(0.8 if k % 10 == 0 else ratio)
+        close += abs(noisy.sigma - 0.05) <= 0.3 * 0.05 and noisy.high == pytest.approx(1.0 + 4.0 * noisy.sigma)
+        robust += abs(shaded.sigma - noisy.sigma) <= 0.3 * 0.05
+        assert noisy.low == pytest.approx(1.0 - 4.0 * noisy.sigma)
+    assert kept == 200
+    assert close >= 180
+    assert robust >= 180
+
+
+def test_the_normal_signal_is_set_from_thirty_frames_and_frames_flagged_for_it_alone_are_judged_again():
+    """``MarkerSignal``: the first five frames 12 % low (a small dot's ±5 % from frame to frame, five frames that
+    happen low) set the normal value 12 % low, and a frame at the true level reads 1.136, flagged ``glare``; the
+    median of the first 30 frames then sets it right, and at the end that frame, flagged for its signal alone, is
+    judged again: ratio 1.0, ``ok``. One flagged as biased (something else in its surround) stays flagged."""
+    from types import SimpleNamespace
+
+    from pendulum.tracking.marker_arc import MarkerArc, MarkerSignal
+
+    arc = MarkerArc(SimpleNamespace(pivot_px=(300.0, 20.0), arm_px=250.0), 3.0)
+    signal = MarkerSignal(arc, 3.0, True, 0.9, 1.12)
+    levels = [88.0] * 5 + [100.0] * 30
+    ratios = [signal.ratio(row, False, level, 300.0, 270.0, steady=True) for row, level in enumerate(levels)]
+    assert ratios[:5] == [1.0] * 5
+    assert ratios[5] == pytest.approx(100 / 88) and ratios[5] > 1.12
+    assert signal.curves[False].base == 100.0  # the median of the first 30
+    signal.judged(5, False, 100.0, 300.0, 270.0, ratios[5], "glare", biased=False)
+    signal.judged(6, False, 100.0, 300.0, 270.0, ratios[6], "occluded", biased=True)
+    table = pd.DataFrame(
+        {"x_px": 300.0, "y_px": 270.0, "quality": 0.9, "signal_ratio": ratios, "flag": "ok"}, index=range(35)
+    )
+    table.loc[5, "flag"], table.loc[6, "flag"] = "glare", "occluded"
+    signal.finish(table)
+    assert table.flag[5] == "ok" and table.signal_ratio[5] == pytest.approx(1.0) and table.quality[5] == 1.0
+    assert table.flag[6] == "occluded"
+    assert table.signal_ratio[:5].tolist() == pytest.approx([0.88] * 5)
+
+
 def test_a_still_body_with_more_of_something_at_either_end_of_the_record_is_held():
     """``held_still_runs``: fingers alone over the body's edge make its silhouette ~1.5 times its own area, under
     the 1.5 that flags a hand: a run of still frames over 1.2 times from the record's first frame (or to its last)

@@ -57,7 +57,7 @@ from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.acquisition import Candidate, inner_grey, marker_candidates, marker_like, near_any, static_spot
 from pendulum.tracking.centroids import measure_marker
 from pendulum.tracking.checks import estimate_exposure_fraction, exposure_centre_correction, flag_jumps
-from pendulum.tracking.marker_arc import ArcReference, MarkerArc
+from pendulum.tracking.marker_arc import ArcReference, MarkerArc, MarkerSignal
 from pendulum.tracking.samples import frame_count
 from pendulum.tracking.settings import TrackerSettings
 
@@ -209,18 +209,19 @@ def track_video(
     bounds = None if detection is None else tuple(detection.active_box_px)
     arc = MarkerArc(detection, settings.marker_radius_px)
     # the normal signal (per measurement kind) and width² along the arc, from the ok frames
-    signal_curves = {
-        kind: ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc) for kind in (False, True)
-    }
+    signal = MarkerSignal(
+        arc,
+        settings.marker_radius_px,
+        settings.reference_along_arc,
+        settings.min_signal_ratio,
+        settings.max_signal_ratio,
+    )
     width_curve = ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc)
     rows = []
     history: list[tuple[int, float, float]] = []  # (frame, x, y) of good frames
     previous = None
     marker_level = None
     marker_grey = None  # median grey inside the marker (polarity space), for the coverage measurement
-    signal_refs: dict[bool, float] = {}  # per measurement kind (coverage or ring): the normal signal
-    signals: dict[bool, list[float]] = {False: [], True: []}
-    first_signals: list[tuple[int, bool, float]] = []  # (row, kind, signal) before the kind's reference
     width_ref = math.nan  # the marker's width² in the first frames: a wider spot is not the marker alone
     widths: list[float] = []
     # The two centroids' disagreement in the first frames: what is rigidly joined to the marker (a bob's rod,
@@ -387,37 +388,22 @@ def track_video(
             marker_grey = inner_grey(image, m.x, m.y, r, settings.polarity)
             marker_level = marker_grey
         kind = m.mode_coverage
-        if kind not in signal_refs:
-            signals[kind].append(m.signal)
-            first_signals.append((len(rows), kind, m.signal))
-            if not math.isfinite(width_ref):
-                widths.append(m.width2_px2)
-            ratio = 1.0
-            if len(signals[kind]) >= 5:
-                signal_refs[kind] = float(np.median(signals[kind]))
-                signal_curves[kind].base = signal_refs[kind]
-            if len(widths) >= 5 and not math.isfinite(width_ref):
+        ratio = signal.ratio(len(rows), kind, m.signal, m.x, m.y, steady=not (duplicate or m.at_edge))
+        if not math.isfinite(width_ref):
+            widths.append(m.width2_px2)
+            if len(widths) >= 5:
                 width_ref = float(np.median(widths))
                 width_curve.base = width_ref
         if not math.isfinite(disagreement_ref) and math.isfinite(m.disagreement_px):
             disagreements.append(m.disagreement_px)
             if len(disagreements) >= 5:
                 disagreement_ref = float(np.median(disagreements))
-        else:
-            ratio = m.signal / signal_curves[kind].value(m.x, m.y)
         # a long streak's mask takes in more of the scene's noise across it: r²/100 per radius of streak
         streak_width2 = 0.01 * r * max(speed - r, 0.0)
         quality = float(np.clip(min(ratio, 1.0 / ratio) if ratio > 0 else 0.0, 0.0, 1.0))
-        if ratio < 0.5:
-            flag, x, y, quality = "lost", np.nan, np.nan, 0.0
-        elif duplicate:
-            flag, x, y = "duplicate", m.x, m.y
-        elif m.at_edge:
-            flag, x, y = "edge", m.x, m.y
-        elif (
-            ratio < settings.min_signal_ratio
+        biased = (  # the measured position is not the marker's alone
             # (a thresholded streak's centroid sits on its plateau: 2 % of the streak's excess length off)
-            or m.disagreement_px
+            m.disagreement_px
             > settings.max_centroid_disagreement_px
             + (disagreement_ref if math.isfinite(disagreement_ref) else 0.0)
             + 0.02 * max(speed - r, 0.0)
@@ -427,9 +413,16 @@ def track_video(
             or (coverage_expected and not m.mode_coverage)
             or near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
             or m.width2_px2 > settings.max_width_ratio * width_curve.value(m.x, m.y) + streak_width2
-        ):
+        )
+        if ratio < 0.5:
+            flag, x, y, quality = "lost", np.nan, np.nan, 0.0
+        elif duplicate:
+            flag, x, y = "duplicate", m.x, m.y
+        elif m.at_edge:
+            flag, x, y = "edge", m.x, m.y
+        elif biased or ratio < signal.band.low:
             flag, x, y = "occluded", m.x, m.y
-        elif ratio > settings.max_signal_ratio:
+        elif ratio > signal.band.high:
             flag, x, y = "glare", m.x, m.y
         else:
             flag, x, y = "ok", m.x, m.y
@@ -448,12 +441,13 @@ def track_video(
                 del history[:-6]
                 if flag == "ok":
                     arc.add(x, y)
-                    signal_curves[kind].add(x, y, m.signal)
                     width_curve.add(x, y, m.width2_px2 - streak_width2)
                 if flag in ("ok", "edge"):
                     xi, yi, half = int(round(x)), int(round(y)), int(r + 4)
                     box = np.s_[max(yi - half, 0) : yi + half + 1, max(xi - half, 0) : xi + half + 1]
                     window = (index, box, image[box].astype(np.float32))
+        if flag != "lost" and not astray:
+            signal.judged(len(rows), kind, m.signal, x, y, ratio, flag, biased)
         rows.append((index, t, x, y, quality, ratio, flag))
         streak2[index] = m.streak2_px2
         if progress and index % progress_every == 0 and index:
@@ -467,6 +461,7 @@ def track_video(
         "marker_radius_px": round(float(r), 3),
         "start_px": None if settings.start_px is None else [round(float(v), 2) for v in settings.start_px],
         "found_by": found_by,
+        **signal.summary(),
     }
     if reference_contrast is None:
         score = "no disk-like spot at all" if best_seen is None else f"the best spot scores {best_seen.score:.2f}"
@@ -486,10 +481,7 @@ def track_video(
             + (", or give start_px in the trial's sidecar" if settings.start_px is None else ", and start_px (given)")
             + seen
         )
-    # The first frames of each measurement kind set its reference signal; recompute their ratios against it.
-    for row, kind, signal in first_signals:
-        if kind in signal_refs:
-            table.loc[row, "signal_ratio"] = signal / signal_refs[kind]
+    signal.finish(table)  # the first frames' ratios; frames flagged for their signal alone judged again
     usable = (table.flag == "ok").to_numpy()
     jumps = flag_jumps(table.x_px.to_numpy(), table.y_px.to_numpy(), usable, settings)
     table.loc[jumps, "flag"] = "jump"

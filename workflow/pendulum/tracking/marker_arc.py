@@ -116,6 +116,13 @@ class ArcReference:
         reach = self.REACH_RADII * self.r / arm
         return float(np.polyval(coef, end)) + slope * min(max(phi - end, -reach), reach)
 
+    def covers(self, x: float, y: float) -> bool:
+        """Whether ρ at (x, y) is fitted there, not carried on from the angles seen."""
+        if self.fit is None:
+            return False
+        _, lo, hi, (cx, cy, _) = self.fit
+        return lo <= math.atan2(x - cx, y - cy) <= hi
+
     def value(self, x: float, y: float) -> float:
         """The normal value at (x, y): ``base`` × ρ(φ), ρ kept within [0.5, 2]."""
         return self.base * min(max(self.ratio(x, y), 0.5), 2.0)
@@ -158,3 +165,110 @@ class ArcReference:
         if keep.sum() >= degree + 3 and not keep.all():
             coef = np.polyfit(centre[keep], median[keep], degree, w=weight[keep])
         self.fit = (coef, float(phi.min()), float(phi.max()), circle)
+
+
+class SignalSpread:
+    """The spread of the marker signal about its normal value along the arc, and the flag band it allows.
+
+    Over the first :attr:`FRAMES` ok frames given (:class:`MarkerSignal` gives those after its normal value is set,
+    where the curve along the arc is fitted), the ratios ρ = signal / normal value: their robust spread
+    σ = 1.4826 · median|ρ − median ρ| (a shadow band or a highlight in some of them moves it little). The band
+    [``low``, ``high``] is the settings' flag band widened to 1 ± :attr:`SIGMAS` σ where that is wider, never beyond
+    1 ± :attr:`MAX_HALF_WIDTH`: a small dot in a colour view (its chroma on a grid half as fine as the picture's)
+    varies by ±5 % as it moves, its position as good in those frames as in any other, and is not flagged for its own
+    variation. A steady signal (σ ≤ 2.5 %; the demo's 0.2–0.4 %) keeps the settings' band, as does every frame before
+    :attr:`MIN_FRAMES` are in.
+    """
+
+    FRAMES = 60
+    MIN_FRAMES = 10
+    SIGMAS = 4.0
+    MAX_HALF_WIDTH = 0.3
+
+    def __init__(self, low: float, high: float):
+        self.settings_band = (low, high)
+        self.low, self.high = low, high
+        self.sigma = math.nan
+        self.ratios: list[float] = []
+
+    def add(self, ratio: float) -> None:
+        """A measured frame's ρ (not a repeated frame, nor one at the picture's edge)."""
+        if len(self.ratios) >= self.FRAMES:
+            return
+        self.ratios.append(ratio)
+        if len(self.ratios) >= self.MIN_FRAMES:
+            ratios = np.asarray(self.ratios)
+            self.sigma = 1.4826 * float(np.median(np.abs(ratios - np.median(ratios))))
+            half = min(self.SIGMAS * self.sigma, self.MAX_HALF_WIDTH)
+            self.low, self.high = min(self.settings_band[0], 1.0 - half), max(self.settings_band[1], 1.0 + half)
+
+
+class MarkerSignal:
+    """The marker's signal judged against its normal value: the ratio ρ = signal / normal value of each frame, and
+    the flag band (:class:`SignalSpread`) it must lie in.
+
+    Per measurement kind (coverage of the scene, or against its ring), the normal value is the median of the kind's
+    first :attr:`FIRST_FRAMES` measured frames (their ρ is 1 until then, and set against it at the end), from
+    :attr:`REFERENCE_FRAMES` of them once measured (a small dot's signal varies by ±5 % from frame to frame: five
+    frames set it up to 8 % off, and the frames after "glare"), times its curve along the arc (:class:`ArcReference`,
+    from the ok frames). Frames flagged for their signal alone (their position passes every other check) are judged
+    again at the end, against the normal value and band as finally learnt: within the band, they are ok.
+    """
+
+    FIRST_FRAMES = 5
+    REFERENCE_FRAMES = 30
+
+    def __init__(self, arc: MarkerArc, radius_px: float, along_arc: bool, low: float, high: float):
+        self.curves = {kind: ArcReference(arc, radius_px, along_arc) for kind in (False, True)}
+        self.band = SignalSpread(low, high)
+        self.samples: dict[bool, list[float]] = {False: [], True: []}
+        self.first: list[tuple[int, bool, float]] = []  # (row, kind, signal) before the kind's reference
+        self.by_signal: list[tuple[int, bool, float]] = []  # (row, kind, signal) flagged for their signal alone
+
+    def ratio(self, row: int, kind: bool, signal: float, x: float, y: float, steady: bool) -> float:
+        """ρ of a measured frame; ``steady``: not a repeated frame nor one at the picture's edge (the normal value
+        is then taken from it too, up to :attr:`REFERENCE_FRAMES` frames)."""
+        samples, curve = self.samples[kind], self.curves[kind]
+        if len(samples) < self.FIRST_FRAMES:
+            samples.append(signal)
+            self.first.append((row, kind, signal))
+            if len(samples) == self.FIRST_FRAMES:
+                curve.base = float(np.median(samples))
+            return 1.0
+        ratio = signal / curve.value(x, y)
+        if steady and ratio >= 0.5 and len(samples) < self.REFERENCE_FRAMES:
+            samples.append(signal)
+            if len(samples) == self.REFERENCE_FRAMES:
+                curve.base = float(np.median(samples))
+        return ratio
+
+    def judged(self, row: int, kind: bool, signal: float, x: float, y: float, ratio: float, flag: str, biased: bool):
+        """A frame's flag, given: one flagged for its signal alone (not ``biased``) is judged again at the end; an ok
+        one teaches the band and the curve along the arc."""
+        if flag in ("occluded", "glare") and not biased:
+            self.by_signal.append((row, kind, signal))
+        elif flag == "ok":
+            if len(self.samples[kind]) == self.REFERENCE_FRAMES and self.curves[kind].covers(x, y):
+                # its spread about the normal value, where that is known
+                self.band.add(ratio)
+            self.curves[kind].add(x, y, signal)
+
+    def finish(self, table) -> None:
+        """The first frames' ratios against their kind's normal value; frames flagged for their signal alone judged
+        again (``table``: the track, one row per frame, in order)."""
+        for row, kind, signal in self.first:
+            if len(self.samples[kind]) >= self.FIRST_FRAMES:
+                table.loc[row, "signal_ratio"] = signal / self.curves[kind].base
+        low, high = self.band.low, self.band.high
+        for row, kind, signal in self.by_signal:
+            ratio = signal / self.curves[kind].value(table.x_px[row], table.y_px[row])
+            if low <= ratio <= high:
+                table.loc[row, ["signal_ratio", "quality", "flag"]] = [ratio, min(ratio, 1.0 / ratio), "ok"]
+
+    def summary(self) -> dict:
+        """For the tracks JSON: the ratios' spread about the normal value and the band not flagged."""
+        sigma = self.band.sigma
+        return {
+            "signal_spread": None if math.isnan(sigma) else round(sigma, 4),
+            "signal_band": [round(self.band.low, 3), round(self.band.high, 3)],
+        }

@@ -14,8 +14,10 @@ class TrackerSettings:
     marker_radius_px: float | None = 10.0
     polarity: str = "bright"  # "bright" marker on a darker scene, "dark" on a brighter one, or "auto"
     start_px: tuple[float, float] | None = None  # a hint where the marker is in the first frame
-    min_signal_ratio: float = 0.9  # marker signal below this fraction of normal: "occluded"
-    max_signal_ratio: float = 1.12  # above this: "glare"
+    # marker signal below this fraction of normal: "occluded"; above the other: "glare" (each widened to 1 ∓ 4 × the
+    # signal's own spread in its first ok frames where that is wider: marker_arc.SignalSpread)
+    min_signal_ratio: float = 0.9
+    max_signal_ratio: float = 1.12
     jump_floor_px: float = 1.0  # smallest leave-one-out residual that counts as a jump
     jump_sigmas: float = 6.0
     reacquire_after_frames: int = 10
