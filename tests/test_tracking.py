@@ -255,28 +255,34 @@ def test_the_normal_signal_is_set_from_thirty_frames_and_frames_flagged_for_it_a
     """``MarkerSignal``: the first five frames 12 % low (a small dot's ±5 % from frame to frame, five frames that
     happen low) set the normal value 12 % low, and a frame at the true level reads 1.136, flagged ``glare``; the
     median of the first 30 frames then sets it right, and at the end that frame, flagged for its signal alone, is
-    judged again: ratio 1.0, ``ok``. One flagged as biased (something else in its surround) stays flagged."""
+    judged again: ratio 1.0, ``ok``; one flagged as biased (something else in its surround) stays flagged. With a
+    band widened to its spread (σ 5 %: about 0.84…1.16), a frame at 0.85 is ``ok`` where the dot's other frames at that
+    place read 1.0 (its own noise), and five at 0.85 where all of them do (a shadow there) stay ``occluded``."""
     from types import SimpleNamespace
 
     from pendulum.tracking.marker_arc import MarkerArc, MarkerSignal
 
     arc = MarkerArc(SimpleNamespace(pivot_px=(300.0, 20.0), arm_px=250.0), 3.0)
     signal = MarkerSignal(arc, 3.0, True, 0.9, 1.12)
-    levels = [88.0] * 5 + [100.0] * 30
-    ratios = [signal.ratio(row, False, level, 300.0, 270.0, steady=True) for row, level in enumerate(levels)]
+    here, shade = (300.0, 270.0), (320.0, 269.0)
+    frames = [(88.0, here)] * 5 + [(100.0, here)] * 30 + [(85.0, shade)] * 5 + [(85.0, here)]
+    ratios = [signal.ratio(row, False, level, *at, steady=True) for row, (level, at) in enumerate(frames)]
     assert ratios[:5] == [1.0] * 5
     assert ratios[5] == pytest.approx(100 / 88) and ratios[5] > 1.12
     assert signal.curves[False].base == 100.0  # the median of the first 30
-    signal.judged(5, False, 100.0, 300.0, 270.0, ratios[5], "glare", biased=False)
-    signal.judged(6, False, 100.0, 300.0, 270.0, ratios[6], "occluded", biased=True)
-    table = pd.DataFrame(
-        {"x_px": 300.0, "y_px": 270.0, "quality": 0.9, "signal_ratio": ratios, "flag": "ok"}, index=range(35)
-    )
-    table.loc[5, "flag"], table.loc[6, "flag"] = "glare", "occluded"
+    for ratio in 1.0 + np.random.default_rng(1).normal(0.0, 0.05, 60):  # the ok frames' spread
+        signal.band.add(ratio)
+    assert signal.band.low < 0.85  # 0.843 from these 60 draws (σ̂ 3.9 %)
+    flags = ["ok"] * 5 + ["glare", "occluded"] + ["ok"] * 28 + ["occluded"] * 6
+    for row, ((level, at), ratio, flag) in enumerate(zip(frames, ratios, flags, strict=True)):
+        signal.judged(row, False, level, *at, ratio, flag, biased=row == 6)
+    table = pd.DataFrame({"quality": 0.9, "signal_ratio": ratios, "flag": flags})
     signal.finish(table)
     assert table.flag[5] == "ok" and table.signal_ratio[5] == pytest.approx(1.0) and table.quality[5] == 1.0
     assert table.flag[6] == "occluded"
     assert table.signal_ratio[:5].tolist() == pytest.approx([0.88] * 5)
+    assert (table.flag[35:40] == "occluded").all()
+    assert table.flag[40] == "ok" and table.signal_ratio[40] == pytest.approx(0.85)
 
 
 def test_a_still_body_with_more_of_something_at_either_end_of_the_record_is_held():

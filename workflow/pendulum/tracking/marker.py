@@ -420,9 +420,9 @@ def track_video(
             flag, x, y = "duplicate", m.x, m.y
         elif m.at_edge:
             flag, x, y = "edge", m.x, m.y
-        elif biased or ratio < signal.band.low:
+        elif biased or ratio < settings.min_signal_ratio:
             flag, x, y = "occluded", m.x, m.y
-        elif ratio > signal.band.high:
+        elif ratio > settings.max_signal_ratio:
             flag, x, y = "glare", m.x, m.y
         else:
             flag, x, y = "ok", m.x, m.y

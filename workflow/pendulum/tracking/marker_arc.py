@@ -168,16 +168,15 @@ class ArcReference:
 
 
 class SignalSpread:
-    """The spread of the marker signal about its normal value along the arc, and the flag band it allows.
+    """The spread of the marker signal about its normal value along the arc, and the band of ratios it allows.
 
     Over the first :attr:`FRAMES` ok frames given (:class:`MarkerSignal` gives those after its normal value is set,
     where the curve along the arc is fitted), the ratios ρ = signal / normal value: their robust spread
-    σ = 1.4826 · median|ρ − median ρ| (a shadow band or a highlight in some of them moves it little). The band
-    [``low``, ``high``] is the settings' flag band widened to 1 ± :attr:`SIGMAS` σ where that is wider, never beyond
-    1 ± :attr:`MAX_HALF_WIDTH`: a small dot in a colour view (its chroma on a grid half as fine as the picture's)
-    varies by ±5 % as it moves, its position as good in those frames as in any other, and is not flagged for its own
-    variation. A steady signal (σ ≤ 2.5 %; the demo's 0.2–0.4 %) keeps the settings' band, as does every frame before
-    :attr:`MIN_FRAMES` are in.
+    σ = 1.4826 · median|ρ − median ρ|. The band [``low``, ``high``] is the settings' flag band widened to 1 ±
+    :attr:`SIGMAS` σ where that is wider, never beyond 1 ± :attr:`MAX_HALF_WIDTH`: a frame flagged for its signal
+    alone within it may be the signal's own noise (a small dot in a colour view, its chroma on a grid half as fine as
+    the picture's, varies by ±5 % as it moves; :class:`MarkerSignal` decides). A steady signal (σ ≤ 2.5 %; the
+    demo's 0.2–0.7 %) keeps the settings' band, as does every frame before :attr:`MIN_FRAMES` are in.
     """
 
     FRAMES = 60
@@ -204,26 +203,33 @@ class SignalSpread:
 
 
 class MarkerSignal:
-    """The marker's signal judged against its normal value: the ratio ρ = signal / normal value of each frame, and
-    the flag band (:class:`SignalSpread`) it must lie in.
+    """The marker's signal judged against its normal value: the ratio ρ = signal / normal value of each frame, flagged
+    outside the settings' band, and judged again at the end.
 
     Per measurement kind (coverage of the scene, or against its ring), the normal value is the median of the kind's
     first :attr:`FIRST_FRAMES` measured frames (their ρ is 1 until then, and set against it at the end), from
     :attr:`REFERENCE_FRAMES` of them once measured (a small dot's signal varies by ±5 % from frame to frame: five
     frames set it up to 8 % off, and the frames after "glare"), times its curve along the arc (:class:`ArcReference`,
-    from the ok frames). Frames flagged for their signal alone (their position passes every other check) are judged
-    again at the end, against the normal value and band as finally learnt: within the band, they are ok.
+    from the ok frames). A frame flagged for its signal alone (its position passes every other check) is judged
+    again at the end, against the normal value as finally learnt: ``ok`` where ρ is then within the settings' band,
+    or within the band its spread allows (:class:`SignalSpread`) while the marker's other frames at that place
+    (within a marker radius; at least :attr:`PLACE_FRAMES`) read within the settings' band: the noise of one frame,
+    not something at that place (an occluder's edge, a shadow across the path, a lamp's highlight where the bob
+    passes it, which dim or brighten it there on every pass).
     """
 
     FIRST_FRAMES = 5
     REFERENCE_FRAMES = 30
+    PLACE_FRAMES = 3
 
     def __init__(self, arc: MarkerArc, radius_px: float, along_arc: bool, low: float, high: float):
         self.curves = {kind: ArcReference(arc, radius_px, along_arc) for kind in (False, True)}
+        self.radius_px, self.low, self.high = radius_px, low, high
         self.band = SignalSpread(low, high)
         self.samples: dict[bool, list[float]] = {False: [], True: []}
         self.first: list[tuple[int, bool, float]] = []  # (row, kind, signal) before the kind's reference
-        self.by_signal: list[tuple[int, bool, float]] = []  # (row, kind, signal) flagged for their signal alone
+        self.measured: list[tuple[int, bool, float, float, float]] = []  # (row, kind, signal, x, y) of measured frames
+        self.by_signal: set[int] = set()  # rows flagged for their signal alone
 
     def ratio(self, row: int, kind: bool, signal: float, x: float, y: float, steady: bool) -> float:
         """ρ of a measured frame; ``steady``: not a repeated frame nor one at the picture's edge (the normal value
@@ -243,10 +249,12 @@ class MarkerSignal:
         return ratio
 
     def judged(self, row: int, kind: bool, signal: float, x: float, y: float, ratio: float, flag: str, biased: bool):
-        """A frame's flag, given: one flagged for its signal alone (not ``biased``) is judged again at the end; an ok
-        one teaches the band and the curve along the arc."""
+        """A measured frame's flag, given: one flagged for its signal alone (not ``biased``) is judged again at the
+        end; an ok one teaches the band and the curve along the arc."""
+        if flag in ("ok", "occluded", "glare"):
+            self.measured.append((row, kind, signal, x, y))
         if flag in ("occluded", "glare") and not biased:
-            self.by_signal.append((row, kind, signal))
+            self.by_signal.add(row)
         elif flag == "ok":
             if len(self.samples[kind]) == self.REFERENCE_FRAMES and self.curves[kind].covers(x, y):
                 # its spread about the normal value, where that is known
@@ -259,11 +267,22 @@ class MarkerSignal:
         for row, kind, signal in self.first:
             if len(self.samples[kind]) >= self.FIRST_FRAMES:
                 table.loc[row, "signal_ratio"] = signal / self.curves[kind].base
-        low, high = self.band.low, self.band.high
-        for row, kind, signal in self.by_signal:
-            ratio = signal / self.curves[kind].value(table.x_px[row], table.y_px[row])
-            if low <= ratio <= high:
-                table.loc[row, ["signal_ratio", "quality", "flag"]] = [ratio, min(ratio, 1.0 / ratio), "ok"]
+        if not self.by_signal:
+            return
+        rows, kinds, signals, xs, ys = (np.asarray(v) for v in zip(*self.measured, strict=True))
+        ratios = np.array([s / self.curves[k].value(x, y) for k, s, x, y in zip(kinds, signals, xs, ys, strict=True)])
+        steady = (ratios >= self.low) & (ratios <= self.high)
+        for k in np.flatnonzero(np.isin(rows, sorted(self.by_signal))):
+            ratio = float(ratios[k])
+            if not steady[k]:
+                if not self.band.low <= ratio <= self.band.high:
+                    continue
+                place = np.hypot(xs - xs[k], ys - ys[k]) <= self.radius_px
+                place[k] = False
+                others = ratios[place]
+                if others.size < self.PLACE_FRAMES or not self.low <= float(np.median(others)) <= self.high:
+                    continue
+            table.loc[int(rows[k]), ["signal_ratio", "quality", "flag"]] = [ratio, min(ratio, 1.0 / ratio), "ok"]
 
     def summary(self) -> dict:
         """For the tracks JSON: the ratios' spread about the normal value and the band not flagged."""

@@ -14,8 +14,9 @@ class TrackerSettings:
     marker_radius_px: float | None = 10.0
     polarity: str = "bright"  # "bright" marker on a darker scene, "dark" on a brighter one, or "auto"
     start_px: tuple[float, float] | None = None  # a hint where the marker is in the first frame
-    # marker signal below this fraction of normal: "occluded"; above the other: "glare" (each widened to 1 ∓ 4 × the
-    # signal's own spread in its first ok frames where that is wider: marker_arc.SignalSpread)
+    # marker signal below this fraction of normal: "occluded"; above the other: "glare" (a frame so flagged is ok in
+    # the end where, within 1 ± 4 × the signal's own spread, the marker's other frames at its place read normal:
+    # marker_arc.MarkerSignal)
     min_signal_ratio: float = 0.9
     max_signal_ratio: float = 1.12
     jump_floor_px: float = 1.0  # smallest leave-one-out residual that counts as a jump
