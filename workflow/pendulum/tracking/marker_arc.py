@@ -191,7 +191,7 @@ class SignalSpread:
         self.ratios: list[float] = []
 
     def add(self, ratio: float) -> None:
-        """A measured frame's ρ (not a repeated frame, nor one at the picture's edge)."""
+        """An ok frame's ρ."""
         if len(self.ratios) >= self.FRAMES:
             return
         self.ratios.append(ratio)
@@ -285,7 +285,8 @@ class MarkerSignal:
             table.loc[int(rows[k]), ["signal_ratio", "quality", "flag"]] = [ratio, min(ratio, 1.0 / ratio), "ok"]
 
     def summary(self) -> dict:
-        """For the tracks JSON: the ratios' spread about the normal value and the band not flagged."""
+        """For the tracks JSON: the ratios' spread about the normal value, and the band within which a frame flagged
+        for its signal alone may be ``ok``."""
         sigma = self.band.sigma
         return {
             "signal_spread": None if math.isnan(sigma) else round(sigma, 4),
