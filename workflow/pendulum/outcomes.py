@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from pendulum.status import RIG_MISMATCH_MARKS, copies_of, is_failed, same_record
+from pendulum.status import copies_of, is_failed, same_record, says_rig_mismatch
 
 STATUS_COLUMNS = [
     "trial",
@@ -186,11 +186,7 @@ def rig_mismatch_trials(table: pd.DataFrame) -> list[str]:
     many times the body's, or below zero): a wrong rig value, or a record on another time base (a slow-motion clip)."""
     if "warnings" not in table.columns:
         return []
-    return [
-        str(r.trial)
-        for r in table[table.status == "ok"].itertuples()
-        if any(mark in str(r.warnings) for mark in RIG_MISMATCH_MARKS)
-    ]
+    return [str(r.trial) for r in table[table.status == "ok"].itertuples() if says_rig_mismatch(str(r.warnings))]
 
 
 def mark_copies(rows: list[dict], digests: dict[str, str | None]) -> None:

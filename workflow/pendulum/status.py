@@ -61,9 +61,16 @@ def require_ok(document: dict, what: str) -> dict:
 RIG_MISMATCH_MARKS = ("× the body mass (period", "shorter than the rig values allow")
 
 
+def says_rig_mismatch(warnings) -> bool:
+    """Whether warnings (a fit document's list, or the status table's text of them) say that the trial's period and
+    the rig values cannot both be right."""
+    text = warnings if isinstance(warnings, str) else " ".join(map(str, warnings or []))
+    return any(mark in text for mark in RIG_MISMATCH_MARKS)
+
+
 def rig_mismatch(fit: dict) -> bool:
     """Whether a per-trial fit document warns that its period and the rig values cannot both be right."""
-    return any(mark in str(w) for w in fit.get("warnings") or [] for mark in RIG_MISMATCH_MARKS)
+    return says_rig_mismatch(fit.get("warnings"))
 
 
 def fitted_trials(

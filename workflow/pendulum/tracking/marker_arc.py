@@ -224,7 +224,7 @@ class MarkerSignal:
 
     def __init__(self, arc: MarkerArc, radius_px: float, along_arc: bool, low: float, high: float):
         self.curves = {kind: ArcReference(arc, radius_px, along_arc) for kind in (False, True)}
-        self.radius_px, self.low, self.high = radius_px, low, high
+        self.radius_px = radius_px
         self.band = SignalSpread(low, high)
         self.samples: dict[bool, list[float]] = {False: [], True: []}
         self.first: list[tuple[int, bool, float]] = []  # (row, kind, signal) before the kind's reference
@@ -271,7 +271,8 @@ class MarkerSignal:
             return
         rows, kinds, signals, xs, ys = (np.asarray(v) for v in zip(*self.measured, strict=True))
         ratios = np.array([s / self.curves[k].value(x, y) for k, s, x, y in zip(kinds, signals, xs, ys, strict=True)])
-        steady = (ratios >= self.low) & (ratios <= self.high)
+        low, high = self.band.settings_band
+        steady = (ratios >= low) & (ratios <= high)
         for k in np.flatnonzero(np.isin(rows, sorted(self.by_signal))):
             ratio = float(ratios[k])
             if not steady[k]:
@@ -280,7 +281,7 @@ class MarkerSignal:
                 place = np.hypot(xs - xs[k], ys - ys[k]) <= self.radius_px
                 place[k] = False
                 others = ratios[place]
-                if others.size < self.PLACE_FRAMES or not self.low <= float(np.median(others)) <= self.high:
+                if others.size < self.PLACE_FRAMES or not low <= float(np.median(others)) <= high:
                     continue
             table.loc[int(rows[k]), ["signal_ratio", "quality", "flag"]] = [ratio, min(ratio, 1.0 / ratio), "ok"]
 
