@@ -139,6 +139,24 @@ def _fisheye(image, index, n):
     return cv2.remap(image, mx, my, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
 
 
+KNOCK_S, KNOCK_ROLL_DEG, KNOCK_SHIFT_PX = 10.0, 1.0, (3.0, -2.0)  # knocked_roll: the stand bumped at 10 s
+
+
+def _knocked_roll(image, index, n):
+    """The camera's stand knocked at :data:`KNOCK_S`: the picture turned by :data:`KNOCK_ROLL_DEG` about its centre
+    and moved by :data:`KNOCK_SHIFT_PX`, with a 7 Hz ring that settles in about 0.3 s (as a reviewer's variant)."""
+    import cv2
+
+    after = index / APPLE_FPS - KNOCK_S
+    if after < 0:
+        return image
+    ring = 1 - math.exp(-after / 0.08) * math.cos(2 * math.pi * 7.0 * after)
+    h, w = image.shape
+    turn = cv2.getRotationMatrix2D((w / 2, h / 2), KNOCK_ROLL_DEG * ring, 1.0)
+    turn[:, 2] += np.array(KNOCK_SHIFT_PX) * ring
+    return cv2.warpAffine(image, turn, (w, h), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+
+
 def _arm(image, index, n):
     """Someone's arm reaching in at the bottom right and back (5–8 s; 40 px wide, grey 110, soft-edged), away from
     the swing."""
@@ -464,6 +482,7 @@ def variants():
         "sideways": (_rotate(cv2.ROTATE_90_CLOCKWISE), 1, 0, 18),
         "upside_down": (_rotate(cv2.ROTATE_180), 1, 0, 18),
         "tilted_5deg": (_tilted, 1, 0, 18),
+        "knocked_roll": (_knocked_roll, 1, 0, 18),
         "swing_leaves_the_frame": (_cropped, 1, 0, 18),
         "exposure_drift": (_drift, 1, 0, 18),
         "mains_flicker": (_flicker, 1, 0, 18),

@@ -96,7 +96,11 @@ def work():
             length_m=length_m,
             source=source,
             pivot_covariance_px2=pivot_cov,
+            knock=(path.get("creep") or {}).get("knock"),
         )
+        if (info.camera_turn or {}).get("taken_out"):  # a knocked camera's turn, taken out of θ
+            log.warning("trial %s: %s", trial, info.notes[-1])
+            warnings.append(info.notes[-1])
         info.notes = notes + info.notes
     if info.period_s is None:  # said where the period would be read (trials.csv, the report), not a blank
         warning = missing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))

@@ -25,6 +25,7 @@ from pendulum.angles.swings import (
     rest_start_index,
     sample_noise_rad,
     swing_extrema,
+    turn_at_knock,
 )
 
 MAX_HANG_DEG = 60.0  # a swing centred further from the vertical it is measured from: the vertical is not the camera's
@@ -59,6 +60,9 @@ class AngleRecordInfo:
     first_extremum_deg: float | None = None
     # the record's second harmonic, which a planar swing seen square-on does not have (harmonics.second_harmonic)
     second_harmonic: dict | None = None
+    # a knocked camera's turn (swings.turn_at_knock): measured from the swing's centre on either side of the knock,
+    # taken out of θ after it where it is clear of its error; None without a knock
+    camera_turn: dict | None = None
     notes: list = field(default_factory=list)  # what was done about imperfect input (sorted, dropped rows, …)
 
     def to_dict(self):
@@ -194,9 +198,20 @@ def vertical_turned_with_the_picture(track: pd.DataFrame, pivot_px, vertical_deg
 
 
 def angles_from_track(
-    track: pd.DataFrame, *, pivot_px, vertical_deg: float, length_m: float, source: str, pivot_covariance_px2=None
+    track: pd.DataFrame,
+    *,
+    pivot_px,
+    vertical_deg: float,
+    length_m: float,
+    source: str,
+    pivot_covariance_px2=None,
+    knock: dict | None = None,
 ):
-    """Angle record of a marker track (see :func:`angle_record`); a malformed track raises :class:`InputError`."""
+    """Angle record of a marker track (see :func:`angle_record`); a malformed track raises :class:`InputError`.
+
+    ``knock``: the camera knocked (the track's path document, ``creep.knock``): the picture's turn then
+    (:func:`~pendulum.angles.swings.turn_at_knock`) is taken out of θ from the knock on, where it is clear of its
+    error, and said in ``info.camera_turn`` and its notes."""
     missing = {"frame", "time_s", "x_px", "y_px", "quality", "flag"} - set(track.columns)
     if missing:
         raise InputError(f"{source}: the track lacks column(s) {sorted(missing)}")
@@ -218,7 +233,15 @@ def angles_from_track(
                 f"({vertical_deg:g}° in the image): the camera is on its side or upside down, or vertical_deg is "
                 "wrong; set the rig's vertical_deg to null to have it estimated from the swing"
             )
-    return angle_record(
+    turn = None
+    if knock and ok.any():  # measured about the swing's own middle: no wrap at ±180° (a camera upside down)
+        middle = circular_mean_rad(theta_img[ok])
+        turn = turn_at_knock(columns["time_s"], np.where(ok, wrapped_rad(theta_img - middle), np.nan), knock)
+        if turn and turn["taken_out"]:
+            theta_img = np.where(
+                columns["time_s"] >= knock["from_s"], theta_img - math.radians(turn["turn_deg"]), theta_img
+            )
+    table, info = angle_record(
         columns["time_s"],
         theta_img,
         pd.to_numeric(track.quality, errors="coerce").to_numpy(float),
@@ -230,6 +253,19 @@ def angles_from_track(
         frame=track.frame,
         arm_radius_px=float(np.median(radius[ok])) if ok.any() else None,
         pivot_covariance_px2=pivot_covariance_px2,
+    )
+    if turn is not None:
+        info.camera_turn = {"time_s": knock["time_s"], **turn}
+        if turn["taken_out"]:
+            info.notes.append(knock_turn_sentence(info.camera_turn))
+    return table, info
+
+
+def knock_turn_sentence(turn: dict) -> str:
+    """What was done about a knocked camera's turn (:attr:`AngleRecordInfo.camera_turn`, taken out)."""
+    return (
+        f"the camera turned by {turn['turn_deg']:+.3f}° (± {turn['stderr_deg']:.3f}°) when it was knocked at "
+        f"{turn['time_s']:.2f} s (the swing's centre moved by that much): taken out of θ from then on"
     )
 
 

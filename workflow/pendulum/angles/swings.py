@@ -99,6 +99,40 @@ def swing_centre_track(time_s: np.ndarray, theta: np.ndarray, window: int = 5) -
     return np.interp(time_s, at, smooth)
 
 
+KNOCK_TURN_SIGMAS = 4.0  # a camera's turn at a knock is taken out where at least this many standard errors ...
+MIN_KNOCK_TURN_DEG = 0.02  # ... and this large
+MIN_SIDE_CENTRES = 3  # centre pairs on each side of the knock needed to measure a turn
+
+
+def turn_at_knock(time_s: np.ndarray, theta: np.ndarray, knock: dict) -> dict | None:
+    """The picture's turn when the camera was knocked (``knock``: the track's, with ``from_s``/``to_s`` its shaking;
+    ``path_shape`` brings the positions back for the move, which a turn about the lens's axis also makes, but a
+    turn itself is no departure from the circle and stays in θ as a step): the swing's centre after ``to_s`` less
+    the one before ``from_s``, each the median of that side's centres (:func:`swing_centres`, each averaged with
+    the next: Coulomb friction alternates them), its standard error 1.25 × 1.4826 MAD / √(n/2) per side (pairs
+    overlap). ``theta`` in radians, NaN where unusable. Returns ``turn_deg``, ``stderr_deg``, ``centre_pairs`` (per
+    side) and ``taken_out`` (at least :data:`KNOCK_TURN_SIGMAS` σ and :data:`MIN_KNOCK_TURN_DEG`); None where a
+    side holds fewer than :data:`MIN_SIDE_CENTRES` pairs."""
+    t, th = np.asarray(time_s, float), np.asarray(theta, float)
+    sides = []
+    for side in (t < knock["from_s"], t > knock["to_s"]):
+        values = np.array([c for _, c in swing_centres(th[side])])
+        pairs = 0.5 * (values[1:] + values[:-1])
+        if pairs.size < MIN_SIDE_CENTRES:
+            return None
+        centre = float(np.median(pairs))
+        spread = 1.4826 * float(np.median(np.abs(pairs - centre)))
+        sides.append((centre, 1.2533 * spread / math.sqrt(max(pairs.size / 2, 1.0)), int(pairs.size)))
+    (before, se_before, n_before), (after, se_after, n_after) = sides
+    turn, stderr = math.degrees(after - before), math.degrees(math.hypot(se_before, se_after))
+    return {
+        "turn_deg": round(turn, 4),
+        "stderr_deg": round(stderr, 4),
+        "centre_pairs": [n_before, n_after],
+        "taken_out": bool(abs(turn) >= max(MIN_KNOCK_TURN_DEG, KNOCK_TURN_SIGMAS * stderr)),
+    }
+
+
 def noise_level(theta: np.ndarray) -> float:
     """Sample noise σ from the MAD of third differences (insensitive to slow motion): for thresholds.
 
