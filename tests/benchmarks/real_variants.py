@@ -5,8 +5,9 @@
 `../shared/data/real-video/redapple_480p.mov` (real phone footage, MIT licence) is turned into the
 variants a lab's footage differs by — half, double and triple (1080p) size, 30 and 15 fps, a 6 s record, a
 record that starts later in the swing, a phone on its side, upside down or 5° off level, a swing that
-leaves the frame at one end, exposure drift, mains flicker (a light's bands rolling down the frame), defocus, a
-low bitrate, the sensor noise of a dim room, a
+leaves the frame at one end, a camera knocked at 10 s (turned by 1° and moved: ``knocked_roll``), exposure
+drift, mains flicker (a light's bands rolling down the frame), defocus, a low bitrate, the sensor noise of a
+dim room, a
 dark backdrop, a letterbox, a burnt-in timestamp, a post in front of the swing, an uncalibrated fisheye
 lens, a phone held upright (the swing out of view most of the time: a refusal that says so), a soft dark
 band across the wall (on the wall only, or on the apple too), the apple's own soft shadow beside it, a
@@ -23,12 +24,16 @@ the inner ends of their swings: ``two_pendulums_close_dots_start_px``), and some
 at a corner: ``arm_in_view``; someone walking behind the swing: ``person_behind``) — and each is tracked
 with config.yaml's defaults (no hints), as a new user would. Per variant: the method used, the share of
 frames ``ok`` (and ``edge``), the vertical found, the angle record's period from its zero crossings
-against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure.
+against the independently measured 2.078 s (issue 23: within 0.3 %) and the record's own noise figure; and θ
+against the original clip's own record by the same method, frame by frame (:func:`_against_the_original`: what a
+transformation does to the angles, which ``pass`` does not count).
 The variants are real footage transformed, not renders: what they change is known exactly, and the rest
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
 Measured 2026-12-03: 44 of 46 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
 front (90.8 % ok, every frame it hides part of the apple in flagged), nor the apple before a shadow band in grey
 (93.6 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
+2026-12-05: 45 of 47 (the same two; ``knocked_roll`` passes these criteria, its θ 0.49° RMS off the original's:
+the knock taken for creep); θ against the original's record in docs/footage.md (*θ against the clip's own record*).
 """
 
 from __future__ import annotations
@@ -622,6 +627,45 @@ def make(name: str, workdir: Path) -> Path:
     return out
 
 
+def _against_the_original(name: str, method: str, table, workdir: Path) -> dict:
+    """θ against the original clip's own record by the same ``method`` (the original's, by each method, kept in
+    ``workdir`` when it is judged; judge it first: a string-hung apple turns, and its disk's centre and its
+    silhouette's are not one point), frame by frame (a variant that keeps every k-th frame: its frame j against the
+    clip's frame j k): ``theta_rms_deg``, the RMS of the difference less its median (the vertical each estimates),
+    ``theta_worst_deg`` its largest size, ``theta_scale_pct`` the part of it proportional to θ (a pivot found at
+    another distance along the arm), and ``timing_frames``: frames whose time differs from the original's by over
+    a quarter of a frame period (the phone's lost and repeated frames judged otherwise); {} where fewer than 100
+    frames match (a record that starts later, a hand's hold before it, the original not judged). Not part of
+    ``pass``: a transformed clip's record is not the truth either, but it should not differ from the original's
+    beyond their noise (a lens left uncalibrated does, by design)."""
+    import pandas as pd
+
+    keep = table.loc[table.flag == "ok", ["frame", "video_time_s", "theta_rad"]].dropna()
+    reference = workdir / f"apple_original.{method}.angles.csv"
+    if name == "original":
+        keep.to_csv(reference, index=False)
+    if not reference.is_file():
+        return {}
+    original = pd.read_csv(reference)
+    _, every, first, _ = variants()[name]
+    if first or name in HANDS:  # its times start elsewhere in the clip: no common clock
+        return {}
+    # frame j of the variant is the clip's frame j × every (the two pendulums': the left one is the clip's own)
+    joined = keep.assign(frame=keep.frame * every).merge(original, on="frame", suffixes=("", "_original"))
+    if len(joined) < 100:
+        return {}
+    difference = np.degrees(joined.theta_rad - joined.theta_rad_original).to_numpy(copy=True)
+    difference -= float(np.median(difference))
+    design = np.column_stack([np.degrees(joined.theta_rad_original.to_numpy()), np.ones(len(joined))])
+    (scale, _), *_ = np.linalg.lstsq(design, difference, rcond=None)
+    return {
+        "theta_rms_deg": round(float(np.sqrt(np.mean(difference**2))), 4),
+        "theta_worst_deg": round(float(np.abs(difference).max()), 4),
+        "theta_scale_pct": round(100 * float(scale), 3),
+        "timing_frames": int((np.abs(joined.video_time_s - joined.video_time_s_original) > 0.25 / APPLE_FPS).sum()),
+    }
+
+
 def judge(name: str, workdir: Path) -> dict:
     from test_real_footage import zero_crossing_period
 
@@ -649,10 +693,15 @@ def judge(name: str, workdir: Path) -> dict:
             name == "portrait_crop" and "out of view" in str(error)
         )
         return {**row, "method": "refused", "ok%": 0.0, "pass": right, "error": str(error)[:300]}
-    corrected, _ = path_departure(track)
+    corrected, path = path_departure(track)
     geometry = estimate_rig_geometry({"v": corrected})
     table, info = angles_from_track(
-        corrected, pivot_px=geometry["pivot_px"], vertical_deg=geometry["vertical_deg"], length_m=1.0, source=name
+        corrected,
+        pivot_px=geometry["pivot_px"],
+        vertical_deg=geometry["vertical_deg"],
+        length_m=1.0,
+        source=name,
+        knock=(path.get("creep") or {}).get("knock"),
     )
     period = zero_crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
     row.update(
@@ -665,11 +714,21 @@ def judge(name: str, workdir: Path) -> dict:
         edge_pct=round(100 * float((track.flag == "edge").mean()), 2),
         period_err_pct=round(100 * (period / APPLE_PERIOD_S - 1), 3),
         noise_deg=round(float(info.noise_deg), 4),
+        **_against_the_original(name, track.attrs["method"]["used"], table, workdir),
     )
     # where the swing leaves the frame, the frames with the body partly out of view are flagged `edge`: the
     # rest (83 % of this clip) must be usable
     least = 80 if name == "swing_leaves_the_frame" else 95
     row["pass"] = row["ok%"] >= least and abs(row["period_err_pct"]) <= 0.3 and row["noise_deg"] <= 0.03
+    if name == "original":  # the reference by the other method too (variants differ in which one they take)
+        other = "body" if row["method"] == "marker" else "marker"
+        track = track_trial(video, TrackerSettings.from_config({**config, "method": other}))
+        corrected, path = path_departure(track)
+        geometry = estimate_rig_geometry({"v": corrected})
+        table, _ = angles_from_track(
+            corrected, pivot_px=geometry["pivot_px"], vertical_deg=geometry["vertical_deg"], length_m=1.0, source=name
+        )
+        _against_the_original(name, other, table, workdir)
     return row
 
 
