@@ -32,8 +32,9 @@ is what a camera saw (the wall's shading composited as a camera sees it: :func:`
 Measured 2026-12-03: 44 of 46 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
 front (90.8 % ok, every frame it hides part of the apple in flagged), nor the apple before a shadow band in grey
 (93.6 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
-2026-12-05: 45 of 47 (the same two; ``knocked_roll`` passes these criteria, its θ 0.49° RMS off the original's:
-the knock taken for creep); θ against the original's record in docs/footage.md (*θ against the clip's own record*).
+2026-12-05: 45 of 47 (the same two; ``knocked_roll`` passes these criteria, its θ 0.069° RMS off the original's,
+0.49° before its knock was found from the swing's centre); θ against the original's record in docs/footage.md
+(*θ against the clip's own record*).
 """
 
 from __future__ import annotations
@@ -714,6 +715,8 @@ def judge(name: str, workdir: Path) -> dict:
         edge_pct=round(100 * float((track.flag == "edge").mean()), 2),
         period_err_pct=round(100 * (period / APPLE_PERIOD_S - 1), 3),
         noise_deg=round(float(info.noise_deg), 4),
+        knock_s=((path.get("creep") or {}).get("knock") or {}).get("time_s"),
+        turn_deg=(info.camera_turn or {}).get("turn_deg") if (info.camera_turn or {}).get("taken_out") else None,
         **_against_the_original(name, track.attrs["method"]["used"], table, workdir),
     )
     # where the swing leaves the frame, the frames with the body partly out of view are flagged `edge`: the

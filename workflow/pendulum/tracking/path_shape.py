@@ -12,6 +12,8 @@ is fitted to the ok frames; each degree is tried in turn and kept where it cuts 
 from the circle by at least a fifth and its motion over the clip is at least 0.5 px and 5 standard errors (a
 degree that fails does not stop the next: the first 17 s of the apple clip's creep, a line 4.4 standard errors
 long, is a parabola of 10 standard errors; 2026-12-02).
+A camera knocked once adds a step of the centre (:func:`_knock`); one whose move a creep took in is sought
+where the swing's centre in the picture steps (:func:`_centre_step`: the camera turned as well).
 The positions are then brought to the camera of mid-clip, p − (c(t) − c₀), so the angle
 about the pivot is the swing's. What the moving circle does not explain (a swing out of
 the plane, a stretching string, a body that turns off its centre) is reported, in pixels
@@ -24,6 +26,8 @@ import math
 
 import numpy as np
 import pandas as pd
+
+from pendulum.tracking.timing import path_turning_points
 
 MIN_ARC_SPAN_DEG = 5.0  # a path shorter than this says nothing about its circle
 MAX_DEGREE = 2
@@ -46,6 +50,11 @@ SETTLE_S = 0.5  # the frames this long after a knock are flagged whatever their 
 # along the path does not change it: the reviewer's 7 Hz ring moved θ by up to 0.27° there)
 RING_S = 1.0  # a knocked picture shakes for up to this long ...
 RING_NOISE, RING_RMS = 4.0, 3.0  # ... its frames off the circle by this × the noise and × the RMS left
+# a camera knocked and turned whose move a creep took in: the swing's centre in the picture (gravity's direction there,
+# which only a turning camera moves) steps by at least this, this many standard errors, and leaves a smooth curve
+# this many times the misfit of the curve with the step
+CENTRE_STEP_DEG, CENTRE_STEP_SIGMAS, CENTRE_STEP_GAIN = 0.1, 6.0, 10.0
+CENTRE_STEP_SIDE = 3  # centre pairs on each side of the step
 OUT_OF_PLANE_GAIN = 0.5  # the swing's speed terms must halve what the circle leaves to name an elliptical swing,
 MAX_OUT_OF_PLANE_SHARE = 0.035  # ... and that be under this share of the swing (a bob circling: 4 %, a 15 % ellipse
 # seen from the arm's distance 2.5 %, with a creeping camera 30–50 % ellipses 2.3–3.0 %)
@@ -130,13 +139,16 @@ def _step_gain(x, y, centre: np.ndarray, radius: float) -> np.ndarray:
         return np.where(det > 0, (c * s1 * s1 - 2 * b * s1 * s2 + a * s2 * s2) / det, 0.0)
 
 
-def _step_time(x, y, t, centre: np.ndarray, radius: float, margin: int) -> float | None:
+def _step_time(x, y, t, centre: np.ndarray, radius: float, margin: int, within=None) -> float | None:
     """The time at which a step of the centre best explains the distances (:func:`_step_gain`), at least ``margin``
-    frames from either end (None at that margin's edge: a step beyond it, or none)."""
+    frames from either end (None at that margin's edge: a step beyond it, or none), and within ``within`` (s, s)
+    where given."""
     if x.size < 2 * margin + 2:
         return None
     gain = _step_gain(x, y, centre, radius)
     gain[:margin] = gain[-margin:] = 0.0
+    if within is not None:
+        gain[(t < within[0]) | (t > within[1])] = 0.0
     k = int(np.argmax(gain))
     if gain[k] <= 0 or k in (margin, x.size - margin - 1):
         return None
@@ -184,7 +196,7 @@ def _centre(params: np.ndarray, t: np.ndarray, degree: int, step_s=None, with_st
     return np.column_stack([params[0] + basis @ ax, params[1] + basis @ ay])
 
 
-def _knock(x, y, t, best: tuple, noise_px: float):
+def _knock(x, y, t, best: tuple, noise_px: float, within=None):
     """A camera knocked once (its stand bumped: the picture jumps and settles): the best fit (``best``, as
     :func:`path_departure` keeps it) with a step of the centre added at :func:`_step_time`, each polynomial
     degree tried again with it. Kept where it cuts the RMS by :data:`MIN_RMS_GAIN`, and the step is at least
@@ -192,10 +204,13 @@ def _knock(x, y, t, best: tuple, noise_px: float):
     it leaves (a sharp jump, not a share of a slow departure). Returns (best, step time, facts) or None; the
     facts' ``from_s``–``to_s`` are the picture's shaking: from the frame before the step to :data:`SETTLE_S` after
     it, or to the last frame within :data:`RING_S` after it whose distance from the circle is off by more than
-    :data:`RING_NOISE` × the noise, :data:`RING_RMS` × the RMS left and 0.3 px."""
+    :data:`RING_NOISE` × the noise, :data:`RING_RMS` × the RMS left and 0.3 px. ``within`` (s, s): a knock known to
+    lie there from another measure (the swing's centre stepping: ``pendulum.angles.record.knocked_track``), sought
+    there only and kept where it cuts the RMS and moves the centre by :data:`MIN_MOTION_PX`."""
     fit, step_s = (best[0], best[1], best[2], best[3]), None
     for _ in range(KNOCK_PASSES):  # the step's time, then the fit with it, until the time stays (a creep took part)
-        found = _step_time(x, y, t, _centre(fit[1], t, fit[0], step_s, False), fit[1][2], KNOCK_MARGIN)
+        centre = _centre(fit[1], t, fit[0], step_s, False)
+        found = _step_time(x, y, t, centre, fit[1][2], KNOCK_MARGIN, within)
         if found is None or found == step_s:
             break
         step_s, fit = found, None
@@ -211,10 +226,8 @@ def _knock(x, y, t, best: tuple, noise_px: float):
     size = float(np.hypot(*jump))
     g = jump / size if size > 0 else np.zeros(2)
     sigma = float(math.sqrt(max(g @ c[np.ix_([2 + k, 2 + 2 * k], [2 + k, 2 + 2 * k])] @ g, 0.0)))
-    if not (
-        r <= (1 - MIN_RMS_GAIN) * best[3]
-        and size >= max(MIN_MOTION_PX, MOTION_SIGMAS * sigma, KNOCK_RMS_RATIO * best[3])
-    ):
+    least = max(MIN_MOTION_PX, MOTION_SIGMAS * sigma, KNOCK_RMS_RATIO * best[3]) if within is None else MIN_MOTION_PX
+    if not (r <= (1 - MIN_RMS_GAIN) * best[3] and size >= least):
         return None
     centre = _centre(p, t, degree, step_s)
     residual = np.hypot(x - centre[:, 0], y - centre[:, 1]) - p[2]
@@ -251,6 +264,66 @@ def _knock(x, y, t, best: tuple, noise_px: float):
     return (degree, p, c, r, _motion(p, c, degree, t, step_s)), step_s, facts
 
 
+def _centre_step(x, y, t, centre) -> dict | None:
+    """A step of the swing's centre in the picture: the camera knocked and turned (a turn about the lens's axis moves
+    the path along its circle, which the circle cannot show, and the pivot's move may pass for part of a creep).
+
+    The swing's centre from each three turning points p₀, q, p₁ (their angles about ``centre``; locally geometric
+    decay: c = (p₀ p₁ − q²) / (p₀ + p₁ − 2q)), averaged in pairs, against time: a quadratic (a camera creeping
+    turns the picture slowly too) and a step, the up to three pairs that straddle it (a pair spans about three half
+    swings) left out, at the split that fits best. Kept where the step is at least :data:`CENTRE_STEP_DEG` and
+    :data:`CENTRE_STEP_SIGMAS` σ and the quadratic alone leaves :data:`CENTRE_STEP_GAIN` × its misfit per degree of
+    freedom. Returns ``from_s``/``to_s`` (the last pair before and the first after), ``step_deg``, ``stderr_deg``."""
+    times, _, points = path_turning_points(t, x, y)
+    if times.size < 2 * CENTRE_STEP_SIDE + 6:
+        return None
+    phi = np.unwrap(np.arctan2(points[:, 0] - centre[0], points[:, 1] - centre[1]))
+    p0, q, p1 = phi[:-2], phi[1:-1], phi[2:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        centres = (p0 * p1 - q * q) / (p0 + p1 - 2 * q)
+    at = 0.5 * (times[1:-2] + times[2:-1])
+    values = 0.5 * (centres[1:] + centres[:-1])
+    usable = np.isfinite(values)
+    at, values = at[usable], values[usable]
+    n = values.size
+    tau = (at - at.mean()) / max(float(np.ptp(at)), 1e-9)
+    smooth = np.column_stack([np.ones(n), tau, tau**2])
+
+    def misfit(design, keep):
+        coef, *_ = np.linalg.lstsq(design[keep], values[keep], rcond=None)
+        resid = values[keep] - design[keep] @ coef
+        return coef, float(resid @ resid) / max(int(keep.sum()) - design.shape[1], 1)
+
+    if n < 2 * CENTRE_STEP_SIDE + 4:
+        return None
+    _, plain = misfit(smooth, np.ones(n, bool))
+    best = None
+    for j in range(CENTRE_STEP_SIDE, n - CENTRE_STEP_SIDE):
+        for gap in range(4):
+            if n - j - gap < CENTRE_STEP_SIDE:
+                break
+            keep = np.ones(n, bool)
+            keep[j : j + gap] = False
+            design = np.column_stack([smooth, (np.arange(n) >= j + gap).astype(float)])
+            coef, per = misfit(design, keep)
+            if best is None or per < best[0]:
+                best = (per, coef, design, keep, j, gap)
+    per, coef, design, keep, j, gap = best
+    stderr = math.sqrt(max(per * float(np.linalg.pinv(design[keep].T @ design[keep])[3, 3]), 0.0))
+    step = float(coef[3])
+    if not (
+        abs(step) >= max(math.radians(CENTRE_STEP_DEG), CENTRE_STEP_SIGMAS * stderr)
+        and plain >= CENTRE_STEP_GAIN * max(per, 1e-18)
+    ):
+        return None
+    return {
+        "from_s": round(float(at[j - 1]), 4),
+        "to_s": round(float(at[j + gap]), 4),
+        "step_deg": round(math.degrees(step), 4),
+        "stderr_deg": round(math.degrees(stderr), 4),
+    }
+
+
 def _swing_sd(x: np.ndarray, y: np.ndarray) -> float:
     """The path's SD along its main direction (px)."""
     along = np.column_stack([x, y]) - np.column_stack([x, y]).mean(axis=0)
@@ -261,7 +334,7 @@ def _rms(values: np.ndarray) -> float:
     return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
 
 
-def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[pd.DataFrame, dict]:
+def path_departure(track: pd.DataFrame, noise_px: float | None = None, knock_within=None) -> tuple[pd.DataFrame, dict]:
     """Measure the path's departure from one circle and correct a creeping pivot (module docstring).
 
     Returns the track (``x_px``, ``y_px`` corrected when a creep is found; the image positions kept
@@ -294,7 +367,12 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
         if r > (1 - MIN_RMS_GAIN) * best[3] or extent < MIN_MOTION_PX or extent < MOTION_SIGMAS * sigma:
             continue  # the next degree is tried against the best so far (a creep that turns back is no line)
         best = (degree, p, c, r, (shift, extent, sigma))
-    knock = _knock(x, y, t, best, noise_px) if span >= MIN_ARC_SPAN_DEG else None
+    knock = _knock(x, y, t, best, noise_px, knock_within) if span >= MIN_ARC_SPAN_DEG else None
+    turned = None
+    if knock is None and best[0] > 0 and knock_within is None and span >= MIN_ARC_SPAN_DEG:
+        turned = _centre_step(x, y, t, params[:2])  # a knock a creep took in, told by the picture's turn
+        if turned is not None:
+            knock = _knock(x, y, t, best, noise_px, (turned["from_s"], turned["to_s"]))
     if knock is not None:
         best, step_s, step = knock
     else:
@@ -316,6 +394,8 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
         out["x_px"] = track.x_px.to_numpy(float) - basis @ params[3 : 3 + k]
         out["y_px"] = track.y_px.to_numpy(float) - basis @ params[3 + k : 3 + 2 * k]
     if step is not None:
+        if turned is not None:  # found where the swing's centre stepped: the camera turned as well
+            step["centre_step"] = turned
         creep["knock"] = step
         ringing = (track.time_s >= step["from_s"]) & (track.time_s <= step["to_s"]) & (track.flag == "ok")
         out.loc[ringing, "flag"] = "jump"  # the picture still shaking: off the swing's path, not the swing
@@ -356,7 +436,14 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
             f"the pivot jumped by ({sx:+.1f}, {sy:+.1f}) px in the picture at {step['time_s']:.2f} s (± "
             f"{step['stderr_px']:.1f} px: the camera knocked or slid, or the thread slipping at the pivot), "
             f"corrected, and the {flagged} frames of its shaking to "
-            f"{step['to_s']:.2f} s are flagged jump" + ("" if degree else f": {rms_after:.2f} px RMS after")
+            f"{step['to_s']:.2f} s are flagged jump"
+            + ("" if degree else f": {rms_after:.2f} px RMS after")
+            + (
+                f" (found where the swing's centre in the picture stepped by {turned['step_deg']:+.2f}° between "
+                f"{turned['from_s']:.1f} and {turned['to_s']:.1f} s: the camera turned as well)"
+                if turned is not None
+                else ""
+            )
         )
     if degree:
         dx, dy = creep["start_to_end_px"]

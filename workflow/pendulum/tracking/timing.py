@@ -139,7 +139,7 @@ def frame_period(stamp_s: np.ndarray) -> float:
     return float(regular.mean()) if regular.size else typical
 
 
-def _turning_points(tau: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def path_turning_points(tau: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The swing's turning points: per completed half swing (a run of one sign of the position along the swing's
     main axis less its median) the time of its extreme, the side (+1, −1) and the (x, y) there, each to a fraction
     of a frame by the parabola through the extreme sample and its neighbours."""
@@ -256,7 +256,7 @@ def find_slips(frame: np.ndarray, stamp_s: np.ndarray, x: np.ndarray, y: np.ndar
     for i in idx[repeated_mask]:
         shift[i:] -= 1
     idx = idx[~repeated_mask]
-    turning = _turning_points(stamp_s[idx] / period, x[idx], y[idx])
+    turning = path_turning_points(stamp_s[idx] / period, x[idx], y[idx])
     refused: set[int] = set()  # boundaries (usable frame after them) where the picture moved, not the clock
     applied_at: list[tuple[int, float]] = []  # (usable frame after the boundary, periods) of each slip applied
     for round_ in range(MAX_ROUNDS):
