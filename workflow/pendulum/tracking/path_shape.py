@@ -13,7 +13,7 @@ from the circle by at least a fifth and its motion over the clip is at least 0.5
 degree that fails does not stop the next: the first 17 s of the apple clip's creep, a line 4.4 standard errors
 long, is a parabola of 10 standard errors; 2026-12-02).
 A camera knocked once adds a step of the centre (:func:`_knock`); one whose move a creep took in is sought
-where the swing's centre in the picture steps (:func:`_centre_step`: the camera turned as well).
+where the swing's centre in the picture steps (:func:`_centre_step`: moved across the swing, or turned).
 The positions are then brought to the camera of mid-clip, p − (c(t) − c₀), so the angle
 about the pivot is the swing's. What the moving circle does not explain (a swing out of
 the plane, a stretching string, a body that turns off its centre) is reported, in pixels
@@ -50,9 +50,9 @@ SETTLE_S = 0.5  # the frames this long after a knock are flagged whatever their 
 # along the path does not change it: the reviewer's 7 Hz ring moved θ by up to 0.27° there)
 RING_S = 1.0  # a knocked picture shakes for up to this long ...
 RING_NOISE, RING_RMS = 4.0, 3.0  # ... its frames off the circle by this × the noise and × the RMS left
-# a camera knocked and turned whose move a creep took in: the swing's centre in the picture (gravity's direction there,
-# which only a turning camera moves) steps by at least this, this many standard errors, and leaves a smooth curve
-# this many times the misfit of the curve with the step
+# a camera knocked whose move a creep took in: the swing's centre in the picture (gravity's direction there, which a
+# turning camera or one moved across the swing moves) steps by at least this, this many standard errors, and leaves
+# a smooth curve this many times the misfit of the curve with the step
 CENTRE_STEP_DEG, CENTRE_STEP_SIGMAS, CENTRE_STEP_GAIN = 0.1, 6.0, 10.0
 CENTRE_STEP_SIDE = 3  # centre pairs on each side of the step
 OUT_OF_PLANE_GAIN = 0.5  # the swing's speed terms must halve what the circle leaves to name an elliptical swing,
@@ -205,8 +205,8 @@ def _knock(x, y, t, best: tuple, noise_px: float, within=None):
     facts' ``from_s``–``to_s`` are the picture's shaking: from the frame before the step to :data:`SETTLE_S` after
     it, or to the last frame within :data:`RING_S` after it whose distance from the circle is off by more than
     :data:`RING_NOISE` × the noise, :data:`RING_RMS` × the RMS left and 0.3 px. ``within`` (s, s): a knock known to
-    lie there from another measure (the swing's centre stepping: ``pendulum.angles.record.knocked_track``), sought
-    there only and kept where it cuts the RMS and moves the centre by :data:`MIN_MOTION_PX`."""
+    lie there from another measure (the swing's centre stepping: :func:`_centre_step`), sought there only and kept
+    where it cuts the RMS and moves the centre by :data:`MIN_MOTION_PX`."""
     fit, step_s = (best[0], best[1], best[2], best[3]), None
     for _ in range(KNOCK_PASSES):  # the step's time, then the fit with it, until the time stays (a creep took part)
         centre = _centre(fit[1], t, fit[0], step_s, False)
@@ -265,8 +265,9 @@ def _knock(x, y, t, best: tuple, noise_px: float, within=None):
 
 
 def _centre_step(x, y, t, centre) -> dict | None:
-    """A step of the swing's centre in the picture: the camera knocked and turned (a turn about the lens's axis moves
-    the path along its circle, which the circle cannot show, and the pivot's move may pass for part of a creep).
+    """A step of the swing's centre in the picture about a fixed ``centre``: the camera knocked, moved across the
+    swing or turned (a turn about the lens's axis moves the path along its circle, which the circle cannot show),
+    its move taken for part of a creep.
 
     The swing's centre from each three turning points p₀, q, p₁ (their angles about ``centre``; locally geometric
     decay: c = (p₀ p₁ − q²) / (p₀ + p₁ − 2q)), averaged in pairs, against time: a quadratic (a camera creeping
@@ -286,6 +287,8 @@ def _centre_step(x, y, t, centre) -> dict | None:
     usable = np.isfinite(values)
     at, values = at[usable], values[usable]
     n = values.size
+    if n < 2 * CENTRE_STEP_SIDE + 4:
+        return None
     tau = (at - at.mean()) / max(float(np.ptp(at)), 1e-9)
     smooth = np.column_stack([np.ones(n), tau, tau**2])
 
@@ -294,8 +297,6 @@ def _centre_step(x, y, t, centre) -> dict | None:
         resid = values[keep] - design[keep] @ coef
         return coef, float(resid @ resid) / max(int(keep.sum()) - design.shape[1], 1)
 
-    if n < 2 * CENTRE_STEP_SIDE + 4:
-        return None
     _, plain = misfit(smooth, np.ones(n, bool))
     best = None
     for j in range(CENTRE_STEP_SIDE, n - CENTRE_STEP_SIDE):
@@ -370,7 +371,7 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None, knock_wit
     knock = _knock(x, y, t, best, noise_px, knock_within) if span >= MIN_ARC_SPAN_DEG else None
     turned = None
     if knock is None and best[0] > 0 and knock_within is None and span >= MIN_ARC_SPAN_DEG:
-        turned = _centre_step(x, y, t, params[:2])  # a knock a creep took in, told by the picture's turn
+        turned = _centre_step(x, y, t, params[:2])  # a knock a creep took in, told by the swing's centre
         if turned is not None:
             knock = _knock(x, y, t, best, noise_px, (turned["from_s"], turned["to_s"]))
     if knock is not None:
@@ -394,7 +395,7 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None, knock_wit
         out["x_px"] = track.x_px.to_numpy(float) - basis @ params[3 : 3 + k]
         out["y_px"] = track.y_px.to_numpy(float) - basis @ params[3 + k : 3 + 2 * k]
     if step is not None:
-        if turned is not None:  # found where the swing's centre stepped: the camera turned as well
+        if turned is not None:  # found where the swing's centre stepped
             step["centre_step"] = turned
         creep["knock"] = step
         ringing = (track.time_s >= step["from_s"]) & (track.time_s <= step["to_s"]) & (track.flag == "ok")
@@ -440,7 +441,7 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None, knock_wit
             + ("" if degree else f": {rms_after:.2f} px RMS after")
             + (
                 f" (found where the swing's centre in the picture stepped by {turned['step_deg']:+.2f}° between "
-                f"{turned['from_s']:.1f} and {turned['to_s']:.1f} s: the camera turned as well)"
+                f"{turned['from_s']:.1f} and {turned['to_s']:.1f} s: a creep had taken it in)"
                 if turned is not None
                 else ""
             )
