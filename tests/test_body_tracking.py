@@ -106,21 +106,25 @@ def test_a_knocked_camera_is_found_corrected_and_its_shaking_flagged(shift, cree
     assert "jumped by" in doc["verdict"]
 
 
-def _knocked_with_a_turn(seed: int, roll_deg: float):
-    """circle_track knocked at 9.5 s about the picture's centre (320, 180): turned by ``roll_deg`` and moved by a
-    shift drawn from ``seed`` (3–6 px across the swing, the way the turn moves the pivot: a step along the arm
-    alone is not found as a knock), with a 7 Hz ring settling in about 0.3 s."""
-    rng = np.random.default_rng(seed)
-    track = circle_track(TIMES, THETA, seed=seed)
+def _knocked(track: pd.DataFrame, roll_deg: float, shift) -> pd.DataFrame:
+    """``track`` with its camera knocked at 9.5 s: the picture turned by ``roll_deg`` about its centre (320, 180)
+    and moved by ``shift`` (px), with a 7 Hz ring settling in about 0.3 s."""
     after = np.clip(TIMES - 9.5, 0, None)
     ring = np.where(TIMES >= 9.5, 1 - np.exp(-after / 0.08) * np.cos(2 * math.pi * 7.0 * after), 0.0)
     turn = np.radians(roll_deg) * ring
-    shift = math.copysign(rng.uniform(3, 6), roll_deg or rng.choice([-1, 1])), rng.uniform(-2, 2)
     x, y = track.x_px - 320.0, track.y_px - 180.0
     track["x_px"] = 320.0 + np.cos(turn) * x - np.sin(turn) * y + shift[0] * ring
     track["y_px"] = 180.0 + np.sin(turn) * x + np.cos(turn) * y + shift[1] * ring
     track["quality"] = 1.0
     return track
+
+
+def _knocked_with_a_turn(seed: int, roll_deg: float):
+    """circle_track :func:`_knocked`, the shift drawn from ``seed`` (3–6 px across the swing, the way the turn moves
+    the pivot: a step along the arm alone is not found as a knock)."""
+    rng = np.random.default_rng(seed)
+    shift = math.copysign(rng.uniform(3, 6), roll_deg or rng.choice([-1, 1])), rng.uniform(-2, 2)
+    return _knocked(circle_track(TIMES, THETA, seed=seed), roll_deg, shift)
 
 
 @pytest.mark.parametrize("roll_deg", [1.0, -0.4, 0.0])
@@ -174,16 +178,9 @@ def test_a_knock_a_creep_took_in_is_found_where_the_swings_centre_steps(roll_deg
         track["quality"] = 1.0
         return track
 
-    after = np.clip(TIMES - 9.5, 0, None)
-    ring = np.where(TIMES >= 9.5, 1 - np.exp(-after / 0.08) * np.cos(2 * math.pi * 7.0 * after), 0.0)
-    turn = np.radians(roll_deg) * ring
     good = 0
     for seed in range(6):
-        track = stretched(seed)
-        x, y = track.x_px - 320.0, track.y_px - 180.0
-        track["x_px"] = 320.0 + np.cos(turn) * x - np.sin(turn) * y + 3.0 * ring
-        track["y_px"] = 180.0 + np.sin(turn) * x + np.cos(turn) * y - 2.0 * ring
-        out, doc = path_departure(track)
+        out, doc = path_departure(_knocked(stretched(seed), roll_deg, (3.0, -2.0)))
         knock = doc["creep"].get("knock") or {}
         mid = (327.5, -306.0)  # the pivot at mid-clip: the positions are brought to that camera
         table, info = angles_from_track(out, pivot_px=mid, vertical_deg=0.0, length_m=1.0, source="s", knock=knock)

@@ -270,7 +270,8 @@ def _centre_step(x, y, t, centre) -> dict | None:
     its move taken for part of a creep.
 
     The swing's centre from each three turning points p₀, q, p₁ (their angles about ``centre``; locally geometric
-    decay: c = (p₀ p₁ − q²) / (p₀ + p₁ − 2q)), averaged in pairs, against time: a quadratic (a camera creeping
+    decay: c = (p₀ p₁ − q²) / (p₀ + p₁ − 2q), as ``pendulum.angles.swings.swing_centres`` has it for θ, which this
+    stage cannot import: the angles come after it), averaged in pairs, against time: a quadratic (a camera creeping
     turns the picture slowly too) and a step, the up to three pairs that straddle it (a pair spans about three half
     swings) left out, at the split that fits best. Kept where the step is at least :data:`CENTRE_STEP_DEG` and
     :data:`CENTRE_STEP_SIGMAS` σ and the quadratic alone leaves :data:`CENTRE_STEP_GAIN` × its misfit per degree of
@@ -335,7 +336,7 @@ def _rms(values: np.ndarray) -> float:
     return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
 
 
-def path_departure(track: pd.DataFrame, noise_px: float | None = None, knock_within=None) -> tuple[pd.DataFrame, dict]:
+def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[pd.DataFrame, dict]:
     """Measure the path's departure from one circle and correct a creeping pivot (module docstring).
 
     Returns the track (``x_px``, ``y_px`` corrected when a creep is found; the image positions kept
@@ -368,9 +369,9 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None, knock_wit
         if r > (1 - MIN_RMS_GAIN) * best[3] or extent < MIN_MOTION_PX or extent < MOTION_SIGMAS * sigma:
             continue  # the next degree is tried against the best so far (a creep that turns back is no line)
         best = (degree, p, c, r, (shift, extent, sigma))
-    knock = _knock(x, y, t, best, noise_px, knock_within) if span >= MIN_ARC_SPAN_DEG else None
+    knock = _knock(x, y, t, best, noise_px) if span >= MIN_ARC_SPAN_DEG else None
     turned = None
-    if knock is None and best[0] > 0 and knock_within is None and span >= MIN_ARC_SPAN_DEG:
+    if knock is None and best[0] > 0 and span >= MIN_ARC_SPAN_DEG:
         turned = _centre_step(x, y, t, params[:2])  # a knock a creep took in, told by the swing's centre
         if turned is not None:
             knock = _knock(x, y, t, best, noise_px, (turned["from_s"], turned["to_s"]))
