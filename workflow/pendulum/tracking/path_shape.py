@@ -206,7 +206,8 @@ def _knock(x, y, t, best: tuple, noise_px: float, within=None):
     it, or to the last frame within :data:`RING_S` after it whose distance from the circle is off by more than
     :data:`RING_NOISE` × the noise, :data:`RING_RMS` × the RMS left and 0.3 px. ``within`` (s, s): a knock known to
     lie there from another measure (the swing's centre stepping: :func:`_centre_step`), sought there only and kept
-    where it cuts the RMS and moves the centre by :data:`MIN_MOTION_PX`."""
+    where it lowers the RMS at all and moves the centre by :data:`MIN_MOTION_PX` (the apple clip's own 0.4 px
+    departure can leave a knock's fit within a fifth of the creep's)."""
     fit, step_s = (best[0], best[1], best[2], best[3]), None
     for _ in range(KNOCK_PASSES):  # the step's time, then the fit with it, until the time stays (a creep took part)
         centre = _centre(fit[1], t, fit[0], step_s, False)
@@ -226,8 +227,13 @@ def _knock(x, y, t, best: tuple, noise_px: float, within=None):
     size = float(np.hypot(*jump))
     g = jump / size if size > 0 else np.zeros(2)
     sigma = float(math.sqrt(max(g @ c[np.ix_([2 + k, 2 + 2 * k], [2 + k, 2 + 2 * k])] @ g, 0.0)))
-    least = max(MIN_MOTION_PX, MOTION_SIGMAS * sigma, KNOCK_RMS_RATIO * best[3]) if within is None else MIN_MOTION_PX
-    if not (r <= (1 - MIN_RMS_GAIN) * best[3] and size >= least):
+    if within is None:  # from the path alone: a sharp jump that clearly explains more than the creep
+        kept = r <= (1 - MIN_RMS_GAIN) * best[3] and size >= max(
+            MIN_MOTION_PX, MOTION_SIGMAS * sigma, KNOCK_RMS_RATIO * best[3]
+        )
+    else:  # the swing's centre says a knock happened there: the path only places and sizes its move
+        kept = r < best[3] and size >= MIN_MOTION_PX
+    if not kept:
         return None
     centre = _centre(p, t, degree, step_s)
     residual = np.hypot(x - centre[:, 0], y - centre[:, 1]) - p[2]
