@@ -12,9 +12,10 @@ The pendulum's angle comes from the same physics as every render and every fit
 (:func:`pendulum.synthetic.experiment.true_angle_rad`). The body is a disk of radius R in the image (a sphere's
 silhouette), its inside drawn from its look (:class:`WallBody`): ``apple`` (dark, shaded from above,
 mottled skin), ``two_tone`` (a bright patterned top half over a dark bottom half, as the held-out
-ball), ``pattern`` (a printed checker); ``spin_deg_per_s`` turns the look about the thread (the
-silhouette stays a disk). Coverage is exact to 1/16 px² (4×4 supersampling at the sub-pixel centre),
-exposure blur is the mean of sub-exposures no more than 1.5 px apart.
+ball, its seam's plane tilted by ``seam_tilt_deg``: the body study's up to 30°), ``pattern`` (a printed
+checker); ``spin_deg_per_s`` turns the look about the thread (the silhouette stays a disk). Coverage is
+exact to 1/16 px² (4×4 supersampling at the sub-pixel centre), exposure blur is the mean of sub-exposures no
+more than 1.5 px apart.
 
 The scene (:class:`Wall`): the wall's grey and gradient, a soft static dark band (a shadow across
 the wall), soft shadows that follow the body, the thread, slow exposure drift (auto-exposure),
@@ -44,6 +45,7 @@ class WallBody:
     other_level: float = 215.0  # two_tone: the top half's grey; pattern: the light squares'
     texture: float = 20.0  # grey amplitude of shading and skin
     spin_deg_per_s: float = 0.0  # the look turning about the thread
+    seam_tilt_deg: float = 0.0  # two_tone: its seam's plane tilted from level (turning with the look)
     dot_radius_px: float = 0.0  # a marker dot painted at the body's centre (a clock bob's coloured dot); 0: none
     dot_level: float = 40.0  # the dot's grey
     # a shiny body (a bauble): the specular highlight of a lamp at lamp_px = (x, y, distance in front of the
@@ -139,7 +141,8 @@ def _body_patch(body: WallBody, cx: float, cy: float, spin_rad: float, swing_rad
         # lit from above left: a lighter cap, a darker underside and rim, a mottled skin turning with it
         grey = body.level - 0.6 * t * along - 0.3 * t * across + 0.3 * t * np.sin(7 * spun + 3 * along) - 0.4 * t * rho2
     elif body.look == "two_tone":
-        top = along < 0
+        tilt = math.radians(body.seam_tilt_deg)  # the seam's plane: cos α · along + sin α · spun = 0
+        top = math.cos(tilt) * along + math.sin(tilt) * spun < 0
         grey = np.where(top, body.other_level + t * np.sin(9 * spun) * np.cos(5 * along), body.level - 0.5 * t * along)
     else:
         grey = np.where(
@@ -439,6 +442,7 @@ def random_wall_trial(seed: int, rig: dict = STRING_RIG, truth: dict = STRING_TR
         other_level=float(rng.uniform(170, 240)),
         texture=float(rng.uniform(4, 16)),
         spin_deg_per_s=float(rng.uniform(-10, 10)),  # the real apple turns ≤ 48° in 21 s: up to 4× that
+        seam_tilt_deg=float(rng.uniform(0, 30)),  # drawn last: the other values as before it was
     )
     return WallTrial(spec, body, wall)
 

@@ -38,7 +38,8 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    a bright wall, is left out the same way in every frame); its soft-edged centroid x̂ = Σ w x / Σ w,
    w = 1 in the hull's core, the pixel's coverage D / C_local within 2 px of its outline (no pixel
    locking). Any point fixed to a rigid pendulum turns about the pivot with it, so its angle about the
-   pivot is θ up to a constant (the vertical).
+   pivot is θ up to a constant (the vertical). Beside it, its round outline's centre (a ball seen in part:
+   :mod:`pendulum.tracking.outline`), kept where the path says the centroid moves on the body.
 
 Flags from the measurement's own evidence (never thresholds fitted to renders): ``edge`` (the body itself, within
 1.2 inner radii of its thickest point, not a rod or thread leaving the frame, touches the frame's border),
@@ -79,9 +80,11 @@ from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.body_parts import (
     MAX_AREA_RATIO,
     MIN_AREA_RATIO,
+    body_close_size,
     body_component,
     body_core,
     body_reach,
+    open_size,
     own_centre,
     touches_border,
 )
@@ -102,6 +105,7 @@ from pendulum.tracking.body_scene import (
 )
 from pendulum.tracking.checks import flag_jumps, held_still_runs, robust_outliers
 from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
+from pendulum.tracking.outline import LIMB_RAYS, OUTLINE_COLUMNS, edge_points, outline_centres
 from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.scene_stack import (
     EnlargedMasks,
@@ -175,17 +179,6 @@ class BodyScene:
             "rest_place_clear": self.rest_place_clear,
             "reach_px": None if self.reach_px is None else round(self.reach_px, 2),
         }
-
-
-def _body_close_size(inner_radius_px: float) -> int:
-    """Closing disk (odd, px) for a body of this inner radius: ~½ of it, so a print's dark patches (a third
-    of the radius apart) are one object before the opening."""
-    return 2 * int(round(inner_radius_px / 4)) + 1
-
-
-def _open_size(inner_radius_px: float) -> int:
-    """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
-    return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
 
 
 def find_body(
@@ -357,9 +350,9 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
     component = component if strong is None else strong
     depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
     inner, (ty, tx) = float(depth.max()), np.unravel_index(int(np.argmax(depth)), depth.shape)
-    close_px = max(close_px, _body_close_size(inner))
+    close_px = max(close_px, body_close_size(inner))
     # of its parts after the opening, the one at ``near``, else at its thickest point (its centre may be on a rod)
-    opened, _ = body_component(diff, threshold, _open_size(inner), close_px, near=near or (float(tx), float(ty)))
+    opened, _ = body_component(diff, threshold, open_size(inner), close_px, near=near or (float(tx), float(ty)))
     if opened is None:
         return _Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
@@ -371,7 +364,8 @@ def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _S
 def track_body(
     path, settings: TrackerSettings, progress=None, scene: BodyScene | None = None, rest_place_from=None, view=None
 ) -> pd.DataFrame:
-    """Follow the body through the whole video in one decode pass (columns as :func:`.marker.track_video`).
+    """Follow the body through the whole video in one decode pass (columns as :func:`.marker.track_video`, and
+    its outline's circle per frame: :data:`~pendulum.tracking.outline.OUTLINE_COLUMNS`, for ``method.track_trial``).
 
     ``quality`` and ``signal_ratio`` are the body's covered area relative to its median.
     ``attrs["body"]``: the scene's facts (:meth:`BodyScene.to_dict`). Raises
@@ -383,20 +377,21 @@ def track_body(
     height, width = background.shape
     contrast = scene.contrast_grey
     threshold = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * contrast)
-    open_px = _open_size(scene.inner_radius_px)
-    close_px = max(close_size(background.shape), _body_close_size(scene.inner_radius_px))
+    open_px = open_size(scene.inner_radius_px)
+    close_px = max(close_size(background.shape), body_close_size(scene.inner_radius_px))
     edge_px = EDGE_REACH * scene.inner_radius_px + 2
     reach, body_area, extent = 2.5 * scene.radius_px + 12, math.pi * scene.radius_px**2, scene.reach_px
     x_prev, y_prev = scene.start_px
     vx, vy, lost_run = 0.0, 0.0, 0
-    rows, binary, report, seen = [], [], {}, SilhouetteCounts(background.shape, scene.radius_px)
+    rows, binary, outlines, report = [], [], [], {}
+    seen = SilhouetteCounts(background.shape, scene.radius_px)
     for index, time_s, image in iter_luma(path, report=report, view=view):
         half = reach + 2.0 * math.hypot(vx, vy) + 6 * lost_run
         px, py = x_prev + vx, y_prev + vy
         x0, x1 = max(int(px - half), 0), min(int(px + half) + 1, width)
         y0, y1 = max(int(py - half), 0), min(int(py + half) + 1, height)
         flag, x, y, mass, bx, by = "lost", math.nan, math.nan, 0.0, math.nan, math.nan
-        own = None
+        own, edges = None, np.full((LIMB_RAYS, 2), np.nan, np.float32)
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             diff = one_sided(signed - border_offset(signed), scene.polarity)
@@ -414,6 +409,7 @@ def track_body(
                 sx, sy, mass, bx, by = soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
+                    edges = edge_points(diff, component) + np.float32((x0, y0))  # its outline (a sphere in part)
                     bx0, by0, bw, bh = box
                     touches = (
                         (bx0 + x0 <= 1 and x0 == 0)
@@ -433,6 +429,7 @@ def track_body(
             lost_run += 1
         rows.append([index, float(time_s), x, y, mass, mass, flag])
         binary.append((bx, by))
+        outlines.append(edges)
         if progress and index and index % 500 == 0:
             progress(f"{path}: body tracked through frame {index}")
     table = pd.DataFrame(rows, columns=["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"])
@@ -445,6 +442,7 @@ def track_body(
     usable = flags == "ok"
     reference = float(np.median(mass[usable])) if usable.any() else 1.0
     table["quality"] = table["signal_ratio"] = np.where(np.isfinite(x), mass / reference, 0.0)
+    table[OUTLINE_COLUMNS] = outline_centres(np.stack(outlines))  # chosen or dropped by method.track_trial
     window = max(5, int(round(len(table) / max(table.time_s.iloc[-1], 1e-9))) | 1)  # about one second
     area_fault = robust_outliers(mass / reference, usable, window, AREA_SIGMAS, MIN_AREA_CHANGE)
     bxy = np.asarray(binary, float)

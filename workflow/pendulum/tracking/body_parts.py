@@ -111,3 +111,14 @@ def own_centre(component: np.ndarray, inner_radius_px: float, near) -> tuple[flo
         return None
     k = int(np.argmin(np.hypot(xs - near[0], ys - near[1])))
     return float(xs[k]), float(ys[k])
+
+
+def body_close_size(inner_radius_px: float) -> int:
+    """Closing disk (odd, px) for a body of this inner radius: ~½ of it, so a print's dark patches (a third
+    of the radius apart) are one object before the opening."""
+    return 2 * int(round(inner_radius_px / 4)) + 1
+
+
+def open_size(inner_radius_px: float) -> int:
+    """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
+    return max(3, 2 * int(round(inner_radius_px / 3)) + 1)

@@ -21,6 +21,7 @@ from pendulum.tracking.body import BodyError, track_body
 from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour, track_marker_by_colour
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.occluders import reaching_box
+from pendulum.tracking.outline import centre_by_outline
 from pendulum.tracking.settings import TrackerSettings
 from pendulum.tracking.timing import at_capture_rate, correct_slips
 
@@ -44,7 +45,8 @@ def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
     what each one said. The clip's sampled frames, shared by the searches, are let go at the end.
     """
     try:
-        return at_capture_rate(correct_slips(_track_trial(path, settings, progress)), settings.capture_fps)
+        track = centre_by_outline(_track_trial(path, settings, progress))  # a sphere seen in part: its outline
+        return at_capture_rate(correct_slips(track), settings.capture_fps)
     finally:
         samples.release()
 
