@@ -17,7 +17,8 @@ did not show its limb.
 
 :func:`centre_by_outline` keeps the outline's centres where the measurement itself says so
 (:func:`pendulum.tracking.path_shape.path_departure` on each track): the centroid's path wanders off one circle about
-a fixed or creeping pivot by more than its own noise (the RMS beyond the noise, √(RMS² − noise²)), and the outline's
+a fixed or creeping pivot by more than :data:`WANDER_NOISE_RATIO` times its own noise (the RMS beyond the noise,
+√(RMS² − noise²): on a 6 s clip of a clock's bob, 1.2 times, the outline was 8 times worse), and the outline's
 by at most :data:`OUTLINE_GAIN` of that, with a smaller RMS; or the two paths need different creeps of the camera
 (by more than path_shape's own least creep, and five of their standard errors: a wander slow enough to pass for
 a creep), the outline's path no farther off its circle than the centroid's plus its noise. The camera moves both
@@ -42,8 +43,15 @@ MIN_LIMB_SHARE = 1 / 3  # a sphere shows at least half its limb whatever its mar
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 FULL_CONTRAST = 0.8  # of the body's contrast, reached along a ray whose edge is measured
 MIN_POINTS = 8  # edge points a circle is fitted to
-PAIR_POINTS = 24  # of a frame's edge points, those whose pairs place the circle of the clip's radius
+VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every third ray's points
+VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 992 circles × 96 points)
 OUTLINE_GAIN = 0.5
+WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
+_RAYS = (
+    np.cos(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
+    np.sin(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
+)
+_GROW = np.ones((5, 5), np.uint8)  # the component grown by 2 px: its edge's blur, not its thread
 OUTLINE_COLUMNS = ["outline_x_px", "outline_y_px", "outline_r_px", "outline_rays"]
 
 
@@ -51,16 +59,19 @@ def edge_points(diff: np.ndarray, component: np.ndarray) -> np.ndarray:
     """The body's outermost edge along :data:`LIMB_RAYS` rays, (x, y) in ``diff``'s pixels, NaN where a ray finds
     none (module docstring)."""
     out = np.full((LIMB_RAYS, 2), np.nan, np.float32)
-    points = cv2.findNonZero(component.astype(np.uint8))
+    mask = component.astype(np.uint8)
+    points = cv2.findNonZero(mask)
     if points is None or len(points) < 5:
         return out
     (cx, cy), reach = cv2.minEnclosingCircle(points)
-    level = 0.5 * float(np.percentile(diff[component], 90))
-    grown = cv2.dilate(component.astype(np.uint8), np.ones((5, 5), np.uint8))
-    masked = np.where(grown > 0, diff, 0.0).astype(np.float32)
-    angles = np.linspace(0.0, 2 * np.pi, LIMB_RAYS, endpoint=False)
+    values = diff[component]
+    at = 0.9 * (values.size - 1)  # its 90th percentile (linear, as numpy's), by a partial sort
+    low, high = int(at), min(int(at) + 1, values.size - 1)
+    part = np.partition(values, (low, high))
+    level = 0.5 * float(part[low] + (at - low) * (part[high] - part[low]))
+    masked = diff.astype(np.float32) * cv2.dilate(mask, _GROW)
     radii = np.arange(0.3 * reach, 1.4 * reach + 2.0, RAY_STEP_PX)
-    cos, sin = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    cos, sin = _RAYS
     map_x, map_y = (cx + cos * radii).astype(np.float32), (cy + sin * radii).astype(np.float32)
     profile = cv2.remap(masked, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     above = profile >= level
@@ -76,73 +87,104 @@ def edge_points(diff: np.ndarray, component: np.ndarray) -> np.ndarray:
     return out
 
 
-def _circle(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, int]:
-    """The limb circle through one frame's edge points, its radius free (module docstring): (x, y, radius,
-    points on it); from their enclosing circle, which is the limb's where it shows a semicircle or more."""
-    if x.size < MIN_POINTS:
-        return math.nan, math.nan, math.nan, 0
-    (cx, cy), r = cv2.minEnclosingCircle(np.column_stack([x, y]).astype(np.float32))
-    keep = np.zeros(x.size, bool)
+def _circles(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Per frame (rows of edge points x, y; NaN where a ray found none), the limb circle with its radius free
+    (module docstring): x, y, radius and the points on it; from their enclosing circle, which is the limb's where it
+    shows a semicircle or more, refitted (algebraic least squares) to the points within each of
+    :data:`ON_CIRCLE_PX` of it in turn."""
+    out = np.full((x.shape[0], 4), np.nan)
+    for k in np.nonzero(np.isfinite(x).sum(axis=1) >= MIN_POINTS)[0]:
+        good = np.isfinite(x[k])
+        (out[k, 0], out[k, 1]), out[k, 2] = cv2.minEnclosingCircle(
+            np.column_stack([x[k, good], y[k, good]]).astype(np.float32)
+        )
+    origin = out[:, :2].copy()  # each frame's points about its enclosing circle's centre (a well-posed fit)
+    x, y = x - origin[:, :1], y - origin[:, 1:2]
+    out[:, :2] = 0.0
     for tolerance in ON_CIRCLE_PX:
-        keep = np.abs(np.hypot(x - cx, y - cy) - r) < tolerance
-        if keep.sum() < MIN_POINTS:
-            return math.nan, math.nan, math.nan, 0
-        design = np.column_stack([x[keep], y[keep], np.ones(int(keep.sum()))])
-        (p, q, s), *_ = np.linalg.lstsq(design, x[keep] ** 2 + y[keep] ** 2, rcond=None)
-        cx, cy = p / 2, q / 2
-        r = math.sqrt(max(s + cx**2 + cy**2, 0.0))
-    return float(cx), float(cy), float(r), int(keep.sum())
+        keep = np.abs(np.hypot(x - out[:, :1], y - out[:, 1:2]) - out[:, 2:3]) < tolerance  # NaN: not kept
+        w = keep.astype(float)
+        xs, ys = np.where(keep, x, 0.0), np.where(keep, y, 0.0)
+        moments = [(w * a * b).sum(axis=1) for a, b in ((xs, xs), (xs, ys), (xs, w), (ys, ys), (ys, w), (w, w))]
+        sxx, sxy, sx, syy, sy, n = moments
+        rhs = np.stack([((xs**2 + ys**2) * c).sum(axis=1) for c in (xs, ys, w)], axis=1)
+        normal = np.stack([np.stack(r, axis=1) for r in ((sxx, sxy, sx), (sxy, syy, sy), (sx, sy, n))], axis=1)
+        fits = (n >= MIN_POINTS) & (np.abs(np.linalg.det(normal)) > 1e-9)
+        out[~fits] = np.nan
+        solved = np.linalg.solve(normal[fits], rhs[fits][..., None])[..., 0]
+        cx, cy = solved[:, 0] / 2, solved[:, 1] / 2
+        out[fits, 0], out[fits, 1] = cx, cy
+        out[fits, 2] = np.sqrt(np.maximum(solved[:, 2] + cx**2 + cy**2, 0.0))
+        out[fits, 3] = n[fits]
+    out[:, :2] += origin
+    return out
 
 
-def _centre_at(x: np.ndarray, y: np.ndarray, radius_px: float) -> tuple[float, float, float, int]:
-    """The limb circle of ``radius_px`` through one frame's edge points: of the two circles through each pair of
-    (up to :data:`PAIR_POINTS` of) them, the one with the most points within :data:`ON_CIRCLE_PX` [−1] of it less
-    those beyond it (the limb is the outermost edge), then its centre refitted to those (Gauss–Newton)."""
-    if x.size < MIN_POINTS:
-        return math.nan, math.nan, math.nan, 0
+def _voted(x: np.ndarray, y: np.ndarray, radius_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame, the centre of the circle of ``radius_px`` through its edge points by a vote: of the two circles
+    through each pair of every :data:`VOTE_RAY_STEP`-th ray's points, the one with the most points within
+    :data:`ON_CIRCLE_PX` [−1] of it less those beyond it (the limb is the outermost edge); NaN with none."""
     tolerance = ON_CIRCLE_PX[-1]
-    pick = np.linspace(0, x.size - 1, min(x.size, PAIR_POINTS)).round().astype(int)
-    i, j = np.triu_indices(pick.size, 1)
-    x1, y1, x2, y2 = x[pick[i]], y[pick[i]], x[pick[j]], y[pick[j]]
-    half = np.hypot(x2 - x1, y2 - y1) / 2
-    good = (half > 0) & (half < radius_px)
-    mx, my = (x1 + x2)[good] / 2, (y1 + y2)[good] / 2
-    reach = np.sqrt(radius_px**2 - half[good] ** 2) / half[good]
-    nx, ny = -(y2 - y1)[good] / 2 * reach, (x2 - x1)[good] / 2 * reach  # to the centre, either side
-    cx, cy = np.concatenate([mx + nx, mx - nx]), np.concatenate([my + ny, my - ny])
-    if cx.size == 0:
-        return math.nan, math.nan, math.nan, 0
-    off = np.hypot(x[None, :] - cx[:, None], y[None, :] - cy[:, None]) - radius_px
-    score = (np.abs(off) < tolerance).sum(axis=1) - (off > 2 * tolerance).sum(axis=1)
-    best = int(np.argmax(score))
-    cx, cy = float(cx[best]), float(cy[best])
-    keep = np.zeros(x.size, bool)
+    i, j = np.triu_indices(LIMB_RAYS // VOTE_RAY_STEP, 1)
+    i, j = i * VOTE_RAY_STEP, j * VOTE_RAY_STEP
+    cx, cy = np.full(x.shape[0], np.nan), np.full(x.shape[0], np.nan)
+    for rows in np.array_split(np.arange(x.shape[0]), max(1, x.shape[0] // VOTE_FRAMES)):
+        x1, y1, x2, y2 = x[rows][:, i], y[rows][:, i], x[rows][:, j], y[rows][:, j]
+        half = np.hypot(x2 - x1, y2 - y1) / 2
+        with np.errstate(invalid="ignore", divide="ignore"):
+            reach = np.where((half > 0) & (half < radius_px), np.sqrt(radius_px**2 - half**2) / half, np.nan)
+        mx, my, nx, ny = (x1 + x2) / 2, (y1 + y2) / 2, -(y2 - y1) / 2 * reach, (x2 - x1) / 2 * reach
+        ox, oy = np.concatenate([mx + nx, mx - nx], axis=1), np.concatenate([my + ny, my - ny], axis=1)
+        off = np.hypot(x[rows][:, None, :] - ox[..., None], y[rows][:, None, :] - oy[..., None]) - radius_px
+        score = (np.abs(off) < tolerance).sum(axis=2) - (off > 2 * tolerance).sum(axis=2)
+        score = np.where(np.isfinite(ox), score, -LIMB_RAYS)  # a pair with a ray that found no edge: none
+        best = np.argmax(score, axis=1)
+        cx[rows], cy[rows] = (
+            np.take_along_axis(ox, best[:, None], 1)[:, 0],
+            np.take_along_axis(oy, best[:, None], 1)[:, 0],
+        )
+    return cx, cy
+
+
+def _refined(x: np.ndarray, y: np.ndarray, radius_px: float, cx: np.ndarray, cy: np.ndarray) -> np.ndarray:
+    """Per frame, the centre of the circle of ``radius_px`` through the points within :data:`ON_CIRCLE_PX` [−1] of
+    it from (cx, cy), three Gauss–Newton steps: x, y and the points on it (0 where under :data:`MIN_POINTS`)."""
+    tolerance = ON_CIRCLE_PX[-1]
+    n = np.zeros(x.shape[0], int)
     for _ in range(3):
-        dx, dy = x - cx, y - cy
+        dx, dy = x - cx[:, None], y - cy[:, None]
         distance = np.maximum(np.hypot(dx, dy), 1e-9)
         keep = np.abs(distance - radius_px) < tolerance
-        if keep.sum() < MIN_POINTS:
-            return math.nan, math.nan, math.nan, 0
-        jacobian = -np.column_stack([dx[keep], dy[keep]]) / distance[keep, None]
-        (sx, sy), *_ = np.linalg.lstsq(jacobian, radius_px - distance[keep], rcond=None)
-        cx, cy = cx + float(sx), cy + float(sy)
-    return cx, cy, radius_px, int(keep.sum())
+        ux, uy = np.where(keep, dx / distance, 0.0), np.where(keep, dy / distance, 0.0)
+        r = np.where(keep, radius_px - distance, 0.0)
+        a, b, c = (ux * ux).sum(axis=1), (ux * uy).sum(axis=1), (uy * uy).sum(axis=1)
+        gx, gy = -(ux * r).sum(axis=1), -(uy * r).sum(axis=1)  # J = −u: JᵀJ s = Jᵀ (R − d)
+        n = keep.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            det = np.where(n >= MIN_POINTS, a * c - b * b, np.nan)
+            cx, cy = cx + (c * gx - b * gy) / det, cy + (a * gy - b * gx) / det
+    n = np.where(np.isfinite(cx) & (n >= MIN_POINTS), n, 0)
+    return np.column_stack([np.where(n > 0, cx, np.nan), np.where(n > 0, cy, np.nan), n])
 
 
 def outline_centres(points: np.ndarray) -> np.ndarray:
     """Per frame, from its edge points (frames × :data:`LIMB_RAYS` × 2): the limb circle's centre x, y, radius and
-    the rays on it, at the clip's median radius (module docstring); NaN where it was not seen."""
-    free = [_circle(*_finite(p)) for p in points]
-    radii = np.array([r for _, _, r, n in free if n >= MIN_LIMB_SHARE * LIMB_RAYS])
+    the rays on it, at the clip's median radius (module docstring); NaN where it was not seen. Each centre refitted
+    (:func:`_refined`) from the frame's free circle (:func:`_circles`) and, where that holds under half the rays,
+    from a vote (:func:`_voted`), the one with more points on it kept (a crescent's free circle may have nearly the
+    radius and not the centre)."""
+    x, y = points[..., 0].astype(float), points[..., 1].astype(float)
+    free = _circles(x, y)
+    radii = free[free[:, 3] >= MIN_LIMB_SHARE * LIMB_RAYS, 2]
     if radii.size == 0:
         return np.full((len(points), 4), np.nan)
     radius = float(np.median(radii))
-    return np.array([_centre_at(*_finite(p), radius) for p in points], float).reshape(-1, 4)
-
-
-def _finite(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    good = np.isfinite(p[:, 0])
-    return p[good, 0].astype(float), p[good, 1].astype(float)
+    best = _refined(x, y, radius, free[:, 0], free[:, 1])
+    doubt = np.nonzero(best[:, 2] < LIMB_RAYS / 2)[0]  # under half the rays on it: a vote too
+    if doubt.size:
+        voted = _refined(x[doubt], y[doubt], radius, *_voted(x[doubt], y[doubt], radius))
+        best[doubt] = np.where((voted[:, 2] >= best[doubt, 2])[:, None], voted, best[doubt])
+    return np.column_stack([best[:, :2], np.where(best[:, 2] > 0, radius, np.nan), best[:, 2]])
 
 
 def _creep(document: dict) -> tuple[np.ndarray, float]:
@@ -189,7 +231,7 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
     )
     facts["creep_px"] = {"silhouette": creep_centroid.round(3).tolist(), "outline": creep_outline.round(3).tolist()}
     wanders = (
-        wander_centroid > noise_centroid
+        wander_centroid > WANDER_NOISE_RATIO * noise_centroid
         and wander_outline <= OUTLINE_GAIN * wander_centroid
         and left_outline < left_centroid
     )
