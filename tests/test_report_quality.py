@@ -287,6 +287,11 @@ def test_the_tracking_table_says_briefly_how_a_body_was_tracked():
         "tracked the body itself by its silhouette, usable in 93.5 % of the frames when the method was chosen; a "
         "marker disk usable in under 95 % of the frames"
     )
+    outline = {"view": "colour", "centre": {"by": "outline", "outline_radius_px": 18.807}}  # a turning two-tone ball
+    assert method_note(method, outline).endswith(
+        "; measured by the centre of its round outline (18.8 px in radius): only part of the ball stands out, and "
+        "that part's centroid moves as it turns"
+    )
     failed = {**method, "tried": {**tried, "marker": "failed: no marker found", "body": "failed: two objects"}}
     assert method_note(failed, {"view": "colour"}) == (
         "tracked the body itself by its colour, usable in 99.7 % of the frames when the method was chosen; its "

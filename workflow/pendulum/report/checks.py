@@ -120,6 +120,12 @@ def method_note(method: dict, body: dict) -> str:
     marker = tried.get("marker", "")
     if marker:
         note += "; a marker disk " + ("could not be found" if marker.startswith("failed") else marker.split(":")[0])
+    centre = body.get("centre") or {}
+    if centre.get("by") == "outline":  # a ball seen in part, turning on its string (tracking.outline)
+        note += (
+            f"; measured by the centre of its round outline ({fmt(centre.get('outline_radius_px'), 3)} px in radius): "
+            "only part of the ball stands out, and that part's centroid moves as it turns"
+        )
     return note
 
 
