@@ -11,9 +11,10 @@ outermost point where D (the body's difference from the scene, masked to its com
 thread) falls through half the body's contrast, interpolated between samples :data:`RAY_STEP_PX` apart. Per clip
 (:func:`outline_centres`): a circle through each frame's edge points, started from their enclosing circle and
 refitted (algebraic least squares) to the points within :data:`ON_CIRCLE_PX` of it, and then the centre alone
-refitted (Gauss–Newton) at the clip's median radius: points inside the circle (a seam, the part that does not
-stand out) are left out, the limb kept. A frame whose circle holds fewer than :data:`MIN_LIMB_SHARE` of the rays
-did not show its limb.
+refitted (Gauss–Newton) at the clip's median radius, from that circle or, where it holds under half the rays (a
+crescent's may have nearly the radius and not the centre), from a vote, whichever holds more points: points inside
+the circle (a seam, the part that does not stand out) are left out, the limb kept. A frame whose circle holds
+fewer than :data:`MIN_LIMB_SHARE` of the rays did not show its limb.
 
 :func:`centre_by_outline` keeps the outline's centres where the measurement itself says so
 (:func:`pendulum.tracking.path_shape.path_departure` on each track): the centroid's path wanders off one circle about
@@ -43,8 +44,8 @@ MIN_LIMB_SHARE = 1 / 3  # a sphere shows at least half its limb whatever its mar
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 FULL_CONTRAST = 0.8  # of the body's contrast, reached along a ray whose edge is measured
 MIN_POINTS = 8  # edge points a circle is fitted to
-VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every third ray's points
-VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 992 circles × 96 points)
+VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every sixth ray's points
+VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 240 circles × 96 points)
 OUTLINE_GAIN = 0.5
 WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
 _RAYS = (
@@ -128,7 +129,7 @@ def _voted(x: np.ndarray, y: np.ndarray, radius_px: float) -> tuple[np.ndarray, 
     i, j = np.triu_indices(LIMB_RAYS // VOTE_RAY_STEP, 1)
     i, j = i * VOTE_RAY_STEP, j * VOTE_RAY_STEP
     cx, cy = np.full(x.shape[0], np.nan), np.full(x.shape[0], np.nan)
-    for rows in np.array_split(np.arange(x.shape[0]), max(1, x.shape[0] // VOTE_FRAMES)):
+    for rows in np.array_split(np.arange(x.shape[0]), max(1, -(-x.shape[0] // VOTE_FRAMES))):
         x1, y1, x2, y2 = x[rows][:, i], y[rows][:, i], x[rows][:, j], y[rows][:, j]
         half = np.hypot(x2 - x1, y2 - y1) / 2
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -163,6 +164,7 @@ def _refined(x: np.ndarray, y: np.ndarray, radius_px: float, cx: np.ndarray, cy:
         with np.errstate(invalid="ignore", divide="ignore"):
             det = np.where(n >= MIN_POINTS, a * c - b * b, np.nan)
             cx, cy = cx + (c * gx - b * gy) / det, cy + (a * gy - b * gx) / det
+    n = (np.abs(np.hypot(x - cx[:, None], y - cy[:, None]) - radius_px) < tolerance).sum(axis=1)  # after the last
     n = np.where(np.isfinite(cx) & (n >= MIN_POINTS), n, 0)
     return np.column_stack([np.where(n > 0, cx, np.nan), np.where(n > 0, cy, np.nan), n])
 
@@ -187,6 +189,11 @@ def outline_centres(points: np.ndarray) -> np.ndarray:
     return np.column_stack([best[:, :2], np.where(best[:, 2] > 0, radius, np.nan), best[:, 2]])
 
 
+def _rounded(value: float) -> float | None:
+    """A figure for the tracks JSON: 4 decimals, None where a path's fit gave none."""
+    return round(value, 4) if math.isfinite(value) else None
+
+
 def _creep(document: dict) -> tuple[np.ndarray, float]:
     """The camera's creep a path's fit found, first to last frame (px), and its standard error; none: 0, 0."""
     creep = document.get("creep") or {}
@@ -206,12 +213,13 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
     seen = ok & (track.outline_rays.to_numpy(float) >= MIN_LIMB_SHARE * LIMB_RAYS)
     facts = {"by": "silhouette", "outline_seen_frames": int(seen.sum())}
     centroid.attrs["body"]["centre"] = facts
-    if seen.sum() < MIN_SEEN_SHARE * ok.sum():
+    if not ok.any() or seen.sum() < MIN_SEEN_SHARE * ok.sum():
         return centroid
     radius = float(np.nanmedian(track.outline_r_px.to_numpy(float)[seen]))
     outline = centroid.copy()
-    outline["x_px"] = np.where(seen, track.outline_x_px, track.x_px)
-    outline["y_px"] = np.where(seen, track.outline_y_px, track.y_px)
+    found = np.isfinite(track.outline_x_px.to_numpy(float))  # every frame with a circle, flagged or not: one measure
+    outline["x_px"] = np.where(found, track.outline_x_px, track.x_px)
+    outline["y_px"] = np.where(found, track.outline_y_px, track.y_px)
     outline.loc[ok & ~seen, "flag"] = "occluded"
     _, by_centroid = path_departure(centroid)
     _, by_outline = path_departure(outline)
@@ -222,13 +230,14 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
     wander_outline = math.sqrt(max(left_outline**2 - noise_outline**2, 0.0))
     facts.update(
         outline_radius_px=round(radius, 3),
-        unexplained_rms_px={"silhouette": round(left_centroid, 4), "outline": round(left_outline, 4)},
-        noise_px={"silhouette": round(noise_centroid, 4), "outline": round(noise_outline, 4)},
+        unexplained_rms_px={"silhouette": _rounded(left_centroid), "outline": _rounded(left_outline)},
+        noise_px={"silhouette": _rounded(noise_centroid), "outline": _rounded(noise_outline)},
     )
     (creep_centroid, sigma_centroid), (creep_outline, sigma_outline) = _creep(by_centroid), _creep(by_outline)
-    creeps_differ = float(np.hypot(*(creep_centroid - creep_outline))) > max(
-        MIN_MOTION_PX, MOTION_SIGMAS * math.hypot(sigma_centroid, sigma_outline)
-    )
+    apart = float(np.hypot(*(creep_centroid - creep_outline)))
+    # a centre that moves on the body moves by less than its radius: a larger difference is a creep fitted to a
+    # short or odd path, not evidence
+    creeps_differ = max(MIN_MOTION_PX, MOTION_SIGMAS * math.hypot(sigma_centroid, sigma_outline)) < apart < radius
     facts["creep_px"] = {"silhouette": creep_centroid.round(3).tolist(), "outline": creep_outline.round(3).tolist()}
     wanders = (
         wander_centroid > WANDER_NOISE_RATIO * noise_centroid
