@@ -462,6 +462,7 @@ def _in_colour(name: str, last: int | None = None) -> list:
     tints = [(1 - gain_c) / 0.45 * shift for shift in ((6.0, -4.0) if hard else (0.0, 0.0))]
     walls_c = [_wall(planes) for planes in (us, vs)]
     turning = "turning" in name
+    radius = _ball_radius(shares) if turning else None  # the sphere's, in luma px
     if name.startswith("two_tone"):
         luma = _two_tone_before_band(ys, shares, last, hard, turning)
     else:
@@ -479,8 +480,8 @@ def _in_colour(name: str, last: int | None = None) -> list:
                 body = apple
                 if turning:  # the apple painted out (the banded wall's chroma), a sphere in its place
                     shaded = shaded * (1 - apple) + (wall_c - ((wall_c - 128) * (1 - gain_c) - tint)) * apple
-                    body = _ball_share(apple.shape, cx, cy, _ball_radius(shares), 0.5)
-                top = _top_share(k, body, cx, cy, _ball_radius(shares) if turning else None, 0.5)
+                    body = _ball_share(apple.shape, cx, cy, radius, 0.5)
+                top = _top_share(k, body, cx, cy, radius, 0.5)
                 shaded = shaded * (1 - body) + 128.0 * top + paint * (body - top)
             chroma.append(np.clip(np.round(shaded), 0, 255).astype(np.uint8))
         if name.endswith("_1080p"):  # every plane 3× (the held-out clip's size)

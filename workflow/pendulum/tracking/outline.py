@@ -151,7 +151,6 @@ def _refined(x: np.ndarray, y: np.ndarray, radius_px: float, cx: np.ndarray, cy:
     """Per frame, the centre of the circle of ``radius_px`` through the points within :data:`ON_CIRCLE_PX` [−1] of
     it from (cx, cy), three Gauss–Newton steps: x, y and the points on it (0 where under :data:`MIN_POINTS`)."""
     tolerance = ON_CIRCLE_PX[-1]
-    n = np.zeros(x.shape[0], int)
     for _ in range(3):
         dx, dy = x - cx[:, None], y - cy[:, None]
         distance = np.maximum(np.hypot(dx, dy), 1e-9)
