@@ -394,7 +394,8 @@ def track_body(
         own, edges = None, np.full((LIMB_RAYS, 2), np.nan, np.float32)
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
-            diff = one_sided(signed - border_offset(signed), scene.polarity)
+            signed -= border_offset(signed)
+            diff = one_sided(signed, scene.polarity)
             component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
                 here = float(np.percentile(diff[component], 90))
@@ -409,7 +410,8 @@ def track_body(
                 sx, sy, mass, bx, by = soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
-                    edges = edge_points(diff, component) + np.float32((x0, y0))  # its outline (a sphere in part)
+                    two_sided = signed if scene.polarity == "both" else None  # each side's limb at its contrast
+                    edges = edge_points(diff, component, two_sided) + np.float32((x0, y0))  # a sphere in part
                     bx0, by0, bw, bh = box
                     touches = (
                         (bx0 + x0 <= 1 and x0 == 0)

@@ -43,6 +43,8 @@ ON_CIRCLE_PX = (1.5, 1.0, 0.75)  # the successive fits' tolerances: |distance fr
 MIN_LIMB_SHARE = 1 / 3  # a sphere shows at least half its limb whatever its markings
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 FULL_CONTRAST = 0.8  # of the body's contrast, reached along a ray whose edge is measured
+MIN_SIDE_SHARE = 0.05  # of the body's pixels on one side of the scene, for that side's edge to be sought apart
+MIN_SIDE_CONTRAST = 0.25  # of the body's contrast: a fainter side is the part the silhouette leaves out too
 MIN_POINTS = 8  # edge points a circle is fitted to
 VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every sixth ray's points
 VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 240 circles × 96 points)
@@ -56,35 +58,67 @@ _GROW = np.ones((5, 5), np.uint8)  # the component grown by 2 px: its edge's blu
 OUTLINE_COLUMNS = ["outline_x_px", "outline_y_px", "outline_r_px", "outline_rays"]
 
 
-def edge_points(diff: np.ndarray, component: np.ndarray) -> np.ndarray:
+def _percentile_90(values: np.ndarray) -> float:
+    """The 90th percentile of ``values`` (linear, as numpy's), by a partial sort."""
+    at = 0.9 * (values.size - 1)
+    low, high = int(at), min(int(at) + 1, values.size - 1)
+    part = np.partition(values, (low, high))
+    return float(part[low] + (at - low) * (part[high] - part[low]))
+
+
+def _sides(diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None) -> list[tuple[np.ndarray, float]]:
+    """The differences an edge is sought in, each with its contrast C (90th percentile over the component): D
+    itself; or, for a body both darker and brighter than the scene (``signed``, I − B, given), its dark and its
+    bright side apart where each holds :data:`MIN_SIDE_SHARE` of its pixels at :data:`MIN_SIDE_CONTRAST` of D's
+    contrast or more (a print's light squares, 65 levels against its dark ones' 150: their limb is crossed at half
+    their own contrast, never at half the dark squares')."""
+    contrast = _percentile_90(diff[component])
+    if signed is None:
+        return [(diff, contrast)]
+    sides = []
+    for sign in (-1.0, 1.0):
+        side = np.maximum(sign * signed, 0.0)
+        values = side[component & (sign * signed > 0)]
+        if values.size < MIN_SIDE_SHARE * np.count_nonzero(component):
+            return [(diff, contrast)]
+        level = _percentile_90(values)
+        if level < MIN_SIDE_CONTRAST * contrast:
+            return [(diff, contrast)]
+        sides.append((side, level))
+    return sides
+
+
+def edge_points(diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None = None) -> np.ndarray:
     """The body's outermost edge along :data:`LIMB_RAYS` rays, (x, y) in ``diff``'s pixels, NaN where a ray finds
-    none (module docstring)."""
+    none (module docstring); ``signed``: I − B where D is its size (a body both darker and brighter than the scene),
+    each side's edge then found at half its own contrast (:func:`_sides`), the outer of the two kept."""
     out = np.full((LIMB_RAYS, 2), np.nan, np.float32)
     mask = component.astype(np.uint8)
     points = cv2.findNonZero(mask)
     if points is None or len(points) < 5:
         return out
     (cx, cy), reach = cv2.minEnclosingCircle(points)
-    values = diff[component]
-    at = 0.9 * (values.size - 1)  # its 90th percentile (linear, as numpy's), by a partial sort
-    low, high = int(at), min(int(at) + 1, values.size - 1)
-    part = np.partition(values, (low, high))
-    level = 0.5 * float(part[low] + (at - low) * (part[high] - part[low]))
-    masked = diff.astype(np.float32) * cv2.dilate(mask, _GROW)
+    grown = cv2.dilate(mask, _GROW)
     radii = np.arange(0.3 * reach, 1.4 * reach + 2.0, RAY_STEP_PX)
     cos, sin = _RAYS
     map_x, map_y = (cx + cos * radii).astype(np.float32), (cy + sin * radii).astype(np.float32)
-    profile = cv2.remap(masked, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-    above = profile >= level
-    last = radii.size - 1 - np.argmax(above[:, ::-1], axis=1)  # the outermost sample above the level
-    # a ray through a sliver of the body (a crescent's tip) does not reach its full contrast: its edge is blurred in
-    found = above.any(axis=1) & (last + 1 < radii.size) & (profile.max(axis=1) >= FULL_CONTRAST * 2 * level)
-    rows = np.nonzero(found)[0]
-    j = last[rows]
-    inside, outside = profile[rows, j], profile[rows, j + 1]
-    distance = radii[j] + (inside - level) / np.maximum(inside - outside, 1e-6) * RAY_STEP_PX
-    out[rows, 0] = cx + cos[rows, 0] * distance
-    out[rows, 1] = cy + sin[rows, 0] * distance
+    outermost, distance = np.full(LIMB_RAYS, -1), np.full(LIMB_RAYS, np.nan)
+    for side, contrast in _sides(diff, component, signed):
+        level = 0.5 * contrast
+        masked = side.astype(np.float32) * grown
+        profile = cv2.remap(masked, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        above = profile >= level
+        last = radii.size - 1 - np.argmax(above[:, ::-1], axis=1)  # the outermost sample above the level
+        # a ray through a sliver of the body (a crescent's tip) does not reach its full contrast: its edge is blurred in
+        found = above.any(axis=1) & (last + 1 < radii.size) & (profile.max(axis=1) >= FULL_CONTRAST * contrast)
+        rows = np.nonzero(found & (last > outermost))[0]
+        j = last[rows]
+        inside, outside = profile[rows, j], profile[rows, j + 1]
+        distance[rows] = radii[j] + (inside - level) / np.maximum(inside - outside, 1e-6) * RAY_STEP_PX
+        outermost[rows] = j
+    rows = np.nonzero(outermost >= 0)[0]
+    out[rows, 0] = cx + cos[rows, 0] * distance[rows]
+    out[rows, 1] = cy + sin[rows, 0] * distance[rows]
     return out
 
 
