@@ -410,8 +410,7 @@ def track_body(
                 sx, sy, mass, bx, by = soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
-                    two_sided = signed if scene.polarity == "both" else None  # each side's limb at its contrast
-                    edges = edge_points(diff, component, two_sided) + np.float32((x0, y0))  # a sphere in part
+                    edges = edge_points(diff, component, signed, scene.polarity) + np.float32((x0, y0))  # its outline
                     bx0, by0, bw, bh = box
                     touches = (
                         (bx0 + x0 <= 1 and x0 == 0)

@@ -8,7 +8,9 @@ the sphere's limb, its ends diametrically opposite, so the circle through the ou
 
 Per frame (:func:`edge_points`): along :data:`LIMB_RAYS` rays from the silhouette's enclosing circle's centre, the
 outermost point where D (the body's difference from the scene, masked to its component grown by 2 px: not its
-thread) falls through half the body's contrast, interpolated between samples :data:`RAY_STEP_PX` apart. Per clip
+thread) falls through half the body's contrast, interpolated between samples :data:`RAY_STEP_PX` apart; for a
+body with parts on both sides of the scene (a print's dark squares and its light ones, each side's limb at half
+that side's own contrast: :func:`_sides`), the outer of the two. Per clip
 (:func:`outline_centres`): a circle through each frame's edge points, started from their enclosing circle and
 refitted (algebraic least squares) to the points within :data:`ON_CIRCLE_PX` of it, and then the centre alone
 refitted (Gauss–Newton) at the clip's median radius, from that circle or, where it holds under half the rays (a
@@ -20,11 +22,15 @@ fewer than :data:`MIN_LIMB_SHARE` of the rays did not show its limb.
 (:func:`pendulum.tracking.path_shape.path_departure` on each track): the centroid's path wanders off one circle about
 a fixed or creeping pivot by more than :data:`WANDER_NOISE_RATIO` times its own noise (the RMS beyond the noise,
 √(RMS² − noise²): on a 6 s clip of a clock's bob, 1.2 times, the outline was 8 times worse), and the outline's
-by at most :data:`OUTLINE_GAIN` of that, with a smaller RMS; or the two paths need different creeps of the camera
+by at most :data:`OUTLINE_GAIN` of that, with a smaller RMS; or the outline's path at most :data:`OUTLINE_GAIN` as
+far off its circle as the centroid's and no noisier (a print's centroid wanders mostly along the swing, where a
+circle cannot see it: seed 7031 of the body study, 1.3 times its noise off the circle, its angles 0.054° off the
+truth, 0.020° by its outline); or the two paths need different creeps of the camera
 (by more than path_shape's own least creep, and five of their standard errors: a wander slow enough to pass for
 a creep), the outline's path no farther off its circle than the centroid's plus its noise. The camera moves both
 centres alike; only a centre that moves on the body makes them differ, and a sphere's outline cannot. An apple (its
-outline no circle, its centre 2–4 times noisier) and a uniform ball (both centres on one path) keep the centroid.
+outline no circle, its centre 2–4 times noisier) and a uniform ball (both centres on one path, equally noisy) keep
+the centroid.
 """
 
 from __future__ import annotations
@@ -45,6 +51,7 @@ MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outl
 FULL_CONTRAST = 0.8  # of the body's contrast, reached along a ray whose edge is measured
 MIN_SIDE_SHARE = 0.05  # of the body's pixels on one side of the scene, for that side's edge to be sought apart
 MIN_SIDE_CONTRAST = 0.25  # of the body's contrast: a fainter side is the part the silhouette leaves out too
+OTHER_SIDE_REACH = 1.3  # × the silhouette's enclosing radius: where a one-sided body's other side is sought
 MIN_POINTS = 8  # edge points a circle is fitted to
 VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every sixth ray's points
 VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 240 circles × 96 points)
@@ -66,46 +73,67 @@ def _percentile_90(values: np.ndarray) -> float:
     return float(part[low] + (at - low) * (part[high] - part[low]))
 
 
-def _sides(diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None) -> list[tuple[np.ndarray, float]]:
-    """The differences an edge is sought in, each with its contrast C (90th percentile over the component): D
-    itself; or, for a body both darker and brighter than the scene (``signed``, I − B, given), its dark and its
-    bright side apart where each holds :data:`MIN_SIDE_SHARE` of its pixels at :data:`MIN_SIDE_CONTRAST` of D's
-    contrast or more (a print's light squares, 65 levels against its dark ones' 150: their limb is crossed at half
-    their own contrast, never at half the dark squares')."""
+def _sides(
+    diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None, polarity: str, centre, reach: float
+) -> list[tuple[np.ndarray, float, np.ndarray]]:
+    """The differences an edge is sought in, each with its contrast C (90th percentile) and where it is sought: D
+    itself within the body's component grown by 2 px; with ``signed`` (I − B) given, also the scene's other side:
+
+    * a body both darker and brighter than the scene (``polarity`` both): its dark and its bright side apart where
+      each holds :data:`MIN_SIDE_SHARE` of its pixels at :data:`MIN_SIDE_CONTRAST` of D's contrast or more (a
+      print's light squares, 65 levels against its dark ones' 150: their limb crossed at half their own contrast,
+      never at half the dark squares');
+    * a body measured by one side (a dark print whose light squares were left out of its silhouette): the other
+      side within :data:`OTHER_SIDE_REACH` of the silhouette's enclosing circle, where it holds as much there."""
+    mask = component.astype(np.uint8)
+    grown = cv2.dilate(mask, _GROW)
     contrast = _percentile_90(diff[component])
+    alone = [(diff, contrast, grown)]
     if signed is None:
-        return [(diff, contrast)]
+        return alone
+    if polarity != "both":
+        sign = 1.0 if polarity == "dark" else -1.0  # the side the silhouette left out
+        disk, near = np.zeros_like(mask), np.zeros_like(mask)
+        at = (round(centre[0]), round(centre[1]))
+        cv2.circle(disk, at, round(reach), 1, -1)
+        cv2.circle(near, at, round(OTHER_SIDE_REACH * reach + 2), 1, -1)
+        side = np.maximum(sign * signed, 0.0)
+        values = side[(disk > 0) & (sign * signed > 0)]
+        if values.size < MIN_SIDE_SHARE * np.count_nonzero(disk) or not values.size:
+            return alone
+        level = _percentile_90(values)
+        return alone + [(side, level, near)] if level >= MIN_SIDE_CONTRAST * contrast else alone
     sides = []
     for sign in (-1.0, 1.0):
         side = np.maximum(sign * signed, 0.0)
         values = side[component & (sign * signed > 0)]
         if values.size < MIN_SIDE_SHARE * np.count_nonzero(component):
-            return [(diff, contrast)]
+            return alone
         level = _percentile_90(values)
         if level < MIN_SIDE_CONTRAST * contrast:
-            return [(diff, contrast)]
-        sides.append((side, level))
+            return alone
+        sides.append((side, level, grown))
     return sides
 
 
-def edge_points(diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None = None) -> np.ndarray:
+def edge_points(
+    diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None = None, polarity: str = "both"
+) -> np.ndarray:
     """The body's outermost edge along :data:`LIMB_RAYS` rays, (x, y) in ``diff``'s pixels, NaN where a ray finds
-    none (module docstring); ``signed``: I − B where D is its size (a body both darker and brighter than the scene),
-    each side's edge then found at half its own contrast (:func:`_sides`), the outer of the two kept."""
+    none (module docstring); ``signed``: I − B, D being its size (``polarity`` both) or one side of it, each side's
+    edge then found at half its own contrast (:func:`_sides`), the outer of the two kept."""
     out = np.full((LIMB_RAYS, 2), np.nan, np.float32)
-    mask = component.astype(np.uint8)
-    points = cv2.findNonZero(mask)
+    points = cv2.findNonZero(component.astype(np.uint8))
     if points is None or len(points) < 5:
         return out
     (cx, cy), reach = cv2.minEnclosingCircle(points)
-    grown = cv2.dilate(mask, _GROW)
     radii = np.arange(0.3 * reach, 1.4 * reach + 2.0, RAY_STEP_PX)
     cos, sin = _RAYS
     map_x, map_y = (cx + cos * radii).astype(np.float32), (cy + sin * radii).astype(np.float32)
     outermost, distance = np.full(LIMB_RAYS, -1), np.full(LIMB_RAYS, np.nan)
-    for side, contrast in _sides(diff, component, signed):
+    for side, contrast, where in _sides(diff, component, signed, polarity, (cx, cy), reach):
         level = 0.5 * contrast
-        masked = side.astype(np.float32) * grown
+        masked = side.astype(np.float32) * where
         profile = cv2.remap(masked, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
         above = profile >= level
         last = radii.size - 1 - np.argmax(above[:, ::-1], axis=1)  # the outermost sample above the level
@@ -276,6 +304,8 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         wander_centroid > WANDER_NOISE_RATIO * noise_centroid
         and wander_outline <= OUTLINE_GAIN * wander_centroid
         and left_outline < left_centroid
+    ) or (  # a wander mostly along the swing (off the circle only in part): the outline's path cleaner on both counts
+        left_outline <= OUTLINE_GAIN * left_centroid and noise_outline <= noise_centroid
     )
     # a wander slow enough to pass for the camera creeping: the centroid's creep not the outline's
     if not (wanders or (creeps_differ and left_outline <= left_centroid + noise_centroid)):
