@@ -111,6 +111,33 @@ def test_a_printed_balls_limb_is_found_at_each_sides_own_contrast(polarity, leas
     assert np.sqrt(np.mean(np.sum((wander - wander.mean(axis=0)) ** 2, axis=1))) >= least_wander_px
 
 
+def test_a_second_side_is_sought_only_where_the_body_has_one():
+    """Where the scene's other side holds no strong part of the body, the edges are the same as without it (a uniform
+    ball, a faint one in noise, either side measured); a bright print measured by its bright side keeps them too,
+    its dark side not sought (its shadow beside it would be taken for its limb)."""
+    rng = np.random.default_rng(9)
+    sub = (np.arange(480) + 0.5) / 4
+    for contrast, noise in ((120.0, 2.0), (12.0, 3.0)):  # a plain ball; a faint one whose other side is noise alone
+        cover = ((sub[None, :] - 61.3) ** 2 + (sub[:, None] - 58.7) ** 2 <= 30.0**2).reshape(120, 4, 120, 4)
+        for sign, polarity in ((-1.0, "dark"), (1.0, "bright"), (-1.0, "both")):
+            blurred = cv2.GaussianBlur((sign * contrast * cover.mean(axis=(1, 3))).astype(np.float32), (0, 0), 0.8)
+            signed = blurred + rng.normal(0, noise, (120, 120)).astype(np.float32)
+            diff = np.abs(signed) if polarity == "both" else np.maximum(sign * signed, 0.0)
+            component = diff > 0.4 * contrast
+            assert np.array_equal(
+                edge_points(diff, component, signed, polarity), edge_points(diff, component), equal_nan=True
+            ), (contrast, polarity)
+    signed = -_printed_ball(60.0, 60.0, 10.0)  # a bright print (its light squares +150, its dark ones −65) ...
+    cover = ((sub[None, :] - 67.0) ** 2 + (sub[:, None] - 67.0) ** 2 <= PRINT_RADIUS_PX**2).reshape(120, 4, 120, 4)
+    shadow = cv2.GaussianBlur(-60.0 * cover.mean(axis=(1, 3)).astype(np.float32), (0, 0), 2.0)
+    signed = np.where(np.abs(signed) > 1.0, signed, shadow)  # ... its soft shadow 7 px down and right on the wall
+    diff = np.maximum(signed, 0.0)
+    closed = cv2.morphologyEx((diff > 20).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(closed)
+    component = labels == 1 + np.argmax(stats[1:, cv2.CC_STAT_AREA])
+    assert np.array_equal(edge_points(diff, component, signed, "bright"), edge_points(diff, component), equal_nan=True)
+
+
 def _track(
     wander_px: float, centroid_noise_px: float, outline_noise_px: float, unseen: int = 0, drift_px: float = 0.0
 ) -> pd.DataFrame:
@@ -150,8 +177,8 @@ def _track(
     [
         (3.0, 0.0, 0.1, 0.08, "outline"),  # a two-tone ball turning: its half's centroid wanders
         (0.0, 2.0, 0.05, 0.05, "outline"),  # ... turning slowly: its half's centroid passes for a creeping camera
-        (0.25, 0.0, 0.13, 0.06, "outline"),  # a print's centroid: off its circle by only 1.3 times its noise (the rest
-        # of its wander along the swing), the outline's path half as far off and half as noisy (seed 7031)
+        (0.25, 0.0, 0.13, 0.06, "outline"),  # a print's centroid: off its circle by only 1.3 times its noise, the
+        # outline's path half as far off and half as noisy: the better pendulum on both counts (seed 7031)
         (0.0, 0.0, 0.03, 0.15, "silhouette"),  # an apple: its outline no circle, its centre noisier
         (0.0, 0.0, 0.05, 0.05, "silhouette"),  # a uniform ball: the two agree
     ],
@@ -174,3 +201,9 @@ def test_the_outline_is_kept_only_where_its_path_is_the_better_pendulum(
             assert facts["unexplained_rms_px"]["outline"] < 0.5 * facts["unexplained_rms_px"]["silhouette"]
     else:
         assert out.x_px.equals(track.x_px) and (out.flag == "ok").all()
+
+
+def test_a_track_too_short_for_a_path_fit_keeps_its_centroid():
+    """Under 30 usable frames neither path is fitted (their figures unknown): no evidence for the outline."""
+    out = centre_by_outline(_track(0.25, 0.13, 0.06).iloc[:20])
+    assert out.attrs["body"]["centre"]["by"] == "silhouette", out.attrs["body"]["centre"]

@@ -8,9 +8,9 @@ the sphere's limb, its ends diametrically opposite, so the circle through the ou
 
 Per frame (:func:`edge_points`): along :data:`LIMB_RAYS` rays from the silhouette's enclosing circle's centre, the
 outermost point where D (the body's difference from the scene, masked to its component grown by 2 px: not its
-thread) falls through half the body's contrast, interpolated between samples :data:`RAY_STEP_PX` apart; for a
-body with parts on both sides of the scene (a print's dark squares and its light ones, each side's limb at half
-that side's own contrast: :func:`_sides`), the outer of the two. Per clip
+thread) falls through half the body's contrast, interpolated between samples :data:`RAY_STEP_PX` apart; where the
+body differs from the scene on both sides (a print's dark squares and its light ones, whether its silhouette takes
+both sides or one), each side's edge at half that side's own contrast (:func:`_sides`), the outer kept. Per clip
 (:func:`outline_centres`): a circle through each frame's edge points, started from their enclosing circle and
 refitted (algebraic least squares) to the points within :data:`ON_CIRCLE_PX` of it, and then the centre alone
 refitted (Gauss–Newton) at the clip's median radius, from that circle or, where it holds under half the rays (a
@@ -22,10 +22,11 @@ fewer than :data:`MIN_LIMB_SHARE` of the rays did not show its limb.
 (:func:`pendulum.tracking.path_shape.path_departure` on each track): the centroid's path wanders off one circle about
 a fixed or creeping pivot by more than :data:`WANDER_NOISE_RATIO` times its own noise (the RMS beyond the noise,
 √(RMS² − noise²): on a 6 s clip of a clock's bob, 1.2 times, the outline was 8 times worse), and the outline's
-by at most :data:`OUTLINE_GAIN` of that, with a smaller RMS; or the outline's path at most :data:`OUTLINE_GAIN` as
-far off its circle as the centroid's and no noisier (a print's centroid wanders mostly along the swing, where a
-circle cannot see it: seed 7031 of the body study, 1.3 times its noise off the circle, its angles 0.054° off the
-truth, 0.020° by its outline); or the two paths need different creeps of the camera
+by at most :data:`OUTLINE_GAIN` of that, with a smaller RMS; or the outline's path is the better pendulum on both
+counts, at most :data:`OUTLINE_GAIN` as far off its circle as the centroid's and no noisier, whatever the cause (a
+print's centroid wanders mostly along the swing, where a circle sees only part of it, and is noisier: seed 7031 of
+the body study, off its circle by 1.3 times its noise, its angles 0.054° off the truth, 0.020° by its outline; a
+ball whose outline is half as noisy as its centroid); or the two paths need different creeps of the camera
 (by more than path_shape's own least creep, and five of their standard errors: a wander slow enough to pass for
 a creep), the outline's path no farther off its circle than the centroid's plus its noise. The camera moves both
 centres alike; only a centre that moves on the body makes them differ, and a sphere's outline cannot. An apple (its
@@ -51,7 +52,7 @@ MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outl
 FULL_CONTRAST = 0.8  # of the body's contrast, reached along a ray whose edge is measured
 MIN_SIDE_SHARE = 0.05  # of the body's pixels on one side of the scene, for that side's edge to be sought apart
 MIN_SIDE_CONTRAST = 0.25  # of the body's contrast: a fainter side is the part the silhouette leaves out too
-OTHER_SIDE_REACH = 1.3  # × the silhouette's enclosing radius: where a one-sided body's other side is sought
+OTHER_SIDE_REACH = 1.3  # × the silhouette's enclosing radius (+ 2 px): where a dark body's light side is sought
 MIN_POINTS = 8  # edge points a circle is fitted to
 VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every sixth ray's points
 VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 240 circles × 96 points)
@@ -62,6 +63,7 @@ _RAYS = (
     np.sin(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
 )
 _GROW = np.ones((5, 5), np.uint8)  # the component grown by 2 px: its edge's blur, not its thread
+_PATCHES = (cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))  # a side's strong pixels in patches, not the wall's noise
 OUTLINE_COLUMNS = ["outline_x_px", "outline_y_px", "outline_r_px", "outline_rays"]
 
 
@@ -75,45 +77,46 @@ def _percentile_90(values: np.ndarray) -> float:
 
 def _sides(
     diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None, polarity: str, centre, reach: float
-) -> list[tuple[np.ndarray, float, np.ndarray]]:
-    """The differences an edge is sought in, each with its contrast C (90th percentile) and where it is sought: D
-    itself within the body's component grown by 2 px; with ``signed`` (I − B) given, also the scene's other side:
+) -> list[tuple[np.ndarray, float, np.ndarray, bool]]:
+    """The differences an edge is sought in, each with its contrast C (90th percentile) and where it is sought (a
+    mask): D within the body's component grown by 2 px, or, with ``signed`` (I − B) given, each side of the scene
+    where that side holds part of the body: :data:`MIN_SIDE_SHARE` of the pixels looked at differing on it by half
+    :data:`MIN_SIDE_CONTRAST` of D's contrast or more, in patches of 3 × 3 px at least (not the wall's noise), and
+    its C, over the pixels on that side, :data:`MIN_SIDE_CONTRAST` of D's or more:
 
-    * a body both darker and brighter than the scene (``polarity`` both): its dark and its bright side apart where
-      each holds :data:`MIN_SIDE_SHARE` of its pixels at :data:`MIN_SIDE_CONTRAST` of D's contrast or more (a
-      print's light squares, 65 levels against its dark ones' 150: their limb crossed at half their own contrast,
-      never at half the dark squares');
-    * a body measured by one side (a dark print whose light squares were left out of its silhouette): the other
-      side within :data:`OTHER_SIDE_REACH` of the silhouette's enclosing circle, where it holds as much there."""
+    * a body both darker and brighter than the scene (``polarity`` both): its dark and its bright side apart, each
+      in the grown component, in place of D (a print's light squares, 65 levels against its dark ones' 150: their
+      limb crossed at half their own contrast, never at half the dark squares');
+    * a body measured by its dark side (a dark print whose light squares were left out of its silhouette): D, and
+      its light side within :data:`OTHER_SIDE_REACH` × the silhouette's enclosing radius + 2 px, where it falls
+      in the image, not at that disk's rim (a light patch reaching past it); never a shadow, which is dark. A
+      bright body measured by its bright side keeps D alone: its dark side would take in its shadow."""
     mask = component.astype(np.uint8)
     grown = cv2.dilate(mask, _GROW)
     contrast = _percentile_90(diff[component])
-    alone = [(diff, contrast, grown)]
-    if signed is None:
+    alone = [(diff, contrast, grown, False)]
+    if signed is None or polarity == "bright":  # a bright body's dark side: its own shadow beside it, too
         return alone
-    if polarity != "both":
-        sign = 1.0 if polarity == "dark" else -1.0  # the side the silhouette left out
-        disk, near = np.zeros_like(mask), np.zeros_like(mask)
+    if polarity == "dark":
+        looked, near = np.zeros_like(mask), np.zeros_like(mask)
         at = (round(centre[0]), round(centre[1]))
-        cv2.circle(disk, at, round(reach), 1, -1)
+        cv2.circle(looked, at, round(reach), 1, -1)
         cv2.circle(near, at, round(OTHER_SIDE_REACH * reach + 2), 1, -1)
-        side = np.maximum(sign * signed, 0.0)
-        values = side[(disk > 0) & (sign * signed > 0)]
-        if values.size < MIN_SIDE_SHARE * np.count_nonzero(disk) or not values.size:
-            return alone
-        level = _percentile_90(values)
-        return alone + [(side, level, near)] if level >= MIN_SIDE_CONTRAST * contrast else alone
+        signs, where = [1.0], near  # the light side the silhouette left out
+    else:
+        looked, signs, where = mask, [-1.0, 1.0], grown
+    in_disk = polarity != "both"  # the disk's rim is no edge: the side must fall within 1 px beyond (edge_points)
     sides = []
-    for sign in (-1.0, 1.0):
+    for sign in signs:
         side = np.maximum(sign * signed, 0.0)
-        values = side[component & (sign * signed > 0)]
-        if values.size < MIN_SIDE_SHARE * np.count_nonzero(component):
+        seen = cv2.morphologyEx(
+            ((looked > 0) & (side >= 0.5 * MIN_SIDE_CONTRAST * contrast)).astype(np.uint8), *_PATCHES
+        )
+        level = _percentile_90(side[(looked > 0) & (side > 0)]) if seen.any() else 0.0
+        if np.count_nonzero(seen) < MIN_SIDE_SHARE * np.count_nonzero(looked) or level < MIN_SIDE_CONTRAST * contrast:
             return alone
-        level = _percentile_90(values)
-        if level < MIN_SIDE_CONTRAST * contrast:
-            return alone
-        sides.append((side, level, grown))
-    return sides
+        sides.append((side, level, where, in_disk))
+    return alone + sides if polarity != "both" else sides
 
 
 def edge_points(
@@ -131,7 +134,7 @@ def edge_points(
     cos, sin = _RAYS
     map_x, map_y = (cx + cos * radii).astype(np.float32), (cy + sin * radii).astype(np.float32)
     outermost, distance = np.full(LIMB_RAYS, -1), np.full(LIMB_RAYS, np.nan)
-    for side, contrast, where in _sides(diff, component, signed, polarity, (cx, cy), reach):
+    for side, contrast, where, in_disk in _sides(diff, component, signed, polarity, (cx, cy), reach):
         level = 0.5 * contrast
         masked = side.astype(np.float32) * where
         profile = cv2.remap(masked, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
@@ -139,6 +142,9 @@ def edge_points(
         last = radii.size - 1 - np.argmax(above[:, ::-1], axis=1)  # the outermost sample above the level
         # a ray through a sliver of the body (a crescent's tip) does not reach its full contrast: its edge is blurred in
         found = above.any(axis=1) & (last + 1 < radii.size) & (profile.max(axis=1) >= FULL_CONTRAST * contrast)
+        if in_disk:  # a shadow or a thread reaching past the disk it is sought in: no edge of the body
+            free = cv2.remap(side.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            found &= free[np.arange(LIMB_RAYS), np.minimum(last + round(1 / RAY_STEP_PX), radii.size - 1)] < level
         rows = np.nonzero(found & (last > outermost))[0]
         j = last[rows]
         inside, outside = profile[rows, j], profile[rows, j + 1]
@@ -304,8 +310,10 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         wander_centroid > WANDER_NOISE_RATIO * noise_centroid
         and wander_outline <= OUTLINE_GAIN * wander_centroid
         and left_outline < left_centroid
-    ) or (  # a wander mostly along the swing (off the circle only in part): the outline's path cleaner on both counts
-        left_outline <= OUTLINE_GAIN * left_centroid and noise_outline <= noise_centroid
+    ) or (  # the outline's path the better pendulum on both counts (a wander mostly along the swing, and noise)
+        math.isfinite(left_outline + noise_outline + left_centroid + noise_centroid)  # both paths fitted
+        and left_outline <= OUTLINE_GAIN * left_centroid
+        and noise_outline <= noise_centroid
     )
     # a wander slow enough to pass for the camera creeping: the centroid's creep not the outline's
     if not (wanders or (creeps_differ and left_outline <= left_centroid + noise_centroid)):
