@@ -470,13 +470,14 @@ def _in_colour(name: str, last: int | None = None) -> list:
     out = []
     for k, image in enumerate(luma):
         apple = cv2.resize(shares[k].astype(np.float32), small, interpolation=cv2.INTER_AREA)
+        if name.startswith("two_tone"):  # its centre from the luma's apple (rows halved, chroma sited)
+            solid = np.where(shares[k] >= 0.5, shares[k], 0.0)
+            cx = float((solid * np.arange(w)[None, :]).sum() / solid.sum())
+            cy = float((solid * np.arange(h)[:, None]).sum() / solid.sum())
         chroma = []
         for plane, wall_c, paint, tint in zip((us[k], vs[k]), walls_c, (165.0, 117.0), tints, strict=True):
             shaded = plane - (1 - apple) * ((wall_c - 128) * (1 - gain_c) - tint)
-            if name.startswith("two_tone"):  # its centre's height from the luma's apple (rows halved, chroma sited)
-                solid = np.where(shares[k] >= 0.5, shares[k], 0.0)
-                cx = float((solid * np.arange(w)[None, :]).sum() / solid.sum())
-                cy = float((solid * np.arange(h)[:, None]).sum() / solid.sum())
+            if name.startswith("two_tone"):
                 body = apple
                 if turning:  # the apple painted out (the banded wall's chroma), a sphere in its place
                     shaded = shaded * (1 - apple) + (wall_c - ((wall_c - 128) * (1 - gain_c) - tint)) * apple

@@ -112,8 +112,10 @@ def _sides(
         seen = cv2.morphologyEx(
             ((looked > 0) & (side >= 0.5 * MIN_SIDE_CONTRAST * contrast)).astype(np.uint8), *_PATCHES
         )
-        level = _percentile_90(side[(looked > 0) & (side > 0)]) if seen.any() else 0.0
-        if np.count_nonzero(seen) < MIN_SIDE_SHARE * np.count_nonzero(looked) or level < MIN_SIDE_CONTRAST * contrast:
+        if not seen.any() or np.count_nonzero(seen) < MIN_SIDE_SHARE * np.count_nonzero(looked):
+            return alone
+        level = _percentile_90(side[(looked > 0) & (side > 0)])
+        if level < MIN_SIDE_CONTRAST * contrast:
             return alone
         sides.append((side, level, where, in_disk))
     return alone + sides if polarity != "both" else sides
