@@ -173,23 +173,29 @@ def _track(
 
 
 @pytest.mark.parametrize(
-    "wander_px, drift_px, centroid_noise_px, outline_noise_px, by",
+    "wander_px, drift_px, centroid_noise_px, outline_noise_px, by, why",
     [
-        (3.0, 0.0, 0.1, 0.08, "outline"),  # a two-tone ball turning: its half's centroid wanders
-        (0.0, 2.0, 0.05, 0.05, "outline"),  # ... turning slowly: its half's centroid passes for a creeping camera
-        (0.25, 0.0, 0.13, 0.06, "outline"),  # a print's centroid: off its circle by only 1.3 times its noise, the
-        # outline's path half as far off and half as noisy: the better pendulum on both counts (seed 7031)
-        (0.0, 0.0, 0.03, 0.15, "silhouette"),  # an apple: its outline no circle, its centre noisier
-        (0.0, 0.0, 0.05, 0.05, "silhouette"),  # a uniform ball: the two agree
+        (3.0, 0.0, 0.1, 0.08, "outline", "turns on its string"),  # a two-tone ball turning: its half's centroid
+        # wanders
+        (0.0, 2.0, 0.05, 0.05, "outline", "needs the camera to creep"),  # ... turning slowly: its half's centroid
+        # passes for a creeping camera
+        (0.25, 0.0, 0.13, 0.06, "outline", "the better pendulum"),  # a print's centroid: off its circle by only 1.3
+        # times its noise, the outline's path half as far off and half as noisy: the better pendulum on both counts
+        # (seed 7031), not said to be a ball turning on its string
+        (0.0, 0.0, 0.03, 0.15, "silhouette", None),  # an apple: its outline no circle, its centre noisier
+        (0.0, 0.0, 0.05, 0.05, "silhouette", None),  # a uniform ball: the two agree
     ],
 )
 def test_the_outline_is_kept_only_where_its_path_is_the_better_pendulum(
-    wander_px, drift_px, centroid_noise_px, outline_noise_px, by
+    wander_px, drift_px, centroid_noise_px, outline_noise_px, by, why
 ):
     track = _track(wander_px, centroid_noise_px, outline_noise_px, unseen=30, drift_px=drift_px)
     out = centre_by_outline(track)
     facts = out.attrs["body"]["centre"]
     assert facts["by"] == by, facts
+    assert (why is None and "why" not in facts) or why in facts["why"], facts
+    if why == "the better pendulum":
+        assert "turns on its string" not in facts["why"] and "its noise 0.0" in facts["why"], facts
     assert not any(c.startswith("outline_") for c in out.columns)
     if by == "outline":
         assert np.allclose(out.x_px[:-30], track.outline_x_px[:-30])

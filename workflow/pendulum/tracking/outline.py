@@ -312,31 +312,34 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         wander_centroid > WANDER_NOISE_RATIO * noise_centroid
         and wander_outline <= OUTLINE_GAIN * wander_centroid
         and left_outline < left_centroid
-    ) or (  # the outline's path the better pendulum on both counts (a wander mostly along the swing, and noise)
+    )
+    better = (  # the outline's path the better pendulum on both counts (a wander mostly along the swing, and noise)
         math.isfinite(left_outline + noise_outline + left_centroid + noise_centroid)  # both paths fitted
         and left_outline <= OUTLINE_GAIN * left_centroid
         and noise_outline <= noise_centroid
     )
     # a wander slow enough to pass for the camera creeping: the centroid's creep not the outline's
-    if not (wanders or (creeps_differ and left_outline <= left_centroid + noise_centroid)):
+    if not (wanders or better or (creeps_differ and left_outline <= left_centroid + noise_centroid)):
         return centroid
     unseen = int((ok & ~seen).sum())
     facts["by"] = "outline"
-    if wanders:
+    turns = ": a ball seen in part (one half of a two-tone ball, a print's dark patches) that turns on its string"
+    if wanders or better:
         evidence = (
             f"the silhouette's centroid leaves its path {left_centroid:.2f} px RMS off a circle about the pivot, the "
             f"centre of its round outline ({radius:.1f} px in radius) {left_outline:.2f} px"
         )
+        if not wanders:  # the centroid's own wander within its noise: the outline's path the better pendulum
+            evidence += f", and its noise {noise_outline:.2f} px against the centroid's {noise_centroid:.2f} px"
+            turns = ": the outline's path the better pendulum (a centroid that wanders along the swing, or noisier)"
     else:
         (sx, sy), (ox, oy) = creep_centroid, creep_outline
         evidence = (
             f"the silhouette's centroid needs the camera to creep by ({sx:+.1f}, {sy:+.1f}) px over the clip, the "
             f"centre of its round outline ({radius:.1f} px in radius) by ({ox:+.1f}, {oy:+.1f}) px"
         )
-    facts["why"] = (
-        f"{evidence}: a ball seen in part (one half of a two-tone ball, a print's dark patches) that turns on its "
-        "string, measured by its outline's centre"
-        + (f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else "")
+    facts["why"] = f"{evidence}{turns}, measured by its outline's centre" + (
+        f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else ""
     )
     outline.attrs = {**centroid.attrs, "body": {**centroid.attrs["body"], "centre": facts}}
     if "method" in outline.attrs:  # said where the method is
