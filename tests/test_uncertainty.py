@@ -287,3 +287,33 @@ def test_a_consistent_verdict_says_which_coefficients_it_speaks_for():
     assert result["explanation"].startswith("per-trial estimates of drag_area_m2 agree")
     assert result["explanation"].endswith("not tested: added_mass_kg (2 of 3 trials not identifiable)")
     assert result["parameters"]["added_mass_kg"]["trials_used"] == ["apple"]
+
+
+def test_a_rig_value_whose_plus_one_sigma_refit_stops_at_a_bound_is_budgeted_from_its_minus_one_sigma_refit():
+    """An apple on a string in air (a helper's run of the apple clip): added mass 0.0001 kg, its string's length
+    stated ±0.05 m. The +1σ length refit stopped at the bound m_a ≥ 0 and its budget entry was that clip (−m_a),
+    the interval [0, 0.0011] kg, where a length 1σ shorter moves m_a by +0.009 kg: the length left out of the
+    interval. Now the entry is the −1σ refit's shift, turned: within 10 % of that refit's own, and the interval
+    reaches past it."""
+    rig = {
+        "mass_kg": 0.18,
+        "length_m": 1.053,
+        "frontal_area_m2": 0.0038,
+        "displaced_volume_m3": 0.0002,
+        "fluid_density_kg_m3": 1.2,
+        "gravity_m_s2": 9.81,
+    }
+    terms = ("quadratic_drag",)
+    model = PendulumModel(Rig(**rig), terms)
+    data = synthetic_angle_table(
+        model, {"added_mass_kg": 0.0001, "drag_area_m2": 0.0019}, 25.0, rng=np.random.default_rng(3)
+    )
+    tolerances = {"length_m": 0.05}
+    fit = fit_trials([load_record(data, "apple", rig, SETTINGS, tolerances=tolerances)], terms, SETTINGS)
+    shorter = dict(rig, length_m=rig["length_m"] - 0.05)
+    refit = fit_trials([load_record(data, "apple", shorter, SETTINGS, tolerances={})], terms, SETTINGS)
+    added = fit["parameters"]["added_mass_kg"]
+    moved = refit["parameters"]["added_mass_kg"]["value"] - added["value"]
+    assert moved > 10 * added["value"] > 0, (moved, added)  # the bound is near: +1σ would cross it
+    assert -added["error_budget"]["length_m"] == pytest.approx(moved, rel=0.1), added["error_budget"]
+    assert added["ci95"][1] > added["value"] + moved, added

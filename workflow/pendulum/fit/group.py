@@ -30,6 +30,7 @@ from pendulum.fit.uncertainty import (
     sandwich_covariance,
     shared_frontal_area,
     systematic_perturbations,
+    unclipped_shift,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import PendulumModel, simulate
@@ -224,18 +225,36 @@ def systematic_shifts(fit: GroupFit, settings: FitSettings) -> dict[str, np.ndar
     problem = fit.problem
     free = ~fit.active
     base = np.concatenate(fit.residuals)
-    labels, jobs = [], []
-    for rig in problem.rigs:
-        members = [k for k, name in enumerate(problem.rig_of) if name == rig]
-        for label, moved_subset in systematic_perturbations([problem.records[k] for k in members]).items():
-            records = list(problem.records)
-            for k, rec in zip(members, moved_subset, strict=True):
-                records[k] = rec
-            moved = GroupProblem(records, problem.rig_of, problem.terms, problem.masks, problem.max_step_s)
-            start = fit.x + linear_response(fit.jacobian, free, moved.residuals(fit.x) - base)
-            labels.append(label if len(problem.rigs) == 1 else f"{label}[{rig}]")
-            jobs.append((moved, np.where(free, start, fit.x), settings, 1e-7))
-    return {label: refit.x - fit.x for label, refit in zip(labels, solve_many(jobs), strict=True)}
+
+    def jobs_for(sign: float) -> tuple[list[str], list[tuple]]:
+        labels, jobs = [], []
+        for rig in problem.rigs:
+            members = [k for k, name in enumerate(problem.rig_of) if name == rig]
+            subset = [problem.records[k] for k in members]
+            for label, moved_subset in systematic_perturbations(subset, sign).items():
+                records = list(problem.records)
+                for k, rec in zip(members, moved_subset, strict=True):
+                    records[k] = rec
+                moved = GroupProblem(records, problem.rig_of, problem.terms, problem.masks, problem.max_step_s)
+                start = fit.x + linear_response(fit.jacobian, free, moved.residuals(fit.x) - base)
+                labels.append(label if len(problem.rigs) == 1 else f"{label}[{rig}]")
+                jobs.append((moved, np.where(free, start, fit.x), settings, 1e-7))
+        return labels, jobs
+
+    labels, jobs = jobs_for(1.0)
+    up = dict(zip(labels, solve_many(jobs), strict=True))
+    down: dict[str, GroupFit] = {}
+
+    def turned(label: str):  # the −1σ refits (all at once, the first time a bound clips a +1σ one)
+        if not down:
+            names, work = jobs_for(-1.0)
+            down.update(zip(names, solve_many(work), strict=True))
+        return down[label].x - fit.x, down[label].active
+
+    return {
+        label: unclipped_shift(up[label].x - fit.x, up[label].active, free, lambda k=label: turned(k))
+        for label in labels
+    }
 
 
 def leave_trials_out(fit: GroupFit, settings: FitSettings, max_folds: int = MAX_HELD_OUT_FOLDS) -> list[np.ndarray]:

@@ -63,6 +63,7 @@ from pendulum.fit.uncertainty import (
     sandwich_covariance,
     shared_frontal_area,
     systematic_perturbations,
+    unclipped_shift,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound
 from pendulum.model.physics import PendulumModel, keulegan_carpenter_number, simulate
@@ -328,22 +329,31 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
 
 
 def _systematic_shifts(problem: _Problem, sol, jac, lower) -> dict[str, np.ndarray]:
-    """Shift of the estimate when each systematic input moves by 1σ: a real refit, not a linearisation.
-
-    An input that changes the period (length, mass, buoyancy) moves the residuals
-    far beyond their linear range over many cycles, although the estimate itself
-    responds smoothly; so each input is refitted, started from the linearised
-    answer δx = −J⁺ δr (two or three iterations).
-    """
+    """Shift of the estimate when each systematic input moves by 1σ: a real refit, not a linearisation (an input
+    that changes the period moves the residuals far beyond their linear range over many cycles, although the
+    estimate responds smoothly), started from the linearised answer δx = −J⁺ δr; the −1σ refit's, turned, where a
+    bound stopped the +1σ one (:func:`~pendulum.fit.uncertainty.unclipped_shift`)."""
     free = np.asarray(sol.active_mask) == 0
     base = problem.residuals(sol.x)
-    shifts = {}
-    for label, records in systematic_perturbations(problem.records).items():
+    finite = np.isfinite(lower)
+
+    def refit(records):
         moved = _Problem(problem.model_for, records, problem.names, problem.max_step_s)
         moved.masks = [m.copy() for m in problem.masks]
         start = sol.x + linear_response(jac, free, moved.residuals(sol.x) - base)
-        refit = moved.solve(np.where(free, start, sol.x), lower, tolerance=1e-7)
-        shifts[label] = refit.x - sol.x
+        found = moved.solve(np.where(free, start, sol.x), lower, tolerance=1e-7)
+        active = np.asarray(found.active_mask) != 0
+        active[finite] |= found.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))
+        return found.x - sol.x, active
+
+    shifts, down = {}, {}
+    for label, records in systematic_perturbations(problem.records).items():
+
+        def turned(label=label):  # the −1σ refit, where a bound clipped the +1σ one
+            down.update(down or systematic_perturbations(problem.records, sign=-1.0))
+            return refit(down[label])
+
+        shifts[label] = unclipped_shift(*refit(records), free, turned)
     return shifts
 
 

@@ -390,8 +390,9 @@ def pivot_angle_gradient(theta_image_rad: np.ndarray, arm_radius_px: float) -> n
     return np.column_stack([-np.cos(theta_image_rad), np.sin(theta_image_rad)]) / arm_radius_px
 
 
-def systematic_perturbations(records) -> dict[str, list]:
-    """Each systematic input moved by its 1σ: input name → the records as they would then be.
+def systematic_perturbations(records, sign: float = 1.0) -> dict[str, list]:
+    """Each systematic input moved by its 1σ (by −1σ with ``sign`` −1): input name → the records as they would
+    then be.
 
     Rig values: every record's value moved by its stated 1σ tolerance (one
     input for all records of a fit: one rig, one measurement). The estimated
@@ -406,7 +407,7 @@ def systematic_perturbations(records) -> dict[str, list]:
         for rec in records:
             sigma = rec.tolerances.get(key, 0.0)
             if sigma and rec.rig_values.get(key) is not None:
-                values = dict(rec.rig_values, **{key: float(rec.rig_values[key]) + sigma})
+                values = dict(rec.rig_values, **{key: float(rec.rig_values[key]) + sign * sigma})
                 rec = replace(rec, rig=Rig.from_mapping(values), rig_values=values)
                 changed = True
             moved.append(rec)
@@ -421,7 +422,7 @@ def systematic_perturbations(records) -> dict[str, list]:
         for i in range(2):
             if lam[i] <= 0:
                 continue
-            step = math.sqrt(lam[i]) * vec[:, i]
+            step = sign * math.sqrt(lam[i]) * vec[:, i]
             moved = []
             for k, rec in enumerate(records):
                 if k in members:
@@ -431,6 +432,19 @@ def systematic_perturbations(records) -> dict[str, list]:
             label = "pivot_px" if len(groups) == 1 else f"pivot_px[{g}]"
             out[f"{label} (axis {i + 1})"] = moved
     return out
+
+
+def unclipped_shift(up: np.ndarray, up_active: np.ndarray, free: np.ndarray, down) -> np.ndarray:
+    """An input's 1σ shift of the estimate: the +1σ refit's (``up``), but where a parameter the fit left ``free``
+    stopped at its bound in that refit (``up_active``), the −1σ refit's turned (``down()``: its shift and which
+    parameters it stopped at their bound), a bound clipping the shift and not the input's effect. An apple's added
+    mass (0.0004 kg) with its string's length +1σ refitted to the bound 0: a shift of −0.0004 kg, where −1σ moves it
+    by +0.009 kg (a helper's run of the apple clip, 2026-12-05); the interval had left the length out."""
+    clipped = np.asarray(up_active, bool) & np.asarray(free, bool)
+    if not clipped.any():
+        return up
+    down_shift, down_active = down()
+    return np.where(clipped & ~np.asarray(down_active, bool), -down_shift, up)
 
 
 def jacobian_rank_warnings(jac: np.ndarray, labels: list[str], tolerance: float = 1e-8) -> list[str]:
