@@ -224,6 +224,15 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     built += f" ({skipped} more skipped by their sidecars)" if skipped else ""
     lines = [f"{len(bad)} of {len(run)} trial(s) failed; {built}:"]
     lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
+    first = bad.iloc[0]
+    sidecar = (
+        Path(str(first.source)).with_suffix(".yaml").as_posix() if first.source else f"<raw_dir>/{first.trial}.yaml"
+    )
+    lines.append(
+        "A trial that cannot be mended (a clip that is no pendulum, a file that cannot be read) is left out by "
+        f"`skip: <why>` in its sidecar ({sidecar} for {first.trial}); the run then ends without an error "
+        "(docs/your-data.md)."
+    )
     lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
     return "\n".join(lines)
 
