@@ -93,6 +93,8 @@ def test_a_short_arc_is_short_whichever_way_the_camera_is_turned(turned_deg):
     assert fit_circle(x, y).arc_span_deg == pytest.approx(44.0, abs=0.5)
     tilt = path_tilt(x, y)
     assert tilt["arc_span_deg"] == pytest.approx(44.0, abs=0.5) and not tilt["significant"]
+    # no tilt said at all: the apple clip's 44° arc had read "axis ratio 0.002, turned 89.9°" in its geometry JSON
+    assert not tilt["judged"] and "tilt_deg" not in tilt and "not judged" in tilt["note"], tilt
 
 
 @pytest.mark.parametrize("name,amplitude_deg", [("wooden_bob", 56.0), ("steel_bob", 4.0)])

@@ -161,7 +161,8 @@ def path_tilt(x, y) -> dict | None:
     > 1 a plane pitched by acos(b/a). The ratio is fixed only by the fourth-order
     shape of the arc, so a short arc leaves it uncertain and biased by noise:
     ``axis_ratio_stderr`` from the fit's covariance (residual autocorrelation
-    allowed for); ``significant`` only on arcs of at least 80° (swings of ±40°).
+    allowed for); ``significant`` only on arcs of at least 80° (swings of ±40°). On a shorter arc the ratio is
+    not fitted (an apple's 44° arc gave 0.002, a plane "turned by 90°"): ``judged`` false, the arc and a ``note``.
     None when fewer than 20 points.
     """
     from scipy.optimize import least_squares
@@ -175,6 +176,15 @@ def path_tilt(x, y) -> dict | None:
     if x.size < 20:
         return None
     circle = fit_circle(x, y)
+    if circle.arc_span_deg < PATH_TILT_MIN_ARC_DEG:
+        return {
+            "judged": False,
+            "arc_span_deg": circle.arc_span_deg,
+            "significant": False,
+            "n_points": int(x.size),
+            "note": f"not judged: an arc of {circle.arc_span_deg:.0f}° (under {PATH_TILT_MIN_ARC_DEG:.0f}°) does not "
+            "fix the ellipse's axis ratio",
+        }
     r0 = circle.radius_px
 
     def residual(p):
@@ -193,6 +203,7 @@ def path_tilt(x, y) -> dict | None:
     shrink = min(ratio, 1 / ratio)
     tilt = math.degrees(math.acos(min(shrink, 1.0)))
     return {
+        "judged": True,
         "axis_ratio": float(ratio),
         "axis_ratio_stderr": ratio_se,
         "tilt_deg": tilt,
