@@ -268,7 +268,9 @@ def test_a_release_by_hand_is_found_from_the_free_swings_start(fps, seed):
     flags[:hand_gone] = "held"
     biased = np.where(flags == "held", theta + math.radians(rng.uniform(-3, 3)), theta)  # the hand pulls the centroid
     table, info = angle_record(t, biased, np.ones(t.size), flags, vertical_deg=0.0, length_m=0.76, source="hand")
-    assert info.release_detected and info.held_frames == hand_gone
+    # held before the release (within a frame: the release found within half of one), the rest as the hand drew back
+    assert info.release_detected and abs(info.held_frames - np.searchsorted(t, t_release)) <= 1, info.held_frames
+    assert f"{hand_gone - info.held_frames} more with the hand still over it" in info.notes[-1], info.notes
     assert abs(info.release_time_s - t_release) < 0.5 / fps, (info.release_time_s, t_release)
     assert info.hold_angle_deg == pytest.approx(release_deg, abs=0.04)
     assert table.video_time_s.iloc[0] > info.release_time_s and table.time_s.iloc[0] < 1 / fps

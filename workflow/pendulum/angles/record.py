@@ -139,16 +139,18 @@ def angle_record(
         n_samples=int(len(table)),
         n_flagged=int((table.flag != "ok").sum()),
         rest_from_s=rest_from,
-        held_frames=int(held[:first_free].sum()) if by_hand else 0,
+        held_frames=int((held[:first_free] & (t[:first_free] < release.time_s)).sum()) if by_hand else 0,
         noise_deg=math.degrees(sample_noise_rad(theta, t)),
         arm_radius_px=arm_radius_px,
         pivot_covariance_px2=pivot_covariance_px2,
     )
     if by_hand:
         where = "" if release.hold_angle_rad is None else f" at {math.degrees(release.hold_angle_rad):+.2f}°"
+        letting_go = int(held[:first_free].sum()) - info.held_frames  # the hand still over it as it draws back
         info.notes.append(
-            f"released by hand in view: {info.held_frames} frame(s) held (the body with the hand) before the first "
-            f"free one; let go{where} at {release.time_s:.3f} s (video time), from the free swing's start"
+            f"released by hand in view: {info.held_frames} frame(s) held (the body with the hand) before it was let "
+            f"go{where} at {release.time_s:.3f} s (video time, from the free swing's start)"
+            + (f", {letting_go} more with the hand still over it as it drew back" if letting_go else "")
         )
     period = crossing_period(table.time_s.to_numpy(float), table.theta_rad.to_numpy(float))
     if period is not None:
