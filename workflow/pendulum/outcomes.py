@@ -226,7 +226,9 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
     first = bad.iloc[0]
     sidecar = (
-        Path(str(first.source)).with_suffix(".yaml").as_posix() if first.source else f"<raw_dir>/{first.trial}.yaml"
+        Path(first.source).with_suffix(".yaml").as_posix()
+        if isinstance(first.source, str) and first.source
+        else f"<raw_dir>/{first.trial}.yaml"
     )
     lines.append(
         "A trial that cannot be mended (a clip that is no pendulum, a file that cannot be read) is left out by "
