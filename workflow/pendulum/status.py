@@ -90,7 +90,12 @@ def fitted_trials(
         bad = next((d for d in (angle_info[name], fits[name]) if is_failed(d)), None)
         if bad:
             excluded[name] = f"{bad['failed_stage']} failed: {bad['error']}"
-        elif fits[name].get("reliable") is False:
+            # its reason said once, where it failed and in the status table; not again by every group it was in
+            log.warning(
+                "%s: %s left out (%s failed: see results/status/trials.csv)", context, name, bad["failed_stage"]
+            )
+            continue
+        if fits[name].get("reliable") is False:
             problems = [
                 p for t in fits[name].get("trials", {}).values() for p in t.get("record_checks", {}).get("problems", [])
             ]
@@ -148,7 +153,7 @@ def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_f
         work()
         return True
     except UpstreamFailed as exc:
-        log.error("not run: %s", exc)
+        log.error("not run: its %s stage failed (why: results/status/trials.csv, or that stage's log)", exc.stage)
         write_failed(failed(exc.stage, exc.error))
     except Exception as exc:
         if write_failure(exc) is not None:
