@@ -317,3 +317,35 @@ def test_a_rig_value_whose_plus_one_sigma_refit_stops_at_a_bound_is_budgeted_fro
     assert moved > 10 * added["value"] > 0, (moved, added)  # the bound is near: +1σ would cross it
     assert -added["error_budget"]["length_m"] == pytest.approx(moved, rel=0.1), added["error_budget"]
     assert added["ci95"][1] > added["value"] + moved, added
+    # the drag area took up what the bound held back in the +1σ refit (−9.2e-4 m², 49 % of it): its entry is the
+    # −1σ refit's too, one world for every coefficient
+    drag = fit["parameters"]["drag_area_m2"]
+    drag_moved = refit["parameters"]["drag_area_m2"]["value"] - drag["value"]
+    assert -drag["error_budget"]["length_m"] == pytest.approx(drag_moved, rel=0.1), drag["error_budget"]
+
+
+def test_a_clipped_shift_takes_the_minus_one_sigma_refit_whole_where_that_refit_reaches_no_bound():
+    """unclipped_shift's three cases: the −1σ refit whole (no bound in it), per coefficient (a bound in it too),
+    and the +1σ shift as it was where the −1σ values make no rig."""
+    from pendulum.fit.uncertainty import unclipped_shift
+
+    up, free = np.array([-1.0, 5.0, 2.0]), np.array([True, True, True])
+    clipped = np.array([True, False, False])
+    down = np.array([3.0, -1.0, -2.5])
+    assert unclipped_shift(up, ~clipped & False, free, lambda: 1 / 0).tolist() == up.tolist()  # not asked
+    assert unclipped_shift(up, clipped, free, lambda: (down, np.zeros(3, bool))).tolist() == (-down).tolist()
+    bound = np.array([False, False, True])
+    assert unclipped_shift(up, clipped, free, lambda: (down, bound)).tolist() == [-3.0, 5.0, 2.0]
+    assert unclipped_shift(up, clipped, free, lambda: None).tolist() == up.tolist()
+
+
+def test_an_input_whose_minus_one_sigma_value_makes_no_pendulum_is_left_out_of_the_minus_one_sigma_refits():
+    """A body 2.6 kg in water displacing 2.5 kg, its mass stated ±0.13 kg: 1σ lighter it would float, so the −1σ
+    perturbations leave that input out (its shift then stays the +1σ refit's), where the +1σ ones keep it."""
+    from pendulum.fit.uncertainty import systematic_perturbations
+
+    rig = dict(RIG, mass_kg=2.6)
+    record = load_record(table(20, seed=4), "heavy", rig, SETTINGS, tolerances={"mass_kg": 0.13})
+    assert "mass_kg" in systematic_perturbations([record])
+    lighter = systematic_perturbations([record], sign=-1.0)
+    assert "mass_kg" not in lighter and "length_m" in lighter

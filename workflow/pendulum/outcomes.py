@@ -232,8 +232,8 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     )
     lines.append(
         "A trial that cannot be mended (a clip that is no pendulum, a file that cannot be read) is left out by "
-        f"`skip: <why>` in its sidecar ({sidecar} for {first.trial}); the run then ends without an error "
-        "(docs/your-data.md)."
+        f"`skip: <why>` in its sidecar ({sidecar} for {first.trial}, or the sidecar it already has); it then fails "
+        "nothing (docs/your-data.md)."
     )
     lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
     return "\n".join(lines)

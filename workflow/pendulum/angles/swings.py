@@ -102,7 +102,7 @@ def swing_centre_track(time_s: np.ndarray, theta: np.ndarray, window: int = 5) -
 KNOCK_TURN_SIGMAS = 4.0  # a camera's turn at a knock is taken out where at least this many standard errors ...
 MIN_KNOCK_TURN_DEG = 0.02  # ... and this large
 MIN_SIDE_CENTRES = 3  # centre pairs on a side of the knock for its own spread ...
-MIN_SIDE_PAIRS = 2  # ... and at least this many, that side's spread then the other's (a knock 6 s before the end at
+MIN_SIDE_PAIRS = 2  # ... and at least this many, that side's spread then the other's (a knock 4.8 s before the end at
 # 30 fps: 2 pairs after it; its turn of −0.7° stayed in θ, 0.40° RMS off the clip's own record)
 
 
@@ -113,8 +113,9 @@ def turn_at_knock(time_s: np.ndarray, theta: np.ndarray, knock: dict) -> dict | 
     the one before ``from_s``, each the median of that side's centres (:func:`swing_centres`, each averaged with
     the next: Coulomb friction alternates them), its standard error 1.25 × 1.4826 MAD / √(n/2) per side (pairs
     overlap). ``theta`` in radians, NaN where unusable. Returns ``turn_deg``, ``stderr_deg``, ``centre_pairs`` (per
-    side) and ``taken_out`` (at least :data:`KNOCK_TURN_SIGMAS` σ and :data:`MIN_KNOCK_TURN_DEG`); None where a
-    side holds fewer than :data:`MIN_SIDE_CENTRES` pairs."""
+    side) and ``taken_out`` (at least :data:`KNOCK_TURN_SIGMAS` σ and :data:`MIN_KNOCK_TURN_DEG`). A side with
+    fewer than :data:`MIN_SIDE_CENTRES` pairs (at least :data:`MIN_SIDE_PAIRS`) takes the other side's spread; None
+    where a side holds fewer than that, or neither holds :data:`MIN_SIDE_CENTRES`."""
     t, th = np.asarray(time_s, float), np.asarray(theta, float)
     sides = []
     for side in (t < knock["from_s"], t > knock["to_s"]):

@@ -243,13 +243,14 @@ def systematic_shifts(fit: GroupFit, settings: FitSettings) -> dict[str, np.ndar
 
     labels, jobs = jobs_for(1.0)
     up = dict(zip(labels, solve_many(jobs), strict=True))
-    down: dict[str, GroupFit] = {}
+    down: dict[str, GroupFit] | None = None
 
     def turned(label: str):  # the −1σ refits (all at once, the first time a bound clips a +1σ one)
-        if not down:
+        nonlocal down
+        if down is None:
             names, work = jobs_for(-1.0)
-            down.update(zip(names, solve_many(work), strict=True))
-        return down[label].x - fit.x, down[label].active
+            down = dict(zip(names, solve_many(work), strict=True))
+        return (down[label].x - fit.x, down[label].active) if label in down else None
 
     return {
         label: unclipped_shift(up[label].x - fit.x, up[label].active, free, lambda k=label: turned(k))

@@ -346,12 +346,13 @@ def _systematic_shifts(problem: _Problem, sol, jac, lower) -> dict[str, np.ndarr
         active[finite] |= found.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))
         return found.x - sol.x, active
 
-    shifts, down = {}, {}
+    shifts, down = {}, None
     for label, records in systematic_perturbations(problem.records).items():
 
         def turned(label=label):  # the −1σ refit, where a bound clipped the +1σ one
-            down.update(down or systematic_perturbations(problem.records, sign=-1.0))
-            return refit(down[label])
+            nonlocal down
+            down = systematic_perturbations(problem.records, sign=-1.0) if down is None else down
+            return refit(down[label]) if label in down else None
 
         shifts[label] = unclipped_shift(*refit(records), free, turned)
     return shifts

@@ -391,8 +391,8 @@ def pivot_angle_gradient(theta_image_rad: np.ndarray, arm_radius_px: float) -> n
 
 
 def systematic_perturbations(records, sign: float = 1.0) -> dict[str, list]:
-    """Each systematic input moved by its 1σ (by −1σ with ``sign`` −1): input name → the records as they would
-    then be.
+    """Each systematic input moved by its 1σ (by −1σ with ``sign`` −1, an input whose −1σ values make no rig left
+    out): input name → the records as they would then be.
 
     Rig values: every record's value moved by its stated 1σ tolerance (one
     input for all records of a fit: one rig, one measurement). The estimated
@@ -408,10 +408,16 @@ def systematic_perturbations(records, sign: float = 1.0) -> dict[str, list]:
             sigma = rec.tolerances.get(key, 0.0)
             if sigma and rec.rig_values.get(key) is not None:
                 values = dict(rec.rig_values, **{key: float(rec.rig_values[key]) + sign * sigma})
-                rec = replace(rec, rig=Rig.from_mapping(values), rig_values=values)
+                try:
+                    rec = replace(rec, rig=Rig.from_mapping(values), rig_values=values)
+                except ValueError:
+                    if sign > 0:
+                        raise
+                    moved = None  # −1σ makes no pendulum (a body then lighter than the water it displaces)
+                    break
                 changed = True
             moved.append(rec)
-        if changed and key != "frontal_area_m2":  # A enters only C_d = C_dA / A, not the fit
+        if moved is not None and changed and key != "frontal_area_m2":  # A enters only C_d = C_dA / A, not the fit
             out[key] = moved
     groups: dict[tuple, list[int]] = {}
     for k, rec in enumerate(records):
@@ -435,16 +441,23 @@ def systematic_perturbations(records, sign: float = 1.0) -> dict[str, list]:
 
 
 def unclipped_shift(up: np.ndarray, up_active: np.ndarray, free: np.ndarray, down) -> np.ndarray:
-    """An input's 1σ shift of the estimate: the +1σ refit's (``up``), but where a parameter the fit left ``free``
-    stopped at its bound in that refit (``up_active``), the −1σ refit's turned (``down()``: its shift and which
-    parameters it stopped at their bound), a bound clipping the shift and not the input's effect. An apple's added
-    mass (0.0004 kg) with its string's length +1σ refitted to the bound 0: a shift of −0.0004 kg, where −1σ moves it
-    by +0.009 kg (a helper's run of the apple clip, 2026-12-05); the interval had left the length out."""
+    """An input's 1σ shift of the estimate: the +1σ refit's (``up``), or where a coefficient the fit left ``free``
+    stopped at its bound in that refit (``up_active``) the −1σ refit's turned (``down()``: its shift and which
+    coefficients it stopped at their bound; None where the −1σ values are no rig): a bound clipped that shift, and
+    every other coefficient then took up what the bound held back. The whole −1σ shift where that refit reaches no
+    bound; else each coefficient the +1σ refit clipped from it, the rest as they were (both clipped: the +1σ
+    refit's, an underestimate). An apple's added mass (0.0004 kg) with its string's length +1σ refitted to the
+    bound 0: a shift of −0.0004 kg, where −1σ moves it by +0.009 kg, and the drag area by −9.2e-4 m² against the
+    −1σ refit's −1.9e-4 m² (a helper's run of the apple clip, 2026-12-05)."""
     clipped = np.asarray(up_active, bool) & np.asarray(free, bool)
     if not clipped.any():
         return up
-    down_shift, down_active = down()
-    return np.where(clipped & ~np.asarray(down_active, bool), -down_shift, up)
+    found = down()
+    if found is None:
+        return up
+    down_shift, down_active = found
+    below = np.asarray(down_active, bool) & np.asarray(free, bool)
+    return -down_shift if not below.any() else np.where(clipped & ~below, -down_shift, up)
 
 
 def jacobian_rank_warnings(jac: np.ndarray, labels: list[str], tolerance: float = 1e-8) -> list[str]:
