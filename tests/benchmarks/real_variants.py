@@ -5,7 +5,8 @@
 `../shared/data/real-video/redapple_480p.mov` (real phone footage, MIT licence) is turned into the
 variants a lab's footage differs by — half, double and triple (1080p) size, 30 and 15 fps, a 6 s record, a
 record that starts later in the swing, a phone on its side, upside down or 5° off level, a swing that
-leaves the frame at one end, a camera knocked at 10 s (turned by 1° and moved: ``knocked_roll``), exposure
+leaves the frame at one end, a camera knocked at 10 s (turned by 1° and moved: ``knocked_roll``; at 30 fps, 4.8 s
+before the end: ``knocked_roll_30fps_late``), exposure
 drift, mains flicker (a light's bands rolling down the frame), defocus, a low bitrate, the sensor noise of a
 dim room, a
 dark backdrop, a letterbox, a burnt-in timestamp, a post in front of the swing, an uncalibrated fisheye
@@ -151,19 +152,26 @@ def _fisheye(image, index, n):
 KNOCK_S, KNOCK_ROLL_DEG, KNOCK_SHIFT_PX = 10.0, 1.0, (3.0, -2.0)  # knocked_roll: the stand bumped at 10 s
 
 
-def _knocked_roll(image, index, n):
+def _knocked_roll(image, index, n, at_s=KNOCK_S, roll_deg=KNOCK_ROLL_DEG, shift_px=KNOCK_SHIFT_PX, every=1):
     """The camera's stand knocked at :data:`KNOCK_S`: the picture turned by :data:`KNOCK_ROLL_DEG` about its centre
-    and moved by :data:`KNOCK_SHIFT_PX`, with a 7 Hz ring that settles in about 0.3 s (as a reviewer's variant)."""
+    and moved by :data:`KNOCK_SHIFT_PX`, with a 7 Hz ring that settles in about 0.3 s (as a reviewer's variant);
+    ``every``: the clip kept at every so many frames (``index`` counts those kept)."""
     import cv2
 
-    after = index / APPLE_FPS - KNOCK_S
+    after = index * every / APPLE_FPS - at_s
     if after < 0:
         return image
     ring = 1 - math.exp(-after / 0.08) * math.cos(2 * math.pi * 7.0 * after)
     h, w = image.shape
-    turn = cv2.getRotationMatrix2D((w / 2, h / 2), KNOCK_ROLL_DEG * ring, 1.0)
-    turn[:, 2] += np.array(KNOCK_SHIFT_PX) * ring
+    turn = cv2.getRotationMatrix2D((w / 2, h / 2), roll_deg * ring, 1.0)
+    turn[:, 2] += np.array(shift_px) * ring
     return cv2.warpAffine(image, turn, (w, h), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+
+
+def _knocked_late(image, index, n):
+    """The clip at 30 fps knocked 4.8 s before its end (at 14 s: turned −0.7°, moved (−3, 2) px; a reviewer's
+    variant): two pairs of swing centres after the knock (docs/footage.md)."""
+    return _knocked_roll(image, index, n, at_s=14.0, roll_deg=-0.7, shift_px=(-3.0, 2.0), every=2)
 
 
 def _arm(image, index, n):
@@ -567,6 +575,7 @@ def variants():
         "upside_down": (_rotate(cv2.ROTATE_180), 1, 0, 18),
         "tilted_5deg": (_tilted, 1, 0, 18),
         "knocked_roll": (_knocked_roll, 1, 0, 18),
+        "knocked_roll_30fps_late": (_knocked_late, 2, 0, 18),
         "swing_leaves_the_frame": (_cropped, 1, 0, 18),
         "exposure_drift": (_drift, 1, 0, 18),
         "mains_flicker": (_flicker, 1, 0, 18),
