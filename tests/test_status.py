@@ -243,8 +243,10 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
     assert lines[0] == "2 of 3 trial(s) failed; the report and the other 1 trial(s)' results were built:"
     assert lines[1:3] == ["  - b, at fit:linear: record too short", "  - c, at geometry: no usable track"]
     assert lines[-1].startswith("See results/status/trials.csv") and lines[-1].endswith("report.html.")
-    # what to do with one never mended
-    assert "`skip: <why>` in its sidecar (data/raw/b.yaml for b, or the sidecar it already has)" in lines[-2]
+    assert not any("skip:" in line for line in lines)  # a fit's or the geometry's failure is mended, not skipped
+    unreadable = trial_status("e", "data/raw/e.mp4", "rig", [("tracks", "logs/t/e.log", failed("tracks", "no body"))])
+    lines = failure_summary(status_table([*rows, unreadable])).splitlines()
+    assert "`skip: <why>` in its sidecar (data/raw/e.yaml for e, or the sidecar it already has)" in lines[-2]
     refused = {
         "status": "failed",
         "failed_stage": "fit",

@@ -206,6 +206,9 @@ def status_table(rows: list[dict]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=STATUS_COLUMNS).sort_values("trial", kind="stable").reset_index(drop=True)
 
 
+VIDEO_STAGES = ("frames", "tracks")  # a trial failed here has no angle record: nothing later can mend it
+
+
 def failure_summary(table: pd.DataFrame) -> str | None:
     """Every failed trial and why, one line each, for the terminal and the check's log; None when all succeeded.
 
@@ -224,17 +227,19 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     built += f" ({skipped} more skipped by their sidecars)" if skipped else ""
     lines = [f"{len(bad)} of {len(run)} trial(s) failed; {built}:"]
     lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
-    first = bad.iloc[0]
-    sidecar = (
-        Path(first.source).with_suffix(".yaml").as_posix()
-        if isinstance(first.source, str) and first.source
-        else f"<raw_dir>/{first.trial}.yaml"
-    )
-    lines.append(
-        "A trial that cannot be mended (a clip that is no pendulum, a file that cannot be read) is left out by "
-        f"`skip: <why>` in its sidecar ({sidecar} for {first.trial}, or the sidecar it already has); it then fails "
-        "nothing (docs/your-data.md)."
-    )
+    unreadable = bad[bad.stage.isin(VIDEO_STAGES)]  # no angle record from the video: a fit's failure is mended
+    if len(unreadable):
+        first = unreadable.iloc[0]
+        sidecar = (
+            Path(first.source).with_suffix(".yaml").as_posix()
+            if isinstance(first.source, str) and first.source
+            else f"<raw_dir>/{first.trial}.yaml"
+        )
+        lines.append(
+            "A video that cannot give an angle record (a clip that is no pendulum, a file that cannot be read) is left "
+            f"out by `skip: <why>` in its sidecar ({sidecar} for {first.trial}, or the sidecar it already has); it "
+            "then fails nothing (docs/your-data.md)."
+        )
     lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
     return "\n".join(lines)
 
