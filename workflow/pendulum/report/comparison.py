@@ -191,7 +191,8 @@ class ComparisonSections(ReportData):
     def _choice_note(self, rig: str, variant: str, best: dict) -> tuple[bool, str]:
         """What the choice rests on where the richer variants fit no better (every added coefficient at its bound,
         the RMS within 0.1 %): their ΔAIC is only their parameter penalty, so the variants tie and the simplest is
-        given; and where an added term trades against one of the chosen variant's (Table 5), the records cannot
+        given; and where an added term trades against one of the chosen variant's (the rig's evidence table, linked:
+        its number is not known yet, the summary comes first), the records cannot
         tell those laws apart. The apple in air (2026-12-02): "chosen by ΔAIC 2 and 4" said neither. (tie, text)"""
         chosen = self.joint.get((variant, rig)) or {}
         richer = [
@@ -223,7 +224,8 @@ class ComparisonSections(ReportData):
             if rival and rival.name in self.variants[variant]:
                 out += (
                     f" These records cannot tell {esc(TERM_LABELS.get(e['term'], e['term']))} from "
-                    f"{esc(TERM_LABELS.get(rival.name, rival.name))} (Table 5: the two trade one for the other, "
+                    f'{esc(TERM_LABELS.get(rival.name, rival.name))} (<a href="#term-evidence-{esc(rig)}">the '
+                    f"evidence for each added term, rig {esc(rig)}</a>: the two trade one for the other, "
                     f"correlation {fmt(e['rival'][1], 3)}): the coefficients above give the swing's whole damping as "
                     f"if it were all {esc(TERM_LABELS.get(rival.name, rival.name))}; releases over a wider range of "
                     "amplitudes would separate the two laws."
