@@ -333,3 +333,17 @@ def test_the_repository_address_is_cited_where_the_clone_has_one():
     assert cff["repository-code"] == "https://github.com/lab/pendulum" and cff["commit"] == "a" * 40
     without = yaml.safe_load(citation_cff("v3", datetime(2024, 5, 6, tzinfo=UTC), {"commit": "a" * 40}, None, "f" * 64))
     assert "repository-code" not in without
+
+
+def test_the_trials_sidecars_are_frozen_with_the_results(tmp_path, monkeypatch):
+    """A trial's sidecar says which rig it is on, its own values and a skip (a helper's frozen folder held none:
+    a reader rebuilding from it would have put an air pendulum on the paper's rig). Kept at their own paths,
+    covered by the manifest, listed in the provenance."""
+    monkeypatch.chdir(fake_workdir(tmp_path))
+    (tmp_path / "data/raw/a.yaml").write_text("rig: wooden_air\nlength_m: 0.334\n")
+    (tmp_path / "data/raw/b.yaml").write_text('skip: "the marker fell off"\n')
+    folder, _ = freeze_here(allow_dirty=True, sidecars=["data/raw/b.yaml", "data/raw/a.yaml"])
+    for name in ("a", "b"):
+        assert (folder / f"data/raw/{name}.yaml").read_bytes() == (tmp_path / f"data/raw/{name}.yaml").read_bytes()
+    assert json.loads((folder / "provenance.json").read_text())["sidecars"] == ["data/raw/a.yaml", "data/raw/b.yaml"]
+    assert "data/raw/a.yaml" in (folder / MANIFEST).read_text() and sha256sum_check(folder, MANIFEST).returncode == 0

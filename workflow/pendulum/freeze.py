@@ -250,11 +250,14 @@ def freeze(
     citation: dict | None = None,
     frozen_at: datetime | None = None,
     log=None,
+    sidecars: list[str] = (),
 ) -> tuple[Path, str]:
     """Write ``frozen_dir/tag/`` and return it with the SHA-256 of its manifest.
 
     ``results`` are paths relative to the workflow's directory (files or folders), copied to the
-    same relative paths in the folder. Nothing named ``tag`` exists unless every file was written.
+    same relative paths in the folder, and so are the trials' ``sidecars`` (each trial's rig, its own values and
+    settings, a skip and why: the configuration as used is config.yaml and these). Nothing named ``tag`` exists
+    unless every file was written.
     """
     git = check_request(tag, allow_dirty, frozen_dir, code_root)
     frozen_dir = Path(frozen_dir)
@@ -269,7 +272,8 @@ def freeze(
     try:
         tmp.mkdir()
         names = sorted({_result_name(path) for path in results})
-        for name in names:
+        kept_sidecars = sorted({_result_name(path) for path in sidecars})
+        for name in names + kept_sidecars:
             target = tmp / name
             target.parent.mkdir(parents=True, exist_ok=True)
             (shutil.copytree if name.is_dir() else shutil.copy2)(name, target)
@@ -300,6 +304,7 @@ def freeze(
             "raw_inputs": {"directory": Path(raw_dir).as_posix(), "hashes": RAW_HASHES},
             "trials": trial_outcomes(status_table if status_table in names else None),
             "results": [name.as_posix() for name in names],
+            "sidecars": [name.as_posix() for name in kept_sidecars],
         }
         (tmp / "provenance.json").write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
         (tmp / "CITATION.cff").write_text(citation_cff(tag, frozen_at, git, citation, digest), encoding="utf-8")

@@ -35,6 +35,8 @@ rule freeze:
             excluded=NOT_FROZEN,
         ),
         lock=os.path.relpath(Path(workflow.basedir) / "environment-lock.txt"),
+        # every trial's sidecar as used, a skipped one's too: which rig, its own values, a skip and why
+        sidecars=sorted(t.sidecar_path for t in FOUND.values() if t.sidecar_path),
         code=script_code("freeze.py"),
     log:
         f"logs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.log",

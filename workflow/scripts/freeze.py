@@ -20,6 +20,7 @@ try:
         command=sm.params.command,
         citation=sm.params.citation,
         log=log,
+        sidecars=list(sm.input.sidecars),
     )
 except FreezeError as error:
     log.error("freeze refused: %s", error)
