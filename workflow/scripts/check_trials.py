@@ -29,8 +29,10 @@ mismatched = rig_mismatch_trials(table)
 if mismatched:  # built and ok, but the coefficients cannot be right: said at the end of a run that succeeded too
     note = (
         f"{len(mismatched)} trial(s) ok whose period and rig values cannot both be right (an added mass many times "
-        "the body's, or below zero: check the rig values, and the time base of a slow-motion clip, capture_fps; "
-        f"the warnings in results/status/trials.csv): {', '.join(mismatched)}"
+        "the body's, or below zero: check the rig values, and the time base of a slow-motion clip, capture_fps; a "
+        "light body swung in air, whose added mass is tiny, may need a negative one allowed, "
+        "fitting.added_mass_lower_kg, which holds for every rig; the warnings in results/status/trials.csv): "
+        f"{', '.join(mismatched)}"
     )
     log.warning("%s", note)
 if problem:
