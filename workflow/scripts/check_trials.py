@@ -39,8 +39,10 @@ if problem:
     log.error("%s", problem)
     raise SystemExit(1)
 skipped = table[table.status == "skipped"]
-done = f"all {len(table) - len(skipped)} trial(s) ok" + (
-    f", {len(skipped)} skipped by their sidecars" if len(skipped) else ""
+done = (
+    f"all {len(table) - len(skipped)} trial(s) ok"
+    + (f" ({len(mismatched)} with the rig values in doubt, above)" if mismatched else "")
+    + (f", {len(skipped)} skipped by their sidecars" if len(skipped) else "")
 )
 log.info("%s", done)
 write_text(done + "\n", sm.output.done)
