@@ -111,7 +111,7 @@ def test_joint_fits_of_different_samples_are_compared_on_the_trials_fitted_alike
     )
     best = best_variant(table, "joint:rig", ["t1", "t2"])
     assert best["variant"] == "linear"
-    assert "1 per-trial" in best["basis"] and best["comparable"]
+    assert "per-trial fits of 1 of the rig's 2 trial(s) (t1)" in best["basis"] and best["comparable"]
     assert best_variant(table, "joint:other", ["t1"]) is None
 
 

@@ -107,7 +107,12 @@ def best_variant(summary: pd.DataFrame, fit_label: str, trials: list[str]) -> di
         if common:
             chosen = per[per.fit.isin(common)].groupby("variant")
             aic, bic = chosen.aic.sum(), chosen.bic.sum()
-            basis = f"AIC summed over the {len(common)} per-trial fits every variant made to the same samples"
+            named = ", ".join(common) if len(common) <= 6 else f"{', '.join(common[:6])}, …"
+            basis = (
+                f"AIC summed over the per-trial fits of {len(common)} of the rig's {len(trials)} trial(s) ({named}), "
+                "those every variant fitted to the same samples (the joint fits' samples differ, e.g. where a "
+                "variant's outlier rejection left some out)"
+            )
         else:
             aic, bic = joint.set_index("variant").aic, joint.set_index("variant").bic
             basis = "AIC of the joint fits, although they used different samples (not strictly comparable)"
