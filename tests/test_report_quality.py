@@ -309,6 +309,8 @@ def test_the_tracking_table_says_whether_the_marker_was_detected_or_given():
     assert marker_text({"status": "ok", "flags": {"ok": 660}}) == "—"  # a track from before the field existed
     colour = {"method": {"used": "body", "reason": "..."}, "body": {"radius_px": 14.5, "view": "colour"}}
     assert marker_text(colour) == "body by colour, r 14.5 px, auto"
+    pointed = {**colour, "body": {"radius_px": 19.8}, "settings": {"start_px": [73, 177]}}  # one of two pendulums
+    assert marker_text(pointed) == "body, r 19.8 px, auto, at start_px (73, 177)"
     dot = {"method": {"used": "marker"}, "marker": {"polarity": "bright", "marker_radius_px": 5.3, "view": "colour"}}
     assert marker_text(dot) == "dot by colour, r 5.3 px, at start_px"
 

@@ -53,14 +53,17 @@ def in_front_text(box_px) -> str:
 
 def marker_text(tracks: dict) -> str:
     """The marker the tracker followed (tracks JSON ``marker``): polarity and radius, and whether detection found
-    them (``detection`` present: config and sidecar left polarity or radius to it) or they were given."""
+    them (``detection`` present: config and sidecar left polarity or radius to it) or they were given; a body's,
+    and the ``start_px`` the user pointed at one of two pendulums with."""
     method = tracks.get("method") or {}
     if method.get("used") == "body":
         body = tracks.get("body") or {}
         radius = body.get("radius_px")
         size = f", r {radius:.1f} px" if isinstance(radius, (int, float)) else ""
         how = " by colour" if body.get("view") == "colour" else ""
-        return f"body{how}{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto")
+        start = (tracks.get("settings") or {}).get("start_px")
+        at = f", at start_px ({start[0]:g}, {start[1]:g})" if isinstance(start, list) and len(start) == 2 else ""
+        return f"body{how}{size}, " + ("given" if "given in the settings" in method.get("reason", "") else "auto") + at
     marker = tracks.get("marker") or {}
     if not marker:
         return "—"
