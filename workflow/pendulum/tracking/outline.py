@@ -145,8 +145,10 @@ def edge_points(
         # a ray through a sliver of the body (a crescent's tip) does not reach its full contrast: its edge is blurred in
         found = above.any(axis=1) & (last + 1 < radii.size) & (profile.max(axis=1) >= FULL_CONTRAST * contrast)
         if in_disk:  # a shadow or a thread reaching past the disk it is sought in: no edge of the body
-            free = cv2.remap(side.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            found &= free[np.arange(LIMB_RAYS), np.minimum(last + round(1 / RAY_STEP_PX), radii.size - 1)] < level
+            rays, beyond = np.arange(LIMB_RAYS), np.minimum(last + round(1 / RAY_STEP_PX), radii.size - 1)
+            at_x, at_y = map_x[rays, beyond][:, None], map_y[rays, beyond][:, None]  # 1 px past each edge only
+            free = cv2.remap(side.astype(np.float32), at_x, at_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            found &= free[:, 0] < level
         rows = np.nonzero(found & (last > outermost))[0]
         j = last[rows]
         inside, outside = profile[rows, j], profile[rows, j + 1]
