@@ -21,18 +21,20 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from pendulum.fit.output_error import solve_stacked, stacked_jacobian, working_jacobian
-from pendulum.fit.records import AngleRecord, FitSettings
+from pendulum.fit.records import AngleRecord, FitSettings, added_mass_floor_kg, added_mass_lower_kg
 from pendulum.fit.uncertainty import (
     coefficient_entry,
     drag_coefficient_entry,
+    held_shifts,
     linear_response,
     normal_matrix,
+    relaxed_bounds,
     sandwich_covariance,
     shared_frontal_area,
     systematic_perturbations,
     unclipped_shift,
 )
-from pendulum.model.effects import ADDED_MASS, TERMS
+from pendulum.model.effects import ADDED_MASS, TERMS, unit_of
 from pendulum.model.physics import PendulumModel, simulate
 
 RIG_LEVEL = ("linear_damping", "coulomb_friction")  # a rig's bearing and arm: one coefficient per rig
@@ -178,11 +180,8 @@ class GroupProblem:
         return stacked_jacobian(self.jacobian_blocks(x), self.masks, x.size)
 
     def lower_bounds(self, settings: FitSettings) -> np.ndarray:
-        floor = max(-0.99 * r.rig.pivot_inertia_kg_m2 / r.rig.length_m**2 for r in self.records)
-        lower = [
-            max(settings.added_mass_lower_kg, floor) if p == ADDED_MASS else TERMS_BY_PARAMETER[p].lower_bound
-            for p, _ in self.columns
-        ]
+        floor = added_mass_lower_kg(self.records, settings)
+        lower = [floor if p == ADDED_MASS else TERMS_BY_PARAMETER[p].lower_bound for p, _ in self.columns]
         return np.array(lower + [-np.inf] * (3 * len(self.records)))
 
     def start(self, values: dict, nuisance: list) -> np.ndarray:
@@ -193,9 +192,12 @@ class GroupProblem:
         phys = [float(values.get((p, rig), values.get(p, 0.0))) for p, rig in self.columns]
         return np.array(phys + [float(v) for nuis in nuisance for v in nuis])
 
-    def solve(self, x0, settings: FitSettings, tolerance: float = 1e-10, max_evaluations: int = 200) -> GroupFit:
+    def solve(
+        self, x0, settings: FitSettings, tolerance: float = 1e-10, max_evaluations: int = 200, lower=None
+    ) -> GroupFit:
+        """The least-squares estimate from ``x0`` within :meth:`lower_bounds` (or ``lower``, where given)."""
         self._key = None
-        lower = self.lower_bounds(settings)
+        lower = self.lower_bounds(settings) if lower is None else lower
         x0 = np.maximum(np.asarray(x0, float), lower)
         sol = solve_stacked(self, x0, lower, tolerance, max_evaluations)
         finite = np.isfinite(lower)
@@ -217,8 +219,9 @@ def solve_many(jobs: list[tuple]) -> list[GroupFit]:
     return [problem.solve(x0, settings, tolerance) for problem, x0, settings, tolerance in jobs]
 
 
-def systematic_shifts(fit: GroupFit, settings: FitSettings) -> dict[str, np.ndarray]:
-    """Shift of the estimate when each systematic input moves by 1σ, by a refit (as :mod:`pendulum.fit.output_error`).
+def systematic_shifts(fit: GroupFit, settings: FitSettings, cov: np.ndarray) -> dict[str, np.ndarray]:
+    """Shift of the estimate when each systematic input moves by 1σ, by a refit (as :mod:`pendulum.fit.output_error`;
+    ``cov``: the estimate's covariance, for how far a coefficient held on its bound is let go).
 
     Inputs per rig (its values' tolerances, its pooled pivot): rigs are measured separately.
     """
@@ -252,10 +255,26 @@ def systematic_shifts(fit: GroupFit, settings: FitSettings) -> dict[str, np.ndar
             down = dict(zip(names, solve_many(work), strict=True))
         return (down[label].x - fit.x, down[label].active) if label in down else None
 
-    return {
+    shifts = {
         label: unclipped_shift(up[label].x - fit.x, up[label].active, free, lambda k=label: turned(k))
         for label in labels
     }
+    held = fit.active.copy()
+    held[problem.n_phys :] = False
+    if held.any() and shifts:
+        stderr = np.sqrt(np.maximum(np.diag(cov), 0))
+        typical = np.concatenate([problem.steps[: problem.n_phys] / 1e-6, np.zeros(stderr.size - problem.n_phys)])
+        lower = problem.lower_bounds(settings)
+        relaxed = relaxed_bounds(lower, held, np.maximum(stderr, typical), added_mass_floor_kg(problem.records))
+
+        def solve(moved: GroupProblem, start, tolerance):
+            found = moved.solve(start, settings, tolerance, lower=relaxed)
+            return found.x, found.active
+
+        moved = {label: job[0] for label, job in zip(labels, jobs, strict=True)}
+        for label, shift in held_shifts(held, solve, problem, fit.x, moved).items():
+            shifts[label] = np.where(held, shift, shifts[label])
+    return shifts
 
 
 def leave_trials_out(fit: GroupFit, settings: FitSettings, max_folds: int = MAX_HELD_OUT_FOLDS) -> list[np.ndarray]:
@@ -351,15 +370,14 @@ def coefficient_entries(fit: GroupFit, settings: FitSettings) -> tuple[dict, lis
     sandwich statistical error, systematic budget by refits, combined error and 95 % interval; plus C_d.
     Returns the entries and their warnings (at a bound, not identifiable)."""
     cov, _, _ = fit.covariance(settings.max_ar_order)
-    shifts = systematic_shifts(fit, settings)
+    shifts = systematic_shifts(fit, settings, cov)
     stderr = np.sqrt(np.maximum(np.diag(cov), 0))
     lower = fit.problem.lower_bounds(settings)
     warnings, out = [], {}
     for j, ((parameter, _), label) in enumerate(zip(fit.problem.columns, fit.problem.labels, strict=True)):
-        unit = "kg" if parameter == ADDED_MASS else next(t.unit for t in TERMS.values() if t.parameter == parameter)
         out[label] = coefficient_entry(
             label,
-            unit,
+            unit_of(parameter),
             float(fit.x[j]),
             float(stderr[j]),
             {key: float(d[j]) for key, d in shifts.items()},

@@ -30,7 +30,6 @@ bootstrap needs hundreds of refits. Coverage measured on synthetic records
 
 from __future__ import annotations
 
-import hashlib
 import math
 
 import numpy as np
@@ -48,26 +47,34 @@ from pendulum.fit.checks import (
     smooth_swing,
 )
 from pendulum.fit.decay import decay_analysis
-from pendulum.fit.records import AngleRecord, FitSettings
+from pendulum.fit.records import (
+    AngleRecord,
+    FitSettings,
+    added_mass_floor_kg,
+    added_mass_lower_kg,
+    samples_digest,
+    systematic_inputs,
+)
 from pendulum.fit.uncertainty import (
     Z95,
     coefficient_entry,
     compressed_rows,
     consistency_test,
     drag_coefficient_entry,
+    held_shifts,
     interval95,
     jacobian_rank_warnings,
     lag1_autocorrelation,
     linear_response,
     normal_matrix,
+    relaxed_bounds,
     sandwich_covariance,
     shared_frontal_area,
     systematic_perturbations,
     unclipped_shift,
 )
-from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound
+from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound, unit_of
 from pendulum.model.physics import PendulumModel, keulegan_carpenter_number, simulate
-from pendulum.model.rig import tolerances_alike
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
 # From this many trials a fit's steps are solved on its sparse Jacobian (LSMR), not by an SVD of the dense one (rows ×
@@ -269,7 +276,7 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
     model = model_for(records[0].rig)
     names = model.parameter_names
     starts = [decay_analysis(model_for(r.rig), r) for r in records]
-    lower_added_mass_kg = _added_mass_lower_kg(records, settings)
+    lower_added_mass_kg = added_mass_lower_kg(records, settings)
     mismatched, periods = [], []
     for record, start in zip(records, starts, strict=True):
         # a record that hops between objects has no period to trust: its checks say so after the fit
@@ -316,7 +323,7 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
     residual = np.concatenate(res_parts)
     n = residual.size
     white_cov = np.linalg.pinv(normal_matrix(jac)) * float(residual @ residual) / max(n - sol.x.size, 1)
-    hac_info["systematic_shifts"] = _systematic_shifts(problem, sol, jac, lower)
+    hac_info["systematic_shifts"] = _systematic_shifts(problem, sol, jac, lower, np.sqrt(np.maximum(np.diag(cov), 0)))
     labels = list(model.parameter_names) + [f"{k}[{r.trial}]" for r in records for k in NUISANCE]
     free = np.asarray(sol.active_mask) == 0
     ranked = compressed_rows(jac, rows) if sparse.issparse(jac) else jac  # the same singular values
@@ -328,26 +335,28 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
     )
 
 
-def _systematic_shifts(problem: _Problem, sol, jac, lower) -> dict[str, np.ndarray]:
+def _systematic_shifts(problem: _Problem, sol, jac, lower, stderr) -> dict[str, np.ndarray]:
     """Shift of the estimate when each systematic input moves by 1σ: a real refit, not a linearisation (an input
     that changes the period moves the residuals far beyond their linear range over many cycles, although the
     estimate responds smoothly), started from the linearised answer δx = −J⁺ δr; the −1σ refit's, turned, where a
-    bound stopped the +1σ one (:func:`~pendulum.fit.uncertainty.unclipped_shift`)."""
+    bound stopped the +1σ one (:func:`~pendulum.fit.uncertainty.unclipped_shift`); a coefficient held on its bound,
+    from refits with that bound relaxed (:func:`~pendulum.fit.uncertainty.held_shifts`)."""
     free = np.asarray(sol.active_mask) == 0
     base = problem.residuals(sol.x)
-    finite = np.isfinite(lower)
 
-    def refit(records):
+    def moved_problem(records):
         moved = _Problem(problem.model_for, records, problem.names, problem.max_step_s)
         moved.masks = [m.copy() for m in problem.masks]
+        return moved
+
+    def refit(records):
+        moved = moved_problem(records)
         start = sol.x + linear_response(jac, free, moved.residuals(sol.x) - base)
         found = moved.solve(np.where(free, start, sol.x), lower, tolerance=1e-7)
-        active = np.asarray(found.active_mask) != 0
-        active[finite] |= found.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))
-        return found.x - sol.x, active
+        return found.x - sol.x, _on_bound(found, lower)
 
-    shifts, down = {}, None
-    for label, records in systematic_perturbations(problem.records).items():
+    shifts, down, up = {}, None, systematic_perturbations(problem.records)
+    for label, records in up.items():
 
         def turned(label=label):  # the −1σ refit, where a bound clipped the +1σ one
             nonlocal down
@@ -355,13 +364,29 @@ def _systematic_shifts(problem: _Problem, sol, jac, lower) -> dict[str, np.ndarr
             return refit(down[label]) if label in down else None
 
         shifts[label] = unclipped_shift(*refit(records), free, turned)
+    held = np.isfinite(lower) & (~free | (sol.x <= lower + 1e-9 * np.maximum(stderr, 1e-300)))
+    held[problem.n_phys :] = False
+    if held.any() and shifts:
+        typical = typical_scales(problem.models[0])
+        scale = np.maximum(stderr, [typical[n] for n in problem.names] + [0.0] * (stderr.size - problem.n_phys))
+        relaxed = relaxed_bounds(lower, held, scale, added_mass_floor_kg(problem.records))
+
+        def solve(moved, start, tolerance):
+            found = moved.solve(start, relaxed, tolerance)
+            return found.x, _on_bound(found, relaxed)
+
+        moved = {label: moved_problem(records) for label, records in up.items()}
+        for label, shift in held_shifts(held, solve, problem, sol.x, moved).items():
+            shifts[label] = np.where(held, shift, shifts[label])
     return shifts
 
 
-def _added_mass_lower_kg(records, settings) -> float:
-    """The configured lower bound, raised if needed so that I_p + m_a L² stays positive (≥ 1 % of I_p)."""
-    floor = max(-0.99 * r.rig.pivot_inertia_kg_m2 / r.rig.length_m**2 for r in records)
-    return max(settings.added_mass_lower_kg, floor)
+def _on_bound(found, lower) -> np.ndarray:
+    """Which coefficients a solution ended on their bound (the optimiser's active set, or within rounding of it)."""
+    active = np.asarray(found.active_mask) != 0
+    finite = np.isfinite(lower)
+    active[finite] |= found.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))
+    return active
 
 
 def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, n_outliers, hac_info, settings, lower):
@@ -383,7 +408,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         at_bound = bool(active[j] or x[j] <= lower[j] + 1e-9 * max(se, 1e-300))
         params[name] = coefficient_entry(
             name,
-            _unit(name),
+            unit_of(name),
             float(x[j]),
             se,
             {key: float(d[j]) for key, d in shifts.items()},
@@ -471,7 +496,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         "aic": n * math.log(rss / n) + 2 * k_params,
         "bic": n * math.log(rss / n) + k_params * math.log(n),
         "n_samples": int(n),
-        "samples_digest": _samples_digest(records, problem.masks),
+        "samples_digest": samples_digest(records, problem.masks),
         "n_parameters": int(x.size),
         "correlation": {"parameters": names, "matrix": corr[: len(names), : len(names)].tolist()},
         "keulegan_carpenter_number": [
@@ -485,7 +510,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             "noise (p by AIC), its bias from fitting residuals corrected by a parametric bootstrap; systematic: "
             "each rig value's stated 1σ tolerance and the estimated pivot's covariance, each propagated by a "
             "refit (error_budget); combined in quadrature; normal 95 % intervals, one-sided at a bound",
-            "systematic_inputs": _systematic_inputs(records),
+            "systematic_inputs": systematic_inputs(records),
             "stderr_over_white_noise_stderr": inflation,
             **hac_info,
         },
@@ -494,36 +519,6 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         "warnings": warnings,
         "reliable": not problems,
     }
-
-
-def _samples_digest(records, masks) -> str:
-    """SHA-256 of the (trial, time) pairs fitted: AIC/BIC compare only fits with the same digest."""
-    h = hashlib.sha256()
-    for rec, mask in zip(records, masks, strict=True):
-        h.update(rec.trial.encode() + b"\0")
-        h.update(np.round(rec.time_s[mask], 9).tobytes())
-    return h.hexdigest()[:16]
-
-
-def _systematic_inputs(records) -> dict:
-    """What the systematic budget propagated: each rig value's 1σ and the pivot covariance per trial."""
-    alike, differ = tolerances_alike([r.tolerances for r in records])
-    by_trial = {"rig_tolerances_by_trial": {r.trial: dict(r.tolerances) for r in records}} if differ else {}
-    return {
-        "rig_tolerances": alike,  # what every trial states alike; all of each where they differ
-        **by_trial,
-        "pivot_covariance_px2": {r.trial: r.pivot_covariance_px2 for r in records},
-        "arm_radius_px": {r.trial: r.arm_radius_px for r in records},
-    }
-
-
-def _unit(name):
-    if name == ADDED_MASS:
-        return "kg"
-    for term in TERMS.values():
-        if term.parameter == name:
-            return term.unit
-    return ""
 
 
 def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], settings: FitSettings | None = None):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass, field
 
@@ -10,7 +11,7 @@ import pandas as pd
 
 from pendulum.angles.record import InputError
 from pendulum.angles.swings import swing_extrema
-from pendulum.model.rig import Rig
+from pendulum.model.rig import Rig, tolerances_alike
 
 
 @dataclass(frozen=True)
@@ -24,6 +25,16 @@ class FitSettings:
     consistency_alpha: float = 0.05
     max_ar_order: int = 10  # highest order of the residual-noise AR model behind the intervals
     added_mass_lower_kg: float = 0.0  # < 0 only for calibration swings (e.g. in air): an inertia correction
+
+
+def added_mass_floor_kg(records) -> float:
+    """The least added mass that leaves every record's rig a pendulum: I_p + m_a L² ≥ 1 % of I_p."""
+    return max(-0.99 * r.rig.pivot_inertia_kg_m2 / r.rig.length_m**2 for r in records)
+
+
+def added_mass_lower_kg(records, settings: FitSettings) -> float:
+    """The configured lower bound of the added mass, raised to :func:`added_mass_floor_kg` where it is below."""
+    return max(settings.added_mass_lower_kg, added_mass_floor_kg(records))
 
 
 # Standard uncertainty (1σ) of each measured rig value, relative to the value, used when a
@@ -209,3 +220,24 @@ def load_record(
         vertical_rad=math.radians(info.get("vertical_deg") or 0.0),
         release_skip_s=skip_s,
     )
+
+
+def samples_digest(records, masks) -> str:
+    """SHA-256 of the (trial, time) pairs fitted: AIC/BIC compare only fits with the same digest."""
+    h = hashlib.sha256()
+    for rec, mask in zip(records, masks, strict=True):
+        h.update(rec.trial.encode() + b"\0")
+        h.update(np.round(rec.time_s[mask], 9).tobytes())
+    return h.hexdigest()[:16]
+
+
+def systematic_inputs(records) -> dict:
+    """What the systematic budget propagated: each rig value's 1σ and the pivot covariance per trial."""
+    alike, differ = tolerances_alike([r.tolerances for r in records])
+    by_trial = {"rig_tolerances_by_trial": {r.trial: dict(r.tolerances) for r in records}} if differ else {}
+    return {
+        "rig_tolerances": alike,  # what every trial states alike; all of each where they differ
+        **by_trial,
+        "pivot_covariance_px2": {r.trial: r.pivot_covariance_px2 for r in records},
+        "arm_radius_px": {r.trial: r.arm_radius_px for r in records},
+    }

@@ -253,6 +253,12 @@ def term_for_parameter(parameter: str) -> Term | None:
     return next((t for t in TERMS.values() if t.parameter == parameter), None)
 
 
+def unit_of(parameter: str) -> str:
+    """A coefficient's unit ("kg" for the added mass; "" for an unknown name)."""
+    term = term_for_parameter(parameter)
+    return "kg" if parameter == ADDED_MASS else term.unit if term is not None else ""
+
+
 def lower_bound(parameter: str) -> float:
     """The fitter's lower bound of a coefficient (0 for the added mass: the fitter overrides it)."""
     term = term_for_parameter(parameter)
