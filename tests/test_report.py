@@ -790,3 +790,32 @@ def test_the_truth_table_says_which_trials_have_no_truth_file(documents, monkeyp
     assert "1 trial(s) have no truth file (<code>truth_dir</code>) and are not counted: bad." in html
     monkeypatch.setattr(documents, "truth", {"t20": {"added_mass_kg": 2.5}, "bad": {"added_mass_kg": 2.5}})
     assert "no truth file" not in documents.truth_section()
+
+
+def test_the_truth_table_tests_the_statistical_error_alone_where_the_rig_values_are_exact(documents, monkeypatch):
+    """A referee's reading of the demo: renders use the rig's stated values exactly, so the combined σ (almost all
+    rig-value tolerance: m_a's σ_stat 7.6e-5 kg against σ_sys 0.12 kg) covered any estimate. The table now also
+    gives the error in statistical σ alone (the joint's widened by its scale factor) and the per-trial count
+    within 1.96 of them. Here m_a 2.5 ± σ_stat 0.096 (half-width 0.24 / 2.5) against a truth of 2.3."""
+    monkeypatch.setattr(documents, "truth", {"t20": {"truth": {"added_mass_kg": 2.3}}, "bad": {}})
+    html = documents.truth_section()
+    rows = [r for r in re.findall(r"<tr>(.*?)</tr>", html, re.S) if "added mass" in r.lower()]
+    assert rows, html
+    cells = [re.sub(r"<[^>]+>", "", c) for c in re.findall(r"<td[^>]*>(.*?)</td>", rows[0], re.S)]
+    assert cells[5] == "+1.63" and cells[6] == "+2.08", cells  # 0.2 / (0.24 / 1.96); 0.2 / (0.24 / 2.5)
+    assert cells[7] == "yes" and cells[8] == "1 of 1" and cells[9] == "0 of 1", cells
+    assert "no error to cover here" in html
+
+
+def test_variants_that_add_two_terms_at_once_say_why_no_term_is_tested_on_its_own(documents, monkeypatch):
+    """A referee dropped `linear` from the demo's variants: 'No nested variants to compare term by term', with
+    quadratic ⊂ friction (two terms added at once). The report now names that pair and what would test each."""
+    variants = {"quadratic": ["quadratic_drag"], "friction": ["quadratic_drag", "linear_damping", "coulomb_friction"]}
+    monkeypatch.setattr(documents, "variants", variants)
+    monkeypatch.setattr(documents, "order", ["quadratic", "friction"])
+    text = documents._no_term_evidence()
+    assert text.startswith("No two variants differ by one term, so no term is tested on its own: quadratic → friction")
+    assert "adds 2 at once (Coulomb friction and linear damping)" in text
+    monkeypatch.setattr(documents, "variants", {"a": ["quadratic_drag"], "b": ["linear_damping"]})
+    monkeypatch.setattr(documents, "order", ["a", "b"])
+    assert documents._no_term_evidence().startswith("No variant holds every term of another")

@@ -466,7 +466,7 @@ def contact_sheet_with_times(
     tile_h = int(round(tile_width_px * h / w))
     cols = min(4, len(frames))
     rows = math.ceil(len(frames) / cols)
-    sheet = np.zeros((rows * tile_h, cols * tile_width_px), np.uint8)
+    sheet = np.full((rows * tile_h, cols * tile_width_px), 255, np.uint8)  # a short last row: white, as the page
     for k, (t, y) in enumerate(frames):
         tile = cv2.resize(y, (tile_width_px, tile_h), interpolation=cv2.INTER_AREA)
         cv2.putText(tile, f"{t:6.2f} s", (6, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 255, 2, cv2.LINE_AA)

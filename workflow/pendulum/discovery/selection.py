@@ -38,7 +38,7 @@ chosen terms.
 
 **Honest endings.** ``unexplained`` is true when the final residual RMS exceeds
 ``misfit_ratio`` (5, :data:`pendulum.fit.checks.MISFIT_RATIO`) times the noise
-floor the angle records imply (third-difference σ) *and* the residuals are not
+floor the angle records imply (their ``noise_deg``: fifth-difference σ) *and* the residuals are not
 white (Ljung–Box, p < 0.01). Two candidates whose fits differ by less than the
 threshold (n_eff ln(RSS_b/RSS_a)) are ``indistinguishable`` and neither is
 named; at a single swing frequency the history force is always reported with

@@ -250,7 +250,7 @@ class ComparisonSections(ReportData):
         ]
         sentence = (
             f"under the {esc(variant)} model the {n} trial(s) are <b>{esc(verdict)}</b> "
-            f"({esc(consistency.get('explanation', ''))}"
+            f"({esc(_in_words(consistency.get('explanation', '')))}"
             + (
                 f"; largest scale factor S = {fmt(scale[worst], 2)} for {esc(COEFFICIENTS.get(worst, ('', worst))[1])}"
                 if worst
@@ -485,10 +485,29 @@ class ComparisonSections(ReportData):
             )
         return rows
 
+    def _no_term_evidence(self) -> str:
+        """Why no term is tested on its own: no two variants differ by one term (naming the nested pairs that
+        differ by more, each term of which wants a variant of its own)."""
+        wider = [
+            (base, v, sorted(set(self.variants[v]) - set(self.variants[base])))
+            for v in self.order
+            for base in self.order
+            if set(self.variants[base]) < set(self.variants[v])
+        ]
+        if not wider:
+            return "No variant holds every term of another, so no term is compared on its own."
+        base, v, extra = min(wider, key=lambda w: len(w[2]))
+        names = " and ".join(esc(TERM_LABELS.get(t, t)) for t in extra)
+        return (
+            f"No two variants differ by one term, so no term is tested on its own: {esc(base)} → {esc(v)} adds "
+            f"{len(extra)} at once ({names}). A variant with one of them added to {esc(base)} (config "
+            "<code>variants</code>) tests each."
+        )
+
     def _term_evidence(self, rig: str, best: dict | None) -> str:
         evidence = self.term_evidence_rows(rig, best)
         if not evidence:
-            return "<p>No nested variants to compare term by term.</p>"
+            return f"<p>{self._no_term_evidence()}</p>"
         rows = [
             [
                 td(esc(TERM_LABELS.get(e["term"], e["term"]))),
@@ -518,3 +537,10 @@ class ComparisonSections(ReportData):
             "and BIC drops by more than 10."
         )
         return table_html(header, rows, caption=caption, table_id=f"term-evidence-{rig}")
+
+
+def _in_words(text: str) -> str:
+    """A fit's sentence with its coefficients' field names (``added_mass_kg``) as the report names them."""
+    for name, (_, words, _) in COEFFICIENTS.items():
+        text = re.sub(rf"\b{name}\b", words, text)
+    return text

@@ -98,7 +98,7 @@ def best_variant(summary: pd.DataFrame, fit_label: str, trials: list[str]) -> di
     comparable = True
     if joint.samples_digest.nunique() == 1:
         aic, bic = joint.set_index("variant").aic, joint.set_index("variant").bic
-        basis = "AIC of the joint fits (every variant fitted to the same samples)"
+        basis = "AIC of the joint fits, every variant fitted to the same samples"
     else:
         per = summary[summary.fit.isin(trials) & summary.variant.isin(joint.variant)]
         common = sorted(
@@ -228,6 +228,8 @@ class ReportData:
         # rigs with most trials first; trials by rig, then largest release first
         self.rig_names = sorted(n_trials, key=lambda r: (-n_trials[r], r))
         self._trial_order = sorted(self.trials, key=self._trial_key)
+        # one shape per trial in every figure that marks trials (the local C_d, the extinction curves)
+        self.trial_marker = {t: MARKERS[i % len(MARKERS)] for i, t in enumerate(self._trial_order)}
         self.best = {
             rig: best_variant(self.summary, f"joint:{rig}", self.rig_trials(rig))
             for rig in self.rig_names

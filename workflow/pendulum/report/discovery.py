@@ -317,7 +317,14 @@ def excluded_html(document: dict) -> str:
 
 
 def group_html(
-    document, residuals, extinction, table_caption=_PLAIN, figure_caption=_PLAIN, truth=None, harmonics=None
+    document,
+    residuals,
+    extinction,
+    table_caption=_PLAIN,
+    figure_caption=_PLAIN,
+    truth=None,
+    harmonics=None,
+    markers=None,
 ) -> str:
     """One group's discovery: verdict, steps, candidates, figures, endings, coefficients, trials left out."""
     group = esc(document.get("group", ""))
@@ -340,7 +347,7 @@ def group_html(
         endings_html(document, harmonics),
         steps_table(document, table_caption) if document["steps"] else "<p>No effect passed: no step was taken.</p>",
         candidates_table(document, table_caption),
-        figures_html(document, residuals, extinction, figure_caption),
+        figures_html(document, residuals, extinction, figure_caption, markers),
         residual_check_table(document, table_caption),
         parameters_table(document, table_caption, truth),
         excluded_html(document),
@@ -379,6 +386,15 @@ class DiscoverySections(ReportData):
                 if (h := (self.docs.get((t, "angles")) or {}).get("second_harmonic") or {}).get("present")
             }
             out.append(
-                group_html(document, residuals, extinction, self.table_caption, self.figure_caption, truth, harmonics)
+                group_html(
+                    document,
+                    residuals,
+                    extinction,
+                    self.table_caption,
+                    self.figure_caption,
+                    truth,
+                    harmonics,
+                    self.trial_marker,
+                )
             )
         return "".join(out)

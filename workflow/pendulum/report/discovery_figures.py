@@ -121,8 +121,9 @@ def _overlapping(document: dict, extinction: pd.DataFrame) -> str:
     )
 
 
-def extinction_figure(document: dict, extinction: pd.DataFrame) -> bytes | None:
-    """Amplitude loss per half cycle against amplitude: measured points, and each model's prediction."""
+def extinction_figure(document: dict, extinction: pd.DataFrame, markers: dict | None = None) -> bytes | None:
+    """Amplitude loss per half cycle against amplitude: measured points (``markers``: trial → shape), and each
+    model's prediction."""
     import matplotlib
 
     if extinction.empty:
@@ -140,7 +141,7 @@ def extinction_figure(document: dict, extinction: pd.DataFrame) -> bytes | None:
             ax.plot(
                 np.degrees(m.amplitude_rad),
                 np.degrees(m.amplitude_loss_rad),
-                MARKERS[i % len(MARKERS)],
+                (markers or {}).get(trial, MARKERS[i % len(MARKERS)]),
                 ms=4.5,
                 mfc="none",
                 mec="0.35",
@@ -194,8 +195,11 @@ def autocorrelation_figure(document: dict, residuals: pd.DataFrame, max_lag_s: f
         return figure_png(fig)
 
 
-def figures_html(document: dict, residuals: pd.DataFrame, extinction: pd.DataFrame, caption) -> str:
-    """The residual and extinction figures and, when structure is left unexplained, the autocorrelation."""
+def figures_html(
+    document: dict, residuals: pd.DataFrame, extinction: pd.DataFrame, caption, markers: dict | None = None
+) -> str:
+    """The residual and extinction figures and, when structure is left unexplained, the autocorrelation
+    (``markers``: trial → the shape the report's other figures give it)."""
     group = esc(document.get("group", ""))
     n_trials = residuals.trial.nunique() if "trial" in residuals else 0
     colours = "each trial a colour" if n_trials <= len(TRIAL_COLOURS) else f"{n_trials} trials, the colours repeating"
@@ -208,7 +212,7 @@ def figures_html(document: dict, residuals: pd.DataFrame, extinction: pd.DataFra
             "residuals",
         ),
         (
-            extinction_figure(document, extinction),
+            extinction_figure(document, extinction, markers),
             f"Group {group}: extinction curve, the amplitude lost over each half cycle against the amplitude at its "
             "start: measured (open markers, one shape per trial) and as each model's fitted curve predicts it (the "
             "baseline, the baseline with each first-round candidate and the models on the path; black: the final "

@@ -11,6 +11,7 @@ import io
 
 import numpy as np
 
+from pendulum.fit.uncertainty import Z95, Z95_ONE_SIDED
 from pendulum.model.effects import ADDED_MASS
 from pendulum.report.data import ReportData, is_ok, record_problems, true_value
 from pendulum.report.format import MARKERS, PLAIN_SYMBOLS, esc, figure_html, fmt, is_finite
@@ -195,7 +196,9 @@ class FigureSections(ReportData):
                                     continue
                                 offset = k - (len(variants) - 1) / 2
                                 xs.append(x + 1.2 * offset if xkind == "release" else x * 1.03**offset)
-                                half = 1.96 * float(e.get("stderr_statistical") or 0.0)
+                                # at the bound: the one-sided 95 % limit, as Table 3 gives it (statistical here)
+                                z = Z95_ONE_SIDED if e.get("at_bound") else Z95
+                                half = z * float(e.get("stderr_statistical") or 0.0)
                                 ys.append(e["value"])
                                 lo.append(half if not e.get("at_bound") else 0.0)
                                 hi.append(half)
@@ -263,7 +266,7 @@ class FigureSections(ReportData):
                 "offset sideways). Error bars: 95 % statistical intervals — what the consistency test compares; the "
                 "rig values' systematic error moves all trials together and is left out here (it is in Table 3). "
                 "Line and band: each variant's joint fit with its statistical 95 % interval widened by the scale "
-                "factor S. Hollow markers: at the lower bound"
+                "factor S. Hollow markers: at the lower bound, the bar its one-sided 95 % statistical limit"
                 + ("; dashed: truth." if self.truth else ".")
                 + (
                     f" Not plotted: the fits of {esc(', '.join(unreliable))} (unreliable records, Table 3)."
@@ -300,7 +303,7 @@ class FigureSections(ReportData):
                     ax.plot(
                         c.amplitude_deg,
                         np.degrees(c.amplitude_loss_rad),
-                        MARKERS[i % len(MARKERS)],
+                        self.trial_marker[t],
                         ms=4,
                         mfc="none",
                         mec=grey[i % len(grey)],
@@ -309,7 +312,7 @@ class FigureSections(ReportData):
                     bx.plot(
                         c.keulegan_carpenter_number,
                         c.local_drag_coefficient,
-                        MARKERS[i % len(MARKERS)],
+                        self.trial_marker[t],
                         ms=4,
                         mfc="none",
                         mec=grey[i % len(grey)],
