@@ -244,7 +244,11 @@ class FigureSections(ReportData):
                                 loc="left",
                             )
                         if row == len(names) - 1:
-                            ax.set_xlabel("release angle (°)" if xkind == "release" else "KC of the first fitted swing")
+                            ax.set_xlabel(
+                                "release angle (°)"
+                                if xkind == "release"
+                                else "KC of the first fitted swing (variant's fitted curve)"
+                            )
                         if col == 0:
                             ax.set_ylabel(PLAIN_SYMBOLS[name])
                 handles = {}

@@ -427,7 +427,8 @@ class TableSections(ReportData):
             "and, where the variant has them, linear damping c and bearing friction torque τ<sub>f</sub>: "
             "estimate and 95 % interval per trial and variant, and the joint fit of each rig (shared "
             "coefficients, statistical part widened by the consistency scale factor S). KC: Keulegan–Carpenter "
-            "number of the trial's first fitted swing (joint: range). "
+            "number U<sub>max</sub>T/D of the trial's first fitted swing, from the variant's fitted curve (so it "
+            "differs a little between variants, and more where a variant misses the record); joint: the range. "
             + ("Rows ‘truth’: the synthetic trials' true values. " if self.truth else "")
             + "“at bound” marks a coefficient that ended on its lower bound: the data prefer an unphysical "
             "value, and only the one-sided 95 % upper limit is a result. Per-trial intervals of the damping "
