@@ -371,7 +371,10 @@ class FigureSections(ReportData):
                 "term misses one end of the curve. Right: the local drag coefficient of each half cycle, charging all "
                 "of its loss to quadratic drag, against its KC number"
                 + (f"; band: the {esc(variant)} joint C<sub>d</sub> (95 %)" if cd else "")
-                + ". Where the local value climbs at small KC, the loss there is not quadratic drag."
+                + ". Where the local value climbs at small KC, the loss there is not quadratic drag. Half cycles run "
+                "from one turning point of the fitted record to the next: the release swing, before the first "
+                "turning point, is not among them, so the largest KC of the coefficients table (the first fitted "
+                "swing's) lies beyond the right-hand panel."
             )
             out.append(figure_html(png, caption, alt=f"extinction curve and local drag coefficient, rig {rig}"))
         return "".join(out) or "<p>No half-cycle tables to show.</p>"
