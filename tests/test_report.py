@@ -819,3 +819,15 @@ def test_variants_that_add_two_terms_at_once_say_why_no_term_is_tested_on_its_ow
     monkeypatch.setattr(documents, "variants", {"a": ["quadratic_drag"], "b": ["linear_damping"]})
     monkeypatch.setattr(documents, "order", ["a", "b"])
     assert documents._no_term_evidence().startswith("No variant holds every term of another")
+
+
+def test_the_header_says_what_no_interval_holds_a_point_mass_and_the_rod(documents, monkeypatch):
+    """A referee: 'Intervals are 95 % (statistical and rig-value systematic errors combined)' promised more than
+    they hold. A rig that states no I_p is a point mass, and a body's own inertia about its centre then sits in the
+    added mass, in no interval; the rod is not in the equation. Said where it applies, and not otherwise."""
+    text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
+    assert "They do not hold the equation's own form: the rod's mass, buoyancy and drag are not in it." in text
+    assert "On rig rig no Ip (body_inertia_kg_m2) is stated: the body is a point mass, Ip = mL²" in text
+    monkeypatch.setitem(documents.rigs["rig"]["values"], "body_inertia_kg_m2", 2.0)
+    text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
+    assert "the rod's mass" in text and "point mass" not in text

@@ -268,8 +268,27 @@ class CheckSections(ReportData):
             + f". {built}.</p>"
             '<p class="subtitle">Equation of motion: (I<sub>p</sub> + m<sub>a</sub>L²) θ̈ = −(mg − B) L sin θ '
             "− ½ρC<sub>d</sub>AL³ θ̇|θ̇| − c θ̇ − τ<sub>f</sub> sgn θ̇; each variant keeps a subset of the "
-            "damping terms. Intervals are 95 % (statistical and rig-value systematic errors combined).</p></header>"
+            "damping terms. Intervals are 95 % (statistical and rig-value systematic errors combined)."
+            + self._model_form_note()
+            + "</p></header>"
         )
+
+    def _model_form_note(self) -> str:
+        """What no interval holds: the equation's own form (a point mass where a rig states no I_p; the rod)."""
+        point = [
+            r
+            for r in self.rig_names
+            if self.rig_values_used(r)[0].get("body_inertia_kg_m2") is None
+            and "body_inertia_kg_m2" not in self.rig_values_used(r)[1]
+        ]
+        where = (
+            f" On rig{'s' if len(point) > 1 else ''} {esc(', '.join(point))} no I<sub>p</sub> "
+            "(<code>body_inertia_kg_m2</code>) is stated: the body is a point mass, I<sub>p</sub> = mL², and its "
+            "own inertia about its centre I<sub>cg</sub> is counted in m<sub>a</sub> (as I<sub>cg</sub>/L²)."
+            if point
+            else ""
+        )
+        return " They do not hold the equation's own form: the rod's mass, buoyancy and drag are not in it." + where
 
     def truth_section(self) -> str:
         """Joint estimates against the synthetic truth: error in standard errors, coverage of the 95 % intervals."""
