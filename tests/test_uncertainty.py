@@ -289,20 +289,24 @@ def test_a_consistent_verdict_says_which_coefficients_it_speaks_for():
     assert result["parameters"]["added_mass_kg"]["trials_used"] == ["apple"]
 
 
+APPLE_IN_AIR = {  # a helper's rig for the real apple clip: a 0.18 kg apple on a 1.05 m string, in air
+    "mass_kg": 0.18,
+    "length_m": 1.053,
+    "frontal_area_m2": 0.0038,
+    "displaced_volume_m3": 0.0002,
+    "fluid_density_kg_m3": 1.2,
+    "gravity_m_s2": 9.81,
+}
+STRING_TOLERANCE = {"length_m": 0.005}  # the string measured to ±5 mm
+
+
 def test_a_rig_value_whose_plus_one_sigma_refit_stops_at_a_bound_is_budgeted_from_its_minus_one_sigma_refit():
     """An apple on a string in air (a helper's run of the apple clip): added mass 0.0001 kg, its string's length
     stated ±0.05 m. The +1σ length refit stopped at the bound m_a ≥ 0 and its budget entry was that clip (−m_a),
     the interval [0, 0.0011] kg, where a length 1σ shorter moves m_a by +0.009 kg: the length left out of the
     interval. Now the entry is the −1σ refit's shift, turned: within 10 % of that refit's own, and the interval
     reaches past it."""
-    rig = {
-        "mass_kg": 0.18,
-        "length_m": 1.053,
-        "frontal_area_m2": 0.0038,
-        "displaced_volume_m3": 0.0002,
-        "fluid_density_kg_m3": 1.2,
-        "gravity_m_s2": 9.81,
-    }
+    rig = APPLE_IN_AIR
     terms = ("quadratic_drag",)
     model = PendulumModel(Rig(**rig), terms)
     data = synthetic_angle_table(
@@ -349,17 +353,6 @@ def test_an_input_whose_minus_one_sigma_value_makes_no_pendulum_is_left_out_of_t
     assert "mass_kg" in systematic_perturbations([record])
     lighter = systematic_perturbations([record], sign=-1.0)
     assert "mass_kg" not in lighter and "length_m" in lighter
-
-
-APPLE_IN_AIR = {  # a helper's rig for the real apple clip: a 0.18 kg apple on a 1.05 m string, in air
-    "mass_kg": 0.18,
-    "length_m": 1.053,
-    "frontal_area_m2": 0.0038,
-    "displaced_volume_m3": 0.0002,
-    "fluid_density_kg_m3": 1.2,
-    "gravity_m_s2": 9.81,
-}
-STRING_TOLERANCE = {"length_m": 0.005}  # the string measured to ±5 mm
 
 
 def apple_in_air(seed, added_mass_kg: float):
