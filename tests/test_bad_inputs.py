@@ -496,6 +496,11 @@ def test_flat_angle_table_has_no_release(tmp_path):
         ("mass_kg:\t3\n", r"not valid YAML \(line 1, column 9: found character '\\t'"),
         ("displaced_volume_m3: 0.01\n", r"the pendulum floats: buoyancy ρ V g = 1000 × 0.01 × 9.81 = 98.1 N"),
         ("rig: tank_b\n", r"rig 'tank_b' is not one of rigs \['paper_rig'\]"),
+        (
+            "submerged_mass_kg: 4.0\n",
+            r"submerged_mass_kg 4 must be above 0 \(at 0 or below the body floats\) and at most",
+        ),
+        ("submerged_mass_kg: 1\ndisplaced_volume_m3: 0.002\n", r"gives both displaced_volume_m3 and submerged_mass_kg"),
     ],
 )
 def test_bad_sidecar_is_refused_naming_the_file(tmp_path, text, message):
@@ -623,3 +628,13 @@ def test_a_record_that_ends_before_the_release_transient_is_refused_naming_its_t
         load_record(table, "early", PAPER, FitSettings(), source="results/angles/early.csv")
     with pytest.raises(InputError, match=r"^trial lost: no usable angle sample: all 6 rows are flagged"):
         load_record(table.assign(flag="lost"), "lost", PAPER, FitSettings())
+
+
+def test_a_sidecar_s_submerged_mass_replaces_its_rig_s_displaced_volume(tmp_path):
+    """A body weighed hung in the tank (m − ρV on the scale) states its buoyancy: the rig's volume is then not
+    its, and the two are never both given to the fit (a rig of both is refused, above)."""
+    (tmp_path / "trial.mp4").write_bytes(b"")
+    (tmp_path / "trial.yaml").write_text("submerged_mass_kg: 1.03\ntolerances:\n  submerged_mass_kg: 0.002\n")
+    settings = trial_settings(CONFIG, discover_trials(tmp_path)["trial"])
+    assert settings["rig"]["submerged_mass_kg"] == 1.03 and "displaced_volume_m3" not in settings["rig"]
+    assert settings["tolerances"]["submerged_mass_kg"] == 0.002

@@ -166,6 +166,19 @@ def test_measurement_advice_reaches_the_target_it_names():
     assert half == pytest.approx(0.02 * value, rel=1e-9)
     assert "the default share of its value; state yours under rigs.paper.tolerances" in advice["sentence"]
     assert "Measuring the displaced volume to ±" in advice["sentence"]
+    # a referee: volume, density and mass to be measured apart, where one weighing in the tank settles the buoyancy
+    assert "or weigh the body hung in the fluid and state that reading as submerged_mass_kg" in advice["sentence"]
+    budget_without = {"length_m": -0.1, "mass_kg": 0.02}
+    advice = measurement_advice(
+        "added_mass_kg",
+        "the added mass",
+        dict(entry, floor_relative_halfwidth95=Z95 * 0.102 / value),
+        {"error_budget": budget_without},
+        0.02,
+        {"paper": {"mass_kg": 0.005, "length_m": 1e-3}},
+        {},
+    )
+    assert "Measuring the arm length to ±" in advice["sentence"] and "weigh" not in advice["sentence"]
 
 
 def test_bad_requests_are_warned_about_and_the_rest_is_designed(small_group):

@@ -831,3 +831,16 @@ def test_the_header_says_what_no_interval_holds_a_point_mass_and_the_rod(documen
     monkeypatch.setitem(documents.rigs["rig"]["values"], "body_inertia_kg_m2", 2.0)
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
     assert "the rod's mass" in text and "point mass" not in text
+
+
+def test_a_rig_weighed_in_its_fluid_shows_its_submerged_mass_and_the_volume_it_gives(documents, monkeypatch):
+    """Table 1 of a rig stated by its submerged mass (m − ρV on a scale in the tank): that row, with its default
+    0.2 % tolerance, and the volume derived from it, (3.53 − 1.03)/1000 = 0.0025 m³, not the default 0; no such
+    row for a rig stated by its volume."""
+    text = html_module.unescape(re.sub(r"<[^>]+>", " ", documents.rig_table()))
+    assert "submerged mass" not in text
+    monkeypatch.setitem(documents.rigs["rig"]["values"], "submerged_mass_kg", 1.03)
+    text = re.sub(r"\s+", " ", html_module.unescape(re.sub(r"<[^>]+>", " ", documents.rig_table())))
+    assert "submerged mass m − ρV (weighed in the fluid) kg 1.030 ± 0.0021 (0.20 %, default)" in text, text
+    assert "displaced volume V m³ 0.002500 (from the submerged mass) derived" in text, text
+    assert "buoyancy B = ρgV N 24.53" in text, text

@@ -418,3 +418,31 @@ def test_a_one_sided_limit_covers_an_added_mass_near_its_bound_when_the_string_i
         covered += added["ci95"][0] <= truth <= added["ci95"][1]
     assert held >= int(stats.binom.ppf(0.01, n, 0.2)), held  # the case is the bound's: 12 of 40 held
     assert covered >= need, (covered, held)
+
+
+def test_a_body_weighed_in_the_water_states_its_buoyancy_and_narrows_the_added_mass():
+    """The paper rig stated by its submerged mass m − ρV = 1.03 kg (the body weighed hung in the tank, as an ROV's
+    trim is weighed) instead of its volume: the same fit. The volume's default 1 % carried 0.146 kg of the added
+    mass's 0.154 kg systematic σ (a referee: 'measure V to ±3.9 mL, ρ and m apart' where one weighing settles the
+    buoyancy); the scale's 0.2 % of 1.03 kg leaves 0.018 kg. Its entry is the shift of a refit 1σ heavier, and a
+    heavier body of the same submerged mass displaces more: the restoring torque (m_sub g L) does not move."""
+    data = table(30, seed=7)
+    by_volume = fit_trials([load_record(data, "v", RIG, SETTINGS, tolerances={})], TERMS, SETTINGS)
+    submerged_kg = RIG["mass_kg"] - RIG["fluid_density_kg_m3"] * RIG["displaced_volume_m3"]
+    weighed = {k: v for k, v in RIG.items() if k != "displaced_volume_m3"} | {"submerged_mass_kg": submerged_kg}
+    record = load_record(data, "s", weighed, SETTINGS, tolerances={})
+    assert record.rig.restoring_torque_nm == pytest.approx(Rig(**RIG).restoring_torque_nm, rel=1e-12)
+    by_weight = fit_trials([record], TERMS, SETTINGS)
+    for name in PHYSICAL:
+        assert by_weight["parameters"][name]["value"] == pytest.approx(by_volume["parameters"][name]["value"], 1e-9)
+    before, after = by_volume["parameters"]["added_mass_kg"], by_weight["parameters"]["added_mass_kg"]
+    assert "displaced_volume_m3" not in after["error_budget"] and "submerged_mass_kg" in after["error_budget"]
+    assert after["stderr_systematic"] < 0.2 * before["stderr_systematic"], (before, after)
+    sigma = rig_tolerances(weighed)["submerged_mass_kg"]
+    assert sigma == pytest.approx(0.002 * submerged_kg)
+    heavier = dict(weighed, submerged_mass_kg=submerged_kg + sigma)
+    refit = fit_trials([load_record(data, "s", heavier, SETTINGS, tolerances={})], TERMS, SETTINGS)
+    moved = refit["parameters"]["added_mass_kg"]["value"] - after["value"]
+    assert after["error_budget"]["submerged_mass_kg"] == pytest.approx(moved, rel=0.05)
+    with pytest.raises(ValueError, match="not both"):
+        Rig.from_mapping(dict(weighed, displaced_volume_m3=0.0025))

@@ -12,19 +12,11 @@ import jsonschema
 import yaml
 
 from pendulum.camera.video import VIDEO_EXTENSIONS
+from pendulum.model.rig import RIG_VALUE_UNITS
 
 SCHEMA_DIR = Path(__file__).resolve().parents[1] / "schemas"
-RIG_KEYS = (
-    "mass_kg",
-    "length_m",
-    "frontal_area_m2",
-    "displaced_volume_m3",
-    "fluid_density_kg_m3",
-    "gravity_m_s2",
-    "body_inertia_kg_m2",
-    "characteristic_length_m",
-    "kinematic_viscosity_m2_s",
-)
+RIG_KEYS = tuple(RIG_VALUE_UNITS)  # every rig value a rig or sidecar may state
+BUOYANCY_KEYS = ("displaced_volume_m3", "submerged_mass_kg")  # either states the buoyancy: a sidecar's replaces
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined in a sidecar must give these
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method", "capture_fps")
@@ -181,6 +173,13 @@ def check_rig_values(values: dict, where: str) -> None:
     mass, volume = values.get("mass_kg"), values.get("displaced_volume_m3") or 0.0
     rho, g = values.get("fluid_density_kg_m3", 1000.0), values.get("gravity_m_s2", 9.81)
     if mass is None:
+        return
+    submerged = values.get("submerged_mass_kg")  # the body weighed hung in the fluid, m − ρV: its buoyancy
+    if submerged is not None:
+        both = "gives both displaced_volume_m3 and submerged_mass_kg: give one" if volume else ""
+        out = f"submerged_mass_kg {submerged:g} must be above 0 (at 0 or below the body floats) and at most mass_kg"
+        if both or not 0 < submerged <= mass:
+            raise ConfigError(f"{where}: {both or out} {'' if both else f'{mass:g}'}".rstrip())
         return
     weight, buoyancy = mass * g, rho * volume * g
     if buoyancy >= weight:
@@ -470,6 +469,9 @@ def trial_settings(config: dict, trial: Trial) -> dict:
     """Rig values, geometry and tracking settings of one trial: config, then rig, then sidecar."""
     rig = rig_name(config, trial)
     merged_rig = {**config["rigs"][rig]}
+    for given, replaced in (BUOYANCY_KEYS, BUOYANCY_KEYS[::-1]):  # a sidecar's own buoyancy replaces the rig's
+        if given in trial.sidecar:
+            merged_rig.pop(replaced, None)
     merged_rig.update({k: v for k, v in trial.sidecar.items() if k in RIG_KEYS + GEOMETRY_KEYS})
     if any(k in RIG_KEYS for k in trial.sidecar):
         check_rig_values(merged_rig, f"{trial.sidecar_path} (with rig {rig})")

@@ -195,7 +195,10 @@ class Designer:
                 )
                 continue
             try:
-                out[name] = Rig.from_mapping({**base, **vals})
+                values = {**base, **vals}
+                if "submerged_mass_kg" in vals:  # the described rig's own buoyancy, weighed: not the group's volume
+                    values.pop("displaced_volume_m3", None)
+                out[name] = Rig.from_mapping(values)
             except ValueError as error:
                 self.warnings.append(f"design.rigs.{name} ({problem.rigs[0]}'s values with {vals}): {error}; left out")
         return out

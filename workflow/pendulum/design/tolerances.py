@@ -21,6 +21,7 @@ INPUT_WORDS = {  # error-budget input → (words in a sentence, unit)
         ("length_m", "the arm length"),
         ("frontal_area_m2", "the frontal area"),
         ("displaced_volume_m3", "the displaced volume"),
+        ("submerged_mass_kg", "the submerged mass (the body weighed in the fluid)"),
         ("fluid_density_kg_m3", "the fluid's density"),
         ("body_inertia_kg_m2", "the body's moment of inertia"),
         ("gravity_m_s2", "gravity"),
@@ -154,6 +155,11 @@ def measurement_advice(
     listing = steps[0] if len(steps) == 1 else ", ".join(steps[:-1]) + " and " + steps[-1]
     times = f"{1 / factor:.2g}× as precisely" if factor > 0 else "exactly"
     sentence = head + f". Measuring {listing} (1σ; {times} as today) would reach ±{100 * target:g} %"
+    if any(split_key(k)[0] in ("displaced_volume_m3", "fluid_density_kg_m3") for k in chosen):
+        sentence += (
+            "; or weigh the body hung in the fluid and state that reading as submerged_mass_kg (m − ρV) in place of "
+            "the volume: one scale reading settles the buoyancy, which the volume, density and mass set together"
+        )
     return {
         "limited_by": first,
         "measure": measure,

@@ -44,6 +44,7 @@ DEFAULT_RELATIVE_TOLERANCES = {
     "length_m": 0.002,  # tape measure, pivot to centre of the body: ≈1.5 mm on 0.76 m
     "frontal_area_m2": 0.02,  # from drawings or a photograph
     "displaced_volume_m3": 0.01,  # from CAD or displacement
+    "submerged_mass_kg": 0.002,  # weighed hung in the tank's fluid (m − ρV): a scale reading, as the mass
     "body_inertia_kg_m2": 0.02,  # from CAD or a bifilar swing (only when given)
     "fluid_density_kg_m3": 0.002,  # fresh water 0–30 °C
     "gravity_m_s2": 0.0,

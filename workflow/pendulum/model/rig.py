@@ -10,6 +10,7 @@ RIG_VALUE_UNITS = {  # every rig value a rig or sidecar may state → its unit (
     "length_m": "m",
     "frontal_area_m2": "m²",
     "displaced_volume_m3": "m³",
+    "submerged_mass_kg": "kg",
     "fluid_density_kg_m3": "kg/m³",
     "gravity_m_s2": "m/s²",
     "body_inertia_kg_m2": "kg·m²",
@@ -59,6 +60,20 @@ class Rig:
 
     @classmethod
     def from_mapping(cls, values: dict) -> Rig:
+        """A rig from its stated values; a ``submerged_mass_kg`` (the body weighed hung in the tank's fluid,
+        m − ρV) stands for the displaced volume V = (m − m_sub)/ρ."""
+        values = dict(values)
+        submerged = values.pop("submerged_mass_kg", None)
+        if submerged is not None:
+            if values.get("displaced_volume_m3"):
+                raise ValueError("give the displaced volume or the submerged mass, not both")
+            density = values.get("fluid_density_kg_m3", cls.__dataclass_fields__["fluid_density_kg_m3"].default)
+            values["displaced_volume_m3"] = (float(values["mass_kg"]) - float(submerged)) / float(density)
+            if not 0 < float(submerged) <= float(values["mass_kg"]):
+                raise ValueError(
+                    f"submerged mass {float(submerged):g} kg must be above 0 (else the body floats) and at most the "
+                    f"mass {float(values['mass_kg']):g} kg"
+                )
         known = {f for f in cls.__dataclass_fields__}
         return cls(**{k: v for k, v in values.items() if k in known})
 

@@ -44,6 +44,7 @@ RIG_LABELS = {  # rig value → (label, unit)
         ("length_m", "length L (pivot to body centre)"),
         ("frontal_area_m2", "frontal area A"),
         ("displaced_volume_m3", "displaced volume V"),
+        ("submerged_mass_kg", "submerged mass m − ρV (weighed in the fluid)"),
         ("fluid_density_kg_m3", "fluid density ρ"),
         ("gravity_m_s2", "gravity g"),
         ("body_inertia_kg_m2", "body inertia about the pivot I_p"),

@@ -29,6 +29,7 @@ from pendulum.report.figures import FigureSections
 from pendulum.report.format import esc
 from pendulum.report.status import StatusSections
 from pendulum.report.tables import TableSections
+from pendulum.report.truth import TruthSections
 
 # ---------------------------------------------------------------------------
 # The report
@@ -41,6 +42,7 @@ class Report(
     DiscoverySections,
     DesignSections,
     CheckSections,
+    TruthSections,
     StatusSections,
 ):
     """The report's sections as HTML, one method per notebook cell; its fields and look-ups: ``ReportData``."""

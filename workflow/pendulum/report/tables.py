@@ -78,6 +78,8 @@ class TableSections(ReportData):
         rigs = [r for r in self.rig_names if r in self.rigs]
         rows = []
         for key, (label, unit) in RIG_LABELS.items():
+            if key == "submerged_mass_kg" and not any(self.rig_values_used(r)[0].get(key) for r in rigs):
+                continue  # a row only where a rig is weighed in its fluid
             cells = []
             for rig in rigs:
                 used, per_trial = self.rig_values_used(rig)
@@ -96,6 +98,10 @@ class TableSections(ReportData):
                     cells += [td(esc(text), "num"), td(esc("per trial (sidecars): " + ", ".join(listed)), "na")]
                     continue
                 value = values.get(key)
+                if key == "displaced_volume_m3" and used.get(key) is None and used.get("submerged_mass_kg"):
+                    volume = Rig.from_mapping(values).displaced_volume_m3
+                    cells += [td(esc(f"{fmt(volume, 4)} (from the submerged mass)"), "num"), td("derived", "na")]
+                    continue
                 if used.get(key) is None and key in UNSTATED_RIG_DEFAULTS:
                     default = UNSTATED_RIG_DEFAULTS[key]  # not stated: what the model uses
                     if key == "kinematic_viscosity_m2_s":  # water's, or air's for a gas (as the half cycles take it)
