@@ -313,3 +313,23 @@ def test_the_terminal_gets_what_may_be_wrong_and_the_log_the_notes_on_the_model(
     grams = load_record(table.copy(), "apple", {**air, "mass_kg": 180.0}, FitSettings())
     wrong = [w for w in fit_trials([grams], ["quadratic_drag"])["warnings"] if for_the_terminal(w)]
     assert len(wrong) == 1 and "mass_kg (180 kg here" in wrong[0], wrong
+
+
+def test_an_added_mass_held_at_its_bound_by_the_other_terms_is_not_called_a_short_period():
+    """A reviewer's water rig (a history force held at 0 beside it): the added mass held at 0 printed "measured
+    period 3.255 s is shorter than the rig values allow with no added mass (3.238 s)", its own numbers saying the
+    opposite, and the mark that leaves a trial out of the pooled fits. Said as it is now; and a bound other than 0
+    (a swing in air) is the period's reference, not 0."""
+    from pendulum.fit.checks import rig_checks
+    from pendulum.model.rig import Rig
+    from pendulum.status import RIG_MISMATCH_MARKS
+
+    rig = Rig(mass_kg=3.53, length_m=0.76, frontal_area_m2=0.0322, displaced_volume_m3=0.0025)
+    held = {"at_bound": True, "value": 0.0, "lower_bound": 0.0}
+    (longer,) = rig_checks(rig, held, [{"period_s": 3.255}])
+    assert "is at least the rig values' with no added mass (3.238 s)" in longer
+    assert not any(mark in longer for mark in RIG_MISMATCH_MARKS)
+    (shorter,) = rig_checks(rig, held, [{"period_s": 3.2}])
+    assert "3.2 s is shorter than the rig values allow with no added mass (3.238 s)" in shorter
+    (air,) = rig_checks(rig, dict(held, lower_bound=-0.5), [{"period_s": 2.9}])
+    assert "2.9 s is shorter than the rig values allow with the least added mass (-0.5 kg) (3 s)" in air

@@ -819,6 +819,11 @@ def test_variants_that_add_two_terms_at_once_say_why_no_term_is_tested_on_its_ow
     monkeypatch.setattr(documents, "variants", {"a": ["quadratic_drag"], "b": ["linear_damping"]})
     monkeypatch.setattr(documents, "order", ["a", "b"])
     assert documents._no_term_evidence().startswith("No variant holds every term of another")
+    # a pair one term apart whose joint fit failed (a reviewer: it read "quadratic → linear adds 1 at once")
+    monkeypatch.setattr(documents, "variants", {"a": ["quadratic_drag"], "b": ["quadratic_drag", "linear_damping"]})
+    assert documents._no_term_evidence() == (
+        "No term is compared on its own: the joint fits of a → b (one term apart) did not both succeed."
+    )
 
 
 def test_the_header_says_what_no_interval_holds_a_point_mass_and_the_rod(documents, monkeypatch):
@@ -826,11 +831,14 @@ def test_the_header_says_what_no_interval_holds_a_point_mass_and_the_rod(documen
     they hold. A rig that states no I_p is a point mass, and a body's own inertia about its centre then sits in the
     added mass, in no interval; the rod is not in the equation. Said where it applies, and not otherwise."""
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
-    assert "They do not hold the equation's own form: the rod's mass, buoyancy and drag are not in it." in text
+    assert (
+        "They do not hold the equation's own form: the rod's (or string's) mass, buoyancy and drag are not in it."
+        in text
+    )
     assert "On rig rig no Ip (body_inertia_kg_m2) is stated: the body is a point mass, Ip = mL²" in text
     monkeypatch.setitem(documents.rigs["rig"]["values"], "body_inertia_kg_m2", 2.0)
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
-    assert "the rod's mass" in text and "point mass" not in text
+    assert "the rod's (or string's) mass" in text and "point mass" not in text
 
 
 def test_a_rig_weighed_in_its_fluid_shows_its_submerged_mass_and_the_volume_it_gives(documents, monkeypatch):
@@ -844,3 +852,20 @@ def test_a_rig_weighed_in_its_fluid_shows_its_submerged_mass_and_the_volume_it_g
     assert "submerged mass m − ρV (weighed in the fluid) kg 1.030 ± 0.0021 (0.20 %, default)" in text, text
     assert "displaced volume V m³ 0.002500 (from the submerged mass) derived" in text, text
     assert "buoyancy B = ρgV N 24.53" in text, text
+
+
+def test_the_truth_table_widens_the_joint_by_its_scale_factor_and_counts_held_fits_one_sided(documents, monkeypatch):
+    """A reviewer: the fixture's S = 1 never tested the widening, and a held per-trial entry was judged ±1.96 σ_stat
+    where its reported limit is one-sided. A joint with S = 2 halves its σ_stat z (+2.08 → +1.04); a per-trial drag
+    area held at 0 (σ_stat 0.0012) with a truth 0.0022 above it is outside [0, 1.645 σ_stat] = [0, 0.0020], though
+    within 1.96 σ_stat (0.0024) of it."""
+    joint = documents.joint[("quadratic", "rig")]
+    monkeypatch.setitem(joint["parameters"]["added_mass_kg"], "scale_factor", 2.0)
+    monkeypatch.setattr(documents, "truth", {"t20": {"truth": {"added_mass_kg": 2.3, "drag_area_m2": 0.0022}}})
+    html = documents.truth_section()
+    rows = re.findall(r"<tr>(.*?)</tr>", html, re.S)
+    cells = [[re.sub(r"<[^>]+>", "", c) for c in re.findall(r"<td[^>]*>(.*?)</td>", r, re.S)] for r in rows]
+    added = next(c for c in cells if len(c) > 6 and "added mass" in c[2].lower())
+    assert added[6] == "+1.04", added
+    drag = next(c for c in cells if len(c) > 6 and "drag area" in c[2].lower() and c[1] in ("", "quadratic"))
+    assert drag[9] == "0 of 1", drag

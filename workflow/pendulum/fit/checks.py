@@ -106,9 +106,16 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
     measured = float(np.median([s["period_s"] for s in starts]))
     out = []
     if added_mass["at_bound"]:
+        lower = float(added_mass.get("lower_bound") or 0.0)
+        least = 2 * math.pi * math.sqrt((rig.pivot_inertia_kg_m2 + lower * rig.length_m**2) / rig.restoring_torque_nm)
+        with_least = "with no added mass" if lower == 0 else f"with the least added mass ({lower:g} kg)"
         out.append(
-            f"measured small-amplitude period {measured:.4g} s is shorter than the rig values allow with no added "
-            f"mass ({bare:.4g} s): length_m or body_inertia_kg_m2 overstate the pendulum's own inertia"
+            f"measured small-amplitude period {measured:.4g} s is shorter than the rig values allow {with_least} "
+            f"({least:.4g} s): length_m or body_inertia_kg_m2 overstate the pendulum's own inertia"
+            if measured < least
+            else f"the added mass is held at its lower bound ({lower:g} kg) although the measured small-amplitude "
+            f"period {measured:.4g} s is at least the rig values' {with_least} ({least:.4g} s): the fit's other "
+            "terms pull it there, and the bound is no measurement of it"
         )
     elif added_mass["value"] > 5 * rig.mass_kg:
         out.append(

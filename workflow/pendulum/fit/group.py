@@ -33,9 +33,10 @@ from pendulum.fit.uncertainty import (
     shared_frontal_area,
     systematic_perturbations,
     unclipped_shift,
+    unmeasured_warning,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS, unit_of
-from pendulum.model.physics import PendulumModel, simulate
+from pendulum.model.physics import PendulumModel, SimulationDiverged, simulate
 
 RIG_LEVEL = ("linear_damping", "coulomb_friction")  # a rig's bearing and arm: one coefficient per rig
 MAX_HELD_OUT_FOLDS = 10  # trials held out in at most this many folds (each a refit of the rest): one per trial up to 10
@@ -219,7 +220,7 @@ def solve_many(jobs: list[tuple]) -> list[GroupFit]:
     return [problem.solve(x0, settings, tolerance) for problem, x0, settings, tolerance in jobs]
 
 
-def systematic_shifts(fit: GroupFit, settings: FitSettings, cov: np.ndarray) -> dict[str, np.ndarray]:
+def systematic_shifts(fit: GroupFit, settings: FitSettings, cov) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Shift of the estimate when each systematic input moves by 1σ, by a refit (as :mod:`pendulum.fit.output_error`;
     ``cov``: the estimate's covariance, for how far a coefficient held on its bound is let go).
 
@@ -272,9 +273,11 @@ def systematic_shifts(fit: GroupFit, settings: FitSettings, cov: np.ndarray) -> 
             return found.x, found.active
 
         moved = {label: job[0] for label, job in zip(labels, jobs, strict=True)}
-        for label, shift in held_shifts(held, solve, problem, fit.x, moved).items():
-            shifts[label] = np.where(held, shift, shifts[label])
-    return shifts
+        measured, unmeasured = held_shifts(held, solve, problem, fit.x, moved, SimulationDiverged)
+        for label, shift in measured.items():
+            shifts[label] = np.where(held & ~unmeasured, shift, shifts[label])
+        return shifts, unmeasured
+    return shifts, np.zeros(held.size, bool)
 
 
 def leave_trials_out(fit: GroupFit, settings: FitSettings, max_folds: int = MAX_HELD_OUT_FOLDS) -> list[np.ndarray]:
@@ -370,10 +373,11 @@ def coefficient_entries(fit: GroupFit, settings: FitSettings) -> tuple[dict, lis
     sandwich statistical error, systematic budget by refits, combined error and 95 % interval; plus C_d.
     Returns the entries and their warnings (at a bound, not identifiable)."""
     cov, _, _ = fit.covariance(settings.max_ar_order)
-    shifts = systematic_shifts(fit, settings, cov)
+    shifts, unmeasured = systematic_shifts(fit, settings, cov)
     stderr = np.sqrt(np.maximum(np.diag(cov), 0))
     lower = fit.problem.lower_bounds(settings)
-    warnings, out = [], {}
+    warnings = [unmeasured_warning(label) for label, bad in zip(fit.problem.labels, unmeasured, strict=False) if bad]
+    out = {}
     for j, ((parameter, _), label) in enumerate(zip(fit.problem.columns, fit.problem.labels, strict=True)):
         out[label] = coefficient_entry(
             label,

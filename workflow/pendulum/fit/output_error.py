@@ -72,9 +72,10 @@ from pendulum.fit.uncertainty import (
     shared_frontal_area,
     systematic_perturbations,
     unclipped_shift,
+    unmeasured_warning,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound, unit_of
-from pendulum.model.physics import PendulumModel, keulegan_carpenter_number, simulate
+from pendulum.model.physics import PendulumModel, SimulationDiverged, keulegan_carpenter_number, simulate
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
 # From this many trials a fit's steps are solved on its sparse Jacobian (LSMR), not by an SVD of the dense one (rows ×
@@ -335,12 +336,13 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
     )
 
 
-def _systematic_shifts(problem: _Problem, sol, jac, lower, stderr) -> dict[str, np.ndarray]:
+def _systematic_shifts(problem: _Problem, sol, jac, lower, stderr) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Shift of the estimate when each systematic input moves by 1σ: a real refit, not a linearisation (an input
     that changes the period moves the residuals far beyond their linear range over many cycles, although the
     estimate responds smoothly), started from the linearised answer δx = −J⁺ δr; the −1σ refit's, turned, where a
     bound stopped the +1σ one (:func:`~pendulum.fit.uncertainty.unclipped_shift`); a coefficient held on its bound,
-    from refits with that bound relaxed (:func:`~pendulum.fit.uncertainty.held_shifts`)."""
+    from refits with that bound relaxed (:func:`~pendulum.fit.uncertainty.held_shifts`; which of those got none: the
+    second value)."""
     free = np.asarray(sol.active_mask) == 0
     base = problem.residuals(sol.x)
 
@@ -376,9 +378,11 @@ def _systematic_shifts(problem: _Problem, sol, jac, lower, stderr) -> dict[str, 
             return found.x, _on_bound(found, relaxed)
 
         moved = {label: moved_problem(records) for label, records in up.items()}
-        for label, shift in held_shifts(held, solve, problem, sol.x, moved).items():
-            shifts[label] = np.where(held, shift, shifts[label])
-    return shifts
+        measured, unmeasured = held_shifts(held, solve, problem, sol.x, moved, SimulationDiverged)
+        for label, shift in measured.items():
+            shifts[label] = np.where(held & ~unmeasured, shift, shifts[label])
+        return shifts, unmeasured
+    return shifts, np.zeros(held.size, bool)
 
 
 def _on_bound(found, lower) -> np.ndarray:
@@ -393,10 +397,10 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
     names = list(model.parameter_names)
     x = sol.x
     stderr = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    shifts = hac_info.pop("systematic_shifts")
+    shifts, unmeasured = hac_info.pop("systematic_shifts")
     active = np.asarray(sol.active_mask) != 0
     rig = records[0].rig
-    warnings = []
+    warnings = [unmeasured_warning(name) for name, bad in zip(names, unmeasured, strict=False) if bad]
     if not sol.success:
         warnings.append(f"the optimiser stopped without converging: {sol.message}")
     warnings += hac_info.pop("jacobian_warnings")

@@ -473,18 +473,32 @@ def relaxed_bounds(lower: np.ndarray, held: np.ndarray, scale: np.ndarray, added
     return relaxed
 
 
-def held_shifts(held: np.ndarray, solve, base, x0: np.ndarray, moved: dict) -> dict[str, np.ndarray]:
+def held_shifts(
+    held: np.ndarray, solve, base, x0: np.ndarray, moved: dict, failure: type[Exception]
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Each input's 1σ shift of the coefficients a fit holds on their bound (``held``), measured where no bound
     holds them: ``base`` (the problem) and ``moved`` (input → the problem with that input moved by 1σ) solved with
     those bounds relaxed (``solve(problem, start, tolerance)`` → estimate, which coefficients ended on a bound),
     the moved ones from the relaxed base's estimate. Held on its bound, a coefficient's refits stay there, and its
     one-sided limit was statistical only: the wooden bob in air's added mass < 6.4e-5 kg, where its inertia's 2 %
-    moves the unbounded estimate by 3.0e-4 kg. Nothing ({}) where even the relaxed base stops on a bound: the data want
-    that coefficient far past its bound (:data:`RELAXED_BOUND_SPREAD`), and no shift is measured."""
-    start, active = solve(base, x0, 1e-10)
-    if (np.asarray(active, bool) & held).any():
-        return {}
-    return {label: solve(problem, start, 1e-10)[0] - start for label, problem in moved.items()}
+    moves the unbounded estimate by 3.0e-4 kg. Returns the shifts and which held coefficients got none: those the
+    relaxed base still stops on their relaxed bound (the data want them far past it, :data:`RELAXED_BOUND_SPREAD`),
+    or every one where a relaxed fit raised ``failure`` (a simulation that ran away)."""
+    try:
+        start, active = solve(base, x0, 1e-10)
+        shifts = {label: solve(problem, start, 1e-10)[0] - start for label, problem in moved.items()}
+    except failure:
+        return {}, held.copy()
+    return shifts, held & np.asarray(active, bool)
+
+
+def unmeasured_warning(name: str) -> str:
+    """The warning of a coefficient held on its bound whose systematic part :func:`held_shifts` could not measure."""
+    return (
+        f"{name} is held on its bound, and how the rig values move its unbounded estimate could not be measured "
+        f"(that estimate lies beyond {RELAXED_BOUND_SPREAD:g} of its scales below the bound, or its simulation ran "
+        "away there): its upper limit leaves the rig values' tolerances out"
+    )
 
 
 def jacobian_rank_warnings(jac: np.ndarray, labels: list[str], tolerance: float = 1e-8) -> list[str]:

@@ -285,7 +285,10 @@ class CheckSections(ReportData):
             if point
             else ""
         )
-        return " They do not hold the equation's own form: the rod's mass, buoyancy and drag are not in it." + where
+        return (
+            " They do not hold the equation's own form: the rod's (or string's) mass, buoyancy and drag are not in it."
+            + where
+        )
 
     def calibration_table(self) -> str:
         """Table: each camera setup's calibration (lens model chosen by held-out error, focal length, plane)."""

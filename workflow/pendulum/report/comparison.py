@@ -486,8 +486,7 @@ class ComparisonSections(ReportData):
         return rows
 
     def _no_term_evidence(self) -> str:
-        """Why no term is tested on its own: no two variants differ by one term (naming the nested pairs that
-        differ by more, each term of which wants a variant of its own)."""
+        """Why no term is tested on its own: the fits of the pairs one term apart failed, or no pair is one apart."""
         wider = [
             (base, v, sorted(set(self.variants[v]) - set(self.variants[base])))
             for v in self.order
@@ -496,6 +495,10 @@ class ComparisonSections(ReportData):
         ]
         if not wider:
             return "No variant holds every term of another, so no term is compared on its own."
+        single = [f"{esc(base)} → {esc(v)}" for base, v, extra in wider if len(extra) == 1]
+        if single:  # pairs one term apart whose joint fits did not both succeed here
+            pairs = ", ".join(single)
+            return f"No term is compared on its own: the joint fits of {pairs} (one term apart) did not both succeed."
         base, v, extra = min(wider, key=lambda w: len(w[2]))
         names = " and ".join(esc(TERM_LABELS.get(t, t)) for t in extra)
         return (
