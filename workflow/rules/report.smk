@@ -13,8 +13,8 @@ rule report:
         "benchmarks/jobs/report/report.tsv"
     threads: 1
     resources:
-        mem_mb=800,
-        runtime=30,
+        mem_mb=report_mem_mb,
+        runtime=report_runtime,
     params:
         files=report_files(),
         trials=report_trials(),

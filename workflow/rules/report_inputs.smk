@@ -74,6 +74,17 @@ def report_inputs(wildcards):
     return {"results": _paths(report_files())}
 
 
+def report_mem_mb(wildcards):
+    """The report job's memory grows with what it draws: 512 MB measured at 25 trials, 697 at 225 and 1,290 at 425
+    (3 variants each; a helper's runs, 2026-12-05), where a fixed 800 MB had a scheduler kill it. 600 MB and 1 MB per
+    trial and variant (1,875 MB at 425 × 3); its runtime 30 min and 1 min per 10 trials (242 s measured at 425)."""
+    return 600 + len(TRIALS) * len(config["variants"])
+
+
+def report_runtime(wildcards):
+    return 30 + len(TRIALS) // 10
+
+
 def report_trials():
     """Trial → rig, kind, source file, the rig values (and pivot, vertical) its sidecar overrides and the 1σ
     tolerances stated for its values."""
