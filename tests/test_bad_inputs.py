@@ -638,3 +638,24 @@ def test_a_sidecar_s_submerged_mass_replaces_its_rig_s_displaced_volume(tmp_path
     settings = trial_settings(CONFIG, discover_trials(tmp_path)["trial"])
     assert settings["rig"]["submerged_mass_kg"] == 1.03 and "displaced_volume_m3" not in settings["rig"]
     assert settings["tolerances"]["submerged_mass_kg"] == 0.002
+
+
+def test_a_sidecar_that_changes_the_mass_of_a_weighed_rig_must_say_its_own_buoyancy(tmp_path):
+    """A reviewer: ballast added in one trial of a rig stated by its submerged mass kept the rig's weighing, as if
+    the ballast had the fluid's density. Refused, naming the file and what to give; a tolerance of a value of 0
+    ('displaced_volume_m3: 0' with the rig's old tolerance left) raised a bare ZeroDivisionError."""
+    config = copy.deepcopy(CONFIG)
+    rig = config["rigs"]["paper_rig"]
+    rig.pop("displaced_volume_m3")
+    rig["submerged_mass_kg"] = 1.03
+    (tmp_path / "trial.mp4").write_bytes(b"")
+    (tmp_path / "trial.yaml").write_text("mass_kg: 4.0\n")
+    with pytest.raises(ConfigError, match=r"trial\.yaml: gives mass_kg 4 on rig paper_rig, which states its buoyancy"):
+        trial_settings(config, discover_trials(tmp_path)["trial"])
+    (tmp_path / "trial.yaml").write_text("mass_kg: 4.0\nsubmerged_mass_kg: 1.5\n")
+    assert trial_settings(config, discover_trials(tmp_path)["trial"])["rig"]["submerged_mass_kg"] == 1.5
+    (tmp_path / "trial.yaml").write_text("displaced_volume_m3: 0\ntolerances:\n  displaced_volume_m3: 2.0e-5\n")
+    with pytest.raises(
+        ConfigError, match=r"displaced_volume_m3 = 2e-05 is the tolerance of a displaced_volume_m3 of 0"
+    ):
+        trial_settings(CONFIG, discover_trials(tmp_path)["trial"])

@@ -179,6 +179,17 @@ def test_measurement_advice_reaches_the_target_it_names():
         {},
     )
     assert "Measuring the arm length to ±" in advice["sentence"] and "weigh" not in advice["sentence"]
+    # the density alone (a weighed rig, or the drag through ½ρC_dA): weighing settles nothing (a reviewer)
+    advice = measurement_advice(
+        "drag_area_m2",
+        "the drag area",
+        dict(entry, floor_relative_halfwidth95=Z95 * 0.102 / value),
+        {"error_budget": {"fluid_density_kg_m3": -0.1, "mass_kg": 0.02}},
+        0.02,
+        {"paper": {"fluid_density_kg_m3": 2.0, "mass_kg": 0.005}},
+        {},
+    )
+    assert "Measuring the fluid's density to ±" in advice["sentence"] and "weigh" not in advice["sentence"]
 
 
 def test_bad_requests_are_warned_about_and_the_rest_is_designed(small_group):

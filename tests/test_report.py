@@ -869,3 +869,15 @@ def test_the_truth_table_widens_the_joint_by_its_scale_factor_and_counts_held_fi
     assert added[6] == "+1.04", added
     drag = next(c for c in cells if len(c) > 6 and "drag area" in c[2].lower() and c[1] in ("", "quadratic"))
     assert drag[9] == "0 of 1", drag
+
+
+def test_rig_values_where_every_sidecar_weighs_its_body_show_no_volume_the_fits_did_not_use(documents, monkeypatch):
+    """A reviewer: a rig stated by its volume whose every trial's sidecar gives a submerged mass showed the rig's
+    volume (0.0025 ± 2e-5) beside it, and '—' for the weight, buoyancy, restoring torque and I_p (both keys at
+    once raised). The fits take each sidecar's weighing in place of the volume: so does the table."""
+    monkeypatch.setitem(documents.rigs["rig"]["values"], "displaced_volume_m3", 0.0025)
+    for trial in documents.trials.values():
+        monkeypatch.setitem(trial, "overrides", {"submerged_mass_kg": 1.03})
+    text = re.sub(r"\s+", " ", html_module.unescape(re.sub(r"<[^>]+>", " ", documents.rig_table())))
+    assert "displaced volume V m³ 0.002500 (from the submerged mass) derived" in text, text
+    assert "weight mg N 34.63 derived buoyancy B = ρgV N 24.53 derived" in text, text

@@ -478,3 +478,16 @@ def test_a_held_coefficient_whose_shift_cannot_be_measured_says_its_limit_leaves
     added = fit["parameters"]["added_mass_kg"]
     assert added["at_bound"] and added["error_budget"]["length_m"] == 0.0, added
     assert any(w.startswith("added_mass_kg is held on its bound, and how the rig values move") for w in fit["warnings"])
+
+
+def test_a_body_weighed_in_air_is_fitted_though_its_heavier_draw_passes_its_mass():
+    """A reviewer: in air the buoyancy (1.2 × 0.0002 = 0.24 g here) is smaller than a scale's 0.2 % of the reading,
+    so the +1σ submerged mass passed the mass itself and the fit raised "must be at most the mass" for every such
+    trial. The perturbed rig is a linear step, not a stated rig: it is fitted, and the entries are the shifts."""
+    submerged = APPLE_IN_AIR["mass_kg"] - 1.2 * APPLE_IN_AIR["displaced_volume_m3"]
+    weighed = {k: v for k, v in APPLE_IN_AIR.items() if k != "displaced_volume_m3"} | {"submerged_mass_kg": submerged}
+    assert submerged + rig_tolerances(weighed)["submerged_mass_kg"] > weighed["mass_kg"]
+    record = load_record(apple_in_air(5, 0.0002), "apple", weighed, SETTINGS, tolerances={})
+    fit = fit_trials([record], ("quadratic_drag",), SETTINGS)
+    budget = fit["parameters"]["drag_area_m2"]["error_budget"]
+    assert "submerged_mass_kg" in budget and math.isfinite(budget["submerged_mass_kg"]), budget

@@ -201,6 +201,8 @@ def check_tolerances(tolerances: dict, values: dict, where: str) -> None:
         value = values.get(key)
         if not math.isfinite(sigma):
             raise ConfigError(f"{where}/{key} is {sigma!r}; give a finite 1σ")
+        if value is not None and sigma > 0 and value == 0:
+            raise ConfigError(f"{where}/{key} = {sigma:g} is the tolerance of a {key} of 0; give the value or drop it")
         if value is not None and sigma > 0.25 * abs(value):
             raise ConfigError(
                 f"{where}/{key} = {sigma:g} is {100 * sigma / abs(value):.0f} % of {key} = {value:g}; tolerances "
@@ -469,6 +471,13 @@ def trial_settings(config: dict, trial: Trial) -> dict:
     """Rig values, geometry and tracking settings of one trial: config, then rig, then sidecar."""
     rig = rig_name(config, trial)
     merged_rig = {**config["rigs"][rig]}
+    own_mass = trial.sidecar.get("mass_kg", merged_rig.get("mass_kg")) != merged_rig.get("mass_kg")
+    if own_mass and "submerged_mass_kg" in merged_rig and not set(BUOYANCY_KEYS) & set(trial.sidecar):
+        raise ConfigError(
+            f"{trial.sidecar_path}: gives mass_kg {trial.sidecar['mass_kg']:g} on rig {rig}, which states its buoyancy "
+            "by submerged_mass_kg (weighed at its own mass): give this trial's submerged_mass_kg, weighed as it swung, "
+            "or its displaced_volume_m3"
+        )
     for given, replaced in (BUOYANCY_KEYS, BUOYANCY_KEYS[::-1]):  # a sidecar's own buoyancy replaces the rig's
         if given in trial.sidecar:
             merged_rig.pop(replaced, None)

@@ -77,7 +77,8 @@ def report_inputs(wildcards):
 def report_mem_mb(wildcards):
     """The report job's memory grows with what it draws: 512 MB measured at 25 trials, 697 at 225 and 1,290 at 425
     (3 variants each; a helper's runs, 2026-12-05), where a fixed 800 MB had a scheduler kill it. 600 MB and 1 MB per
-    trial and variant (1,875 MB at 425 × 3); its runtime 30 min and 1 min per 10 trials (242 s measured at 425)."""
+    trial and variant (1,875 MB at 425 × 3); its runtime 30 min and 1 min per 10 trials (242 s measured at 425).
+    """
     return 600 + len(TRIALS) * len(config["variants"])
 
 

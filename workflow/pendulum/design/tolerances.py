@@ -155,10 +155,10 @@ def measurement_advice(
     listing = steps[0] if len(steps) == 1 else ", ".join(steps[:-1]) + " and " + steps[-1]
     times = f"{1 / factor:.2g}× as precisely" if factor > 0 else "exactly"
     sentence = head + f". Measuring {listing} (1σ; {times} as today) would reach ±{100 * target:g} %"
-    if any(split_key(k)[0] in ("displaced_volume_m3", "fluid_density_kg_m3") for k in chosen):
+    if any(split_key(k)[0] == "displaced_volume_m3" for k in chosen):  # a weighed rig has no volume entry
         sentence += (
             "; or weigh the body hung in the fluid and state that reading as submerged_mass_kg (m − ρV) in place of "
-            "the volume: one scale reading settles the buoyancy, which the volume, density and mass set together"
+            "the volume: one scale reading settles the buoyancy, which the volume and density set together"
         )
     return {
         "limited_by": first,

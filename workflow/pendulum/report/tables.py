@@ -63,6 +63,7 @@ def camera_rig_note(rigs: dict) -> str:
     )
 
 
+BUOYANCY = ("displaced_volume_m3", "submerged_mass_kg")  # either states the buoyancy (pendulum.trials)
 UNSTATED_RIG_DEFAULTS = {  # rig values the model takes when a rig does not state them (Rig's and records' defaults)
     "displaced_volume_m3": Rig.__dataclass_fields__["displaced_volume_m3"].default,
     **RIG_DEFAULTS,
@@ -199,6 +200,9 @@ class TableSections(ReportData):
         (``key → sorted values``, the second dict)."""
         used, per_trial = dict(self.rigs[rig]["values"]), {}
         trials = self.rig_trials(rig)
+        for given, replaced in (BUOYANCY, BUOYANCY[::-1]):  # every trial's own buoyancy replaces the rig's (as fitted)
+            if trials and all(given in (self.trials[t].get("overrides") or {}) for t in trials):
+                used.pop(replaced, None)
         for key in RIG_LABELS:
             values = [(self.trials[t].get("overrides") or {}).get(key) for t in trials]
             if trials and all(v is not None for v in values):
