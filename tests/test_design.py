@@ -196,7 +196,12 @@ def test_bad_requests_are_warned_about_and_the_rest_is_designed(small_group):
     options = DesignOptions(
         coefficients=("drag_area_m2", "history_coefficient_kg_per_sqrt_s"),
         releases_deg=(20.0,),
-        rigs=(("light", {"mass_kg": 1.0}), ("paper", {"length_m": 0.5}), ("short", {"length_m": 0.4})),
+        rigs=(
+            ("light", {"mass_kg": 1.0}),
+            ("paper", {"length_m": 0.5}),
+            ("short", {"length_m": 0.4}),
+            ("both", {"displaced_volume_m3": 0.002, "submerged_mass_kg": 1.0}),  # one buoyancy, twice
+        ),
         recommend=1,
     )
     document, rows = design_group(small_group, {}, FitSettings(), options)
@@ -204,6 +209,7 @@ def test_bad_requests_are_warned_about_and_the_rest_is_designed(small_group):
     assert "design.coefficients: history_coefficient_kg_per_sqrt_s is not a coefficient" in warnings
     assert "design.rigs.light" in warnings and "not a pendulum" in warnings
     assert "design.rigs.paper: a rig of the group has this name" in warnings
+    assert "design.rigs.both" in warnings and "not both" in warnings
     assert {r["rig"] for r in rows} == {"paper", "short"}  # the good described rig is still designed
     assert document["targets"] == ["drag_area_m2"] and document["recommendations"]
     ranks = sorted(r["rank"] for r in rows if r["coefficient"] == "drag_area_m2")

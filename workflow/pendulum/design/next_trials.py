@@ -196,7 +196,7 @@ class Designer:
                 continue
             try:
                 values = {**base, **vals}
-                if "submerged_mass_kg" in vals:  # the described rig's own buoyancy, weighed: not the group's volume
+                if "submerged_mass_kg" in vals and "displaced_volume_m3" not in vals:  # its own buoyancy, weighed
                     values.pop("displaced_volume_m3", None)
                 out[name] = Rig.from_mapping(values)
             except ValueError as error:
