@@ -225,6 +225,10 @@ def test_a_period_the_rig_values_cannot_give_is_named():
     assert "(length_m 0.76, mass_kg 3.53, displaced_volume_m3 0.0025, fluid_density_kg_m3 1000)" in message
     assert "a simple pendulum of this period is 1.05 m long" in message
     assert rig_period_problem(record, 3.3, 0.0) is None
+    # a rig weighed in the tank is named by its weighing, not by the volume it gives (a reviewer)
+    weighed = {k: v for k, v in rig.items() if k != "displaced_volume_m3"} | {"submerged_mass_kg": 1.03}
+    message = rig_period_problem(load_record(frame, "apple", weighed, FitSettings()), 2.06, 0.0)
+    assert "(length_m 0.76, mass_kg 3.53, submerged_mass_kg 1.03, fluid_density_kg_m3 1000)" in message
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -189,10 +189,12 @@ def rig_period_problem(
         measured = f"period {swing_period_s:.4g} s as swung ({period_s:.4g} s at small amplitude)"
     rig = record.rig
     simple = rig.gravity_m_s2 * period_s**2 / (4 * math.pi**2)  # a simple pendulum of this period: L = g T₀²/4π²
+    weighed = record.rig_values.get("submerged_mass_kg")  # the buoyancy as stated: weighed, or the volume
+    buoyancy = f"submerged_mass_kg {weighed:.4g}" if weighed else f"displaced_volume_m3 {rig.displaced_volume_m3:.4g}"
     return (
         f"trial {record.trial}: its {measured} is shorter than its rig values allow "
         f"({fastest:.4g} s at small amplitude with the least added mass): its values (length_m {rig.length_m:.4g}, "
-        f"mass_kg {rig.mass_kg:.4g}, displaced_volume_m3 {rig.displaced_volume_m3:.4g}, fluid_density_kg_m3 "
+        f"mass_kg {rig.mass_kg:.4g}, {buoyancy}, fluid_density_kg_m3 "
         f"{rig.fluid_density_kg_m3:.4g}) are not this pendulum's (a simple pendulum of this period is "
         f"{simple:.3g} m long); give the trial's rig in config or its sidecar"
     )
