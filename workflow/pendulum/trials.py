@@ -12,11 +12,10 @@ import jsonschema
 import yaml
 
 from pendulum.camera.video import VIDEO_EXTENSIONS
-from pendulum.model.rig import RIG_VALUE_UNITS
+from pendulum.model.rig import BUOYANCY_KEYS, RIG_VALUE_UNITS
 
 SCHEMA_DIR = Path(__file__).resolve().parents[1] / "schemas"
 RIG_KEYS = tuple(RIG_VALUE_UNITS)  # every rig value a rig or sidecar may state
-BUOYANCY_KEYS = ("displaced_volume_m3", "submerged_mass_kg")  # either states the buoyancy: a sidecar's replaces
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined in a sidecar must give these
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method", "capture_fps")
@@ -176,10 +175,11 @@ def check_rig_values(values: dict, where: str) -> None:
         return
     submerged = values.get("submerged_mass_kg")  # the body weighed hung in the fluid, m − ρV: its buoyancy
     if submerged is not None:
-        both = "gives both displaced_volume_m3 and submerged_mass_kg: give one" if volume else ""
-        out = f"submerged_mass_kg {submerged:g} must be above 0 (at 0 or below the body floats) and at most mass_kg"
-        if both or not 0 < submerged <= mass:
-            raise ConfigError(f"{where}: {both or out} {'' if both else f'{mass:g}'}".rstrip())
+        if volume:
+            raise ConfigError(f"{where}: gives both displaced_volume_m3 and submerged_mass_kg: give one")
+        if not 0 < submerged <= mass:
+            floats = "must be above 0 (at 0 or below the body floats)"
+            raise ConfigError(f"{where}: submerged_mass_kg {submerged:g} {floats} and at most mass_kg {mass:g}")
         return
     weight, buoyancy = mass * g, rho * volume * g
     if buoyancy >= weight:

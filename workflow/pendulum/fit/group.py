@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from pendulum.fit.output_error import solve_stacked, stacked_jacobian, working_jacobian
+from pendulum.fit.output_error import on_bound, solve_stacked, stacked_jacobian, working_jacobian
 from pendulum.fit.records import AngleRecord, FitSettings, added_mass_floor_kg, added_mass_lower_kg
 from pendulum.fit.uncertainty import (
     coefficient_entry,
@@ -124,10 +124,8 @@ class GroupProblem:
             np.ones(r.n_samples, bool) if masks is None else np.asarray(masks[k], bool) for k, r in enumerate(records)
         ]
         first = {rig: records[rigs.index(rig)].rig for rig in self.rigs}
-        self.steps = np.array(
-            [1e-6 * typical_scale(p, first[rig] if rig else records[0].rig) for p, rig in self.columns]
-            + [1e-8 for _ in records for _ in range(2)]
-        )
+        self.scales = np.array([typical_scale(p, first[rig] if rig else records[0].rig) for p, rig in self.columns])
+        self.steps = np.concatenate([1e-6 * self.scales, np.full(2 * len(records), 1e-8)])
 
     def touches(self, j: int, k: int) -> bool:
         """Whether coefficient j enters trial k (a rig's own coefficients enter only its trials)."""
@@ -201,9 +199,7 @@ class GroupProblem:
         lower = self.lower_bounds(settings) if lower is None else lower
         x0 = np.maximum(np.asarray(x0, float), lower)
         sol = solve_stacked(self, x0, lower, tolerance, max_evaluations)
-        finite = np.isfinite(lower)
-        active = np.asarray(sol.active_mask) != 0
-        active[finite] |= sol.x[finite] <= lower[finite] + 1e-12 * np.maximum(1.0, np.abs(lower[finite]))
+        active = on_bound(sol, lower)
         return GroupFit(self, sol.x, self.residual_parts(sol.x), active, bool(sol.success), int(sol.nfev))
 
 
@@ -264,7 +260,7 @@ def systematic_shifts(fit: GroupFit, settings: FitSettings, cov) -> tuple[dict[s
     held[problem.n_phys :] = False
     if held.any() and shifts:
         stderr = np.sqrt(np.maximum(np.diag(cov), 0))
-        typical = np.concatenate([problem.steps[: problem.n_phys] / 1e-6, np.zeros(stderr.size - problem.n_phys)])
+        typical = np.concatenate([problem.scales, np.zeros(stderr.size - problem.n_phys)])
         lower = problem.lower_bounds(settings)
         relaxed = relaxed_bounds(lower, held, np.maximum(stderr, typical), added_mass_floor_kg(problem.records))
 

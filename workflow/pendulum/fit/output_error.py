@@ -355,7 +355,7 @@ def _systematic_shifts(problem: _Problem, sol, jac, lower, stderr) -> tuple[dict
         moved = moved_problem(records)
         start = sol.x + linear_response(jac, free, moved.residuals(sol.x) - base)
         found = moved.solve(np.where(free, start, sol.x), lower, tolerance=1e-7)
-        return found.x - sol.x, _on_bound(found, lower)
+        return found.x - sol.x, on_bound(found, lower)
 
     shifts, down, up = {}, None, systematic_perturbations(problem.records)
     for label, records in up.items():
@@ -375,7 +375,7 @@ def _systematic_shifts(problem: _Problem, sol, jac, lower, stderr) -> tuple[dict
 
         def solve(moved, start, tolerance):
             found = moved.solve(start, relaxed, tolerance)
-            return found.x, _on_bound(found, relaxed)
+            return found.x, on_bound(found, relaxed)
 
         moved = {label: moved_problem(records) for label, records in up.items()}
         measured, unmeasured = held_shifts(held, solve, problem, sol.x, moved, SimulationDiverged)
@@ -385,7 +385,7 @@ def _systematic_shifts(problem: _Problem, sol, jac, lower, stderr) -> tuple[dict
     return shifts, np.zeros(held.size, bool)
 
 
-def _on_bound(found, lower) -> np.ndarray:
+def on_bound(found, lower) -> np.ndarray:
     """Which coefficients a solution ended on their bound (the optimiser's active set, or within rounding of it)."""
     active = np.asarray(found.active_mask) != 0
     finite = np.isfinite(lower)

@@ -17,6 +17,7 @@ RIG_VALUE_UNITS = {  # every rig value a rig or sidecar may state → its unit (
     "characteristic_length_m": "m",
     "kinematic_viscosity_m2_s": "m²/s",
 }
+BUOYANCY_KEYS = ("displaced_volume_m3", "submerged_mass_kg")  # either states the buoyancy; a sidecar's replaces
 
 
 @dataclass(frozen=True)

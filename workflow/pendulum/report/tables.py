@@ -16,7 +16,7 @@ from pendulum.fit.records import (
     rig_tolerances,
     with_rig_defaults,
 )
-from pendulum.model.rig import Rig, tolerances_alike
+from pendulum.model.rig import BUOYANCY_KEYS, Rig, tolerances_alike
 from pendulum.report.data import (
     ReportData,
     failure_text,
@@ -63,7 +63,6 @@ def camera_rig_note(rigs: dict) -> str:
     )
 
 
-BUOYANCY = ("displaced_volume_m3", "submerged_mass_kg")  # either states the buoyancy (pendulum.trials)
 UNSTATED_RIG_DEFAULTS = {  # rig values the model takes when a rig does not state them (Rig's and records' defaults)
     "displaced_volume_m3": Rig.__dataclass_fields__["displaced_volume_m3"].default,
     **RIG_DEFAULTS,
@@ -200,7 +199,10 @@ class TableSections(ReportData):
         (``key → sorted values``, the second dict)."""
         used, per_trial = dict(self.rigs[rig]["values"]), {}
         trials = self.rig_trials(rig)
-        for given, replaced in (BUOYANCY, BUOYANCY[::-1]):  # every trial's own buoyancy replaces the rig's (as fitted)
+        for given, replaced in (
+            BUOYANCY_KEYS,
+            BUOYANCY_KEYS[::-1],
+        ):  # every trial's own buoyancy replaces the rig's (as fitted)
             if trials and all(given in (self.trials[t].get("overrides") or {}) for t in trials):
                 used.pop(replaced, None)
         for key in RIG_LABELS:
