@@ -6,7 +6,7 @@ supersampled, sub-pixel centre) for the marker, a two-tone or shiny bob and a se
 a scene (:class:`pendulum.synthetic.specs.Faults`: background stripes, letterbox borders, a second moving
 object, the bob's look, a trimmed clip's discarded packets; occlusions passing in front of the marker and
 their schedule) and what each covers: each pixel's fraction inside a band, the letterbox mask, the
-fraction of the marker disk under a border or under another disk.
+fraction of the marker disk under a border or under another disk; each frame's own sensor noise.
 """
 
 from __future__ import annotations
@@ -29,6 +29,29 @@ def occlusion_schedule(spec: TrialSpec, n_frames: int, first_frame: int) -> list
     slots = np.arange(first_frame + 5, n_frames - occ.event_frames - 1, occ.event_frames * 3)
     starts = np.sort(rng.choice(slots, size=min(n_events, len(slots)), replace=False))
     return [(int(s0), occ.event_frames) for s0 in starts]
+
+
+NOISE_SHIFTS = 128  # the noise field's extra rows and columns: 128² windows, two frames alike 1 time in 16,384
+
+
+def sensor_noise(rng: np.random.Generator, shape: tuple[int, int], sigma: float, n_frames: int):
+    """Each frame's own sensor noise, N(0, σ²) per pixel: ``noise(i)`` is frame i's (a read-only view).
+
+    One field (``shape`` plus :data:`NOISE_SHIFTS` rows and columns) drawn once, each frame a window of it at its
+    own random offset: no two frames share a pattern, at the cost of one frame's draw. (A bank of 4 noise images,
+    repeated, made every 4th frame alike, and so the every-k-th frames a scene model takes from a clip, k a power
+    of two: noise-free against each other, as no camera's are.)"""
+    h, w = shape
+    field = rng.standard_normal((h + NOISE_SHIFTS, w + NOISE_SHIFTS), dtype=np.float32)
+    field *= np.float32(sigma)
+    field.flags.writeable = False
+    offsets = rng.integers(0, NOISE_SHIFTS, size=(max(n_frames, 1), 2))
+
+    def noise(i: int) -> np.ndarray:
+        y, x = offsets[i]
+        return field[y : y + h, x : x + w]
+
+    return noise
 
 
 def pendulum_shades(camera: Camera) -> dict:

@@ -14,8 +14,9 @@ silhouette), its inside drawn from its look (:class:`WallBody`): ``apple`` (dark
 mottled skin), ``two_tone`` (a bright patterned top half over a dark bottom half, as the held-out
 ball, its seam's plane tilted by ``seam_tilt_deg``: the body study's up to 30°), ``pattern`` (a printed
 checker); ``spin_deg_per_s`` turns the look about the thread (the silhouette stays a disk). Coverage is
-exact to 1/16 px² (4×4 supersampling at the sub-pixel centre), exposure blur is the mean of sub-exposures no
-more than 1.5 px apart.
+exact to 1/16 px² (4×4 supersampling at the sub-pixel centre; pixel k centred on k, as OpenCV and the
+trackers measure), exposure blur is the mean of sub-exposures no more than 1.5 px apart, and each frame
+has its own sensor noise (:func:`~pendulum.synthetic.scene.sensor_noise`).
 
 The scene (:class:`Wall`): the wall's grey and gradient, a soft static dark band (a shadow across
 the wall), soft shadows that follow the body, the thread, slow exposure drift (auto-exposure),
@@ -34,6 +35,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.synthetic.experiment import true_angle_rad, write_video
+from pendulum.synthetic.scene import sensor_noise
 from pendulum.synthetic.specs import TrialSpec
 
 
@@ -112,10 +114,10 @@ def _wall_image(spec: TrialSpec, wall: Wall) -> np.ndarray:
 def _disk_coverage(gx: np.ndarray, gy: np.ndarray, cx: float, cy: float, r: float) -> np.ndarray:
     """Each pixel's share of 4 × 4 sub-pixel samples within r of (cx, cy): 1 or 0 away from the rim, counted
     near it (a sample lies within 0.53 px of its pixel's centre)."""
-    d = np.hypot(gx + 0.5 - cx, gy + 0.5 - cy)
+    d = np.hypot(gx - cx, gy - cy)
     coverage = (d < r).astype(np.float64)
     rim = np.nonzero(np.abs(d - r) <= 1.0)
-    sub = (np.arange(4) + 0.5) / 4
+    sub = (np.arange(4) + 0.5) / 4 - 0.5
     sx, sy = np.meshgrid(sub, sub)
     fx = gx[rim][:, None] + sx.ravel() - cx
     fy = gy[rim][:, None] + sy.ravel() - cy
@@ -130,8 +132,8 @@ def _body_patch(body: WallBody, cx: float, cy: float, spin_rad: float, swing_rad
     size = int(math.ceil(2 * r + 5))
     gy, gx = np.mgrid[0:size, 0:size].astype(np.float32)
     coverage = _disk_coverage(gx, gy, cx - x0, cy - y0, r)
-    u = (gx + 0.5 - (cx - x0)) / r  # body frame: across and along the thread
-    v = (gy + 0.5 - (cy - y0)) / r
+    u = (gx - (cx - x0)) / r  # body frame: across and along the thread
+    v = (gy - (cy - y0)) / r
     cs, sn = math.cos(swing_rad), math.sin(swing_rad)
     across, along = u * cs - v * sn, u * sn + v * cs
     rho2 = np.clip(across**2 + along**2, 0, 1)
@@ -167,7 +169,7 @@ def _shadow_patch(body: WallBody, wall: Wall, cx: float, cy: float):
     x0, y0 = int(math.floor(cx - reach)), int(math.floor(cy - reach))
     size = int(math.ceil(2 * reach + 2))
     gy, gx = np.mgrid[0:size, 0:size].astype(np.float32)
-    dist = np.hypot(gx + 0.5 - (cx - x0), gy + 0.5 - (cy - y0))
+    dist = np.hypot(gx - (cx - x0), gy - (cy - y0))
     from scipy.special import ndtr
 
     return x0, y0, (wall.shadow_depth * ndtr((r - dist) / max(s, 1e-3))).astype(np.float32)
@@ -229,7 +231,7 @@ def render_wall_trial(trial: WallTrial, progress=None) -> tuple[list, pd.DataFra
     base = _wall_image(spec, wall)
     h, w = base.shape
     rng = np.random.default_rng(spec.seed + 15485863)
-    noise_bank = [rng.standard_normal(base.shape).astype(np.float32) * cam.noise_sigma for _ in range(4)]
+    noise = sensor_noise(rng, base.shape, cam.noise_sigma, n)
 
     def draw(canvas, i, j, part=(slice(None), slice(None))):
         """The body, its shadows and its thread at sub-exposure j of frame i, drawn onto ``canvas``."""
@@ -329,7 +331,7 @@ def render_wall_trial(trial: WallTrial, progress=None) -> tuple[list, pd.DataFra
             frame *= 1 + wall.exposure_drift * math.sin(2 * math.pi * video_t[i] / wall.exposure_drift_period_s)
         if wall.defocus_px > 0:
             frame = cv2.GaussianBlur(frame, (0, 0), wall.defocus_px)
-        frame += noise_bank[i % 4] if i % 2 == 0 else np.flip(noise_bank[i % 4], axis=1)
+        frame += noise(i)
         np.rint(frame, out=frame)
         frames.append(np.minimum(np.maximum(frame, 0, out=frame), 255, out=frame).astype(np.uint8))
         if progress and (i % 100 == 0 or i == n - 1):
