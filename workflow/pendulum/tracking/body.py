@@ -461,7 +461,8 @@ def track_body(
     flags[area_fault | centroid_fault | merged] = "occluded"
     # fingers alone over its edge add less than MAX_AREA_RATIO: a still run over the body's usual size, at either end
     flags[held_still_runs(mass / own, x, y, TYPICAL_AREA_RATIO, STILL_PX)] = "held"
-    hidden, in_front = hidden_frames(seen, x, y, background, max(NOISE_SIGMAS * scene.noise_grey, 4.0))  # a post
+    elsewhere = getattr(view, "hidden_box", None)  # a place the brightness view found hidden, for a colour view
+    hidden, in_front = hidden_frames(seen, x, y, background, max(NOISE_SIGMAS * scene.noise_grey, 4.0), elsewhere)
     flags[hidden & (flags == "ok")] = "occluded"
     usable = flags == "ok"
     # the body with what holds it before the first free frame or after the last (a hand before the release, one

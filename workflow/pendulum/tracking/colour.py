@@ -107,10 +107,11 @@ def _first_chroma(path) -> np.ndarray:
 class ColourView:
     """A decoded frame → its colour view P (module docstring), uint8 (height, width)."""
 
-    def __init__(self, wall_uv: np.ndarray, gain: float, dead_zone: int):
+    def __init__(self, wall_uv: np.ndarray, gain: float, dead_zone: int, hidden_box: list | None = None):
         self.wall = wall_uv
         self.gain, self.dead_zone = float(gain), int(dead_zone)
         self.key = ("colour", round(self.gain, 6), self.dead_zone)
+        self.hidden_box = hidden_box  # where the brightness view found something in front (occluders.hidden_frames)
 
     def __call__(self, frame) -> np.ndarray:
         planes = chroma_planes(frame)
@@ -146,7 +147,9 @@ def colour_view(path, luma_track: pd.DataFrame | None) -> tuple[ColourView | Non
     if contrast < MIN_COLOUR_SNR * noise:
         return None, {**facts, "colour": "the body's colour does not stand out from the wall's"}
     dead_zone = max(1, int(round(DEAD_ZONE_NOISE * noise)))
-    return ColourView(wall, COLOUR_CONTRAST / (contrast - dead_zone), dead_zone), facts
+    in_front = {} if luma_track is None else (luma_track.attrs.get("body") or {}).get("in_front") or {}
+    hidden_box = in_front.get("box_px")  # where the brightness view lost the body: hidden in colour too?
+    return ColourView(wall, COLOUR_CONTRAST / (contrast - dead_zone), dead_zone, hidden_box), facts
 
 
 def _body_contrasts(samples, difference: np.ndarray, luma_track: pd.DataFrame) -> list[float]:

@@ -20,7 +20,6 @@ from pendulum.tracking import samples
 from pendulum.tracking.body import BodyError, track_body
 from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour, track_marker_by_colour
 from pendulum.tracking.marker import MarkerAbandoned, track_video
-from pendulum.tracking.occluders import reaching_box
 from pendulum.tracking.outline import centre_by_outline
 from pendulum.tracking.settings import TrackerSettings
 from pendulum.tracking.timing import at_capture_rate, correct_slips
@@ -172,15 +171,11 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
     if colour is None:
         tried["body_by_colour"] = facts.get("colour", "not taken")
         return body
-    in_front = (body.attrs.get("body") or {}).get("in_front") or {}
-    if in_front.get("box_px"):  # what hides part of the body in its brightness hides it in its colour too
-        x, y = colour.x_px.to_numpy(float), colour.y_px.to_numpy(float)
-        behind = reaching_box(x, y, in_front["box_px"], colour.attrs["body"]["radius_px"]) & (colour.flag == "ok")
-        colour.loc[behind, "flag"] = "occluded"
-        colour.attrs["body"]["in_front"] = {**in_front, "seen_in": "brightness"}
     tried["body_by_colour"] = _usable(colour)
     if usable_fraction(colour) > usable_fraction(body):
         colour.attrs["body"]["brightness"] = {"usable": tried["body"], "warning": body.attrs["body"].get("warning")}
+        if (in_front := body.attrs["body"].get("in_front")) and "in_front" not in colour.attrs["body"]:
+            colour.attrs["body"]["brightness"]["in_front_not_in_colour"] = in_front  # its colour seen there
         return colour
     return body
 

@@ -65,12 +65,22 @@ def _stamps(image_shape, stamp: np.ndarray, half: int, xs: np.ndarray, ys: np.nd
 
 
 def hidden_frames(
-    counts: SilhouetteCounts, xs: np.ndarray, ys: np.ndarray, background: np.ndarray, threshold_grey: float
+    counts: SilhouetteCounts,
+    xs: np.ndarray,
+    ys: np.ndarray,
+    background: np.ndarray,
+    threshold_grey: float,
+    found_elsewhere: list | None = None,
 ) -> tuple[np.ndarray, dict]:
     """The frames whose body reaches a place something in front hides (bool per frame), and what was found:
     ``hidden_px`` (its pixel count), ``box_px`` (x, y, width, height) or None. The body is expected only where a
     counted frame put it (one cut by the frame's border is not counted, nor expected); something in front stands
-    out of the wall around it by more than ``threshold_grey`` (the tracker's: what a moving body must differ by)."""
+    out of the wall around it by more than ``threshold_grey`` (the tracker's: what a moving body must differ by).
+
+    ``found_elsewhere``: the box of such a place another view of the clip found (the brightness view's, for the
+    colour view, where a neutral bar need not stand out): the body's unseen pixels within it, if there are as
+    many as a hidden place needs, are that place in this view too (``seen_in`` ``brightness``). Where this view
+    sees the body there, nothing hides it: the other view lost it against a wall of its own grey or colour."""
     none = np.zeros(xs.size, bool), {"hidden_px": 0, "box_px": None}
     if counts.n < MIN_EXPECTED:
         return none
@@ -83,14 +93,18 @@ def hidden_frames(
     rows = np.asarray(counts.frames, int)
     for _, where, stamp in _stamps(expected.shape, core, counts.half, xs[rows], ys[rows]):
         expected[where] += stamp
-    hidden = (expected >= MIN_EXPECTED) & (counts.seen < SEEN_SHARE * expected)
+    unseen = (expected >= MIN_EXPECTED) & (counts.seen < SEEN_SHARE * expected)
     least = max(4, MIN_HIDDEN_SHARE * core.sum())
-    if hidden.sum() < least:
-        return none
     # something in front shows in the static scene: it stands out of the wall around it
     wall = cv2.medianBlur(np.clip(np.rint(background), 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
     stands_out = np.abs(background - wall) > threshold_grey
-    hidden &= cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    hidden = unseen & (cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0)
+    facts = {}
+    if hidden.sum() < least and found_elsewhere is not None:
+        x0, y0, width, height = found_elsewhere
+        hidden = np.zeros_like(unseen)
+        hidden[y0 : y0 + height, x0 : x0 + width] = unseen[y0 : y0 + height, x0 : x0 + width]
+        facts = {"seen_in": "brightness"}
     if hidden.sum() < least:
         return none
     frames = np.zeros(xs.size, bool)
@@ -98,7 +112,7 @@ def hidden_frames(
         frames[k] = bool((hidden[where] & stamp).any())
     ys_h, xs_h = np.nonzero(hidden)
     box = [int(xs_h.min()), int(ys_h.min()), int(xs_h.max() - xs_h.min() + 1), int(ys_h.max() - ys_h.min() + 1)]
-    return frames, {"hidden_px": int(hidden.sum()), "box_px": box}
+    return frames, {"hidden_px": int(hidden.sum()), "box_px": box, **facts}
 
 
 def reaching_box(xs: np.ndarray, ys: np.ndarray, box: list, radius_px: float) -> np.ndarray:
