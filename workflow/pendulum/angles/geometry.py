@@ -421,7 +421,7 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
     if result.get("circle") and result["pivot_covariance_px2"] is not None:
         result.update(pivot_uncertainty(result["pivot_covariance_px2"], result["circle"]["radius_px"], vertical_deg))
         scale = result["angle_scale_stderr_pct"]
-        if scale > MAX_ANGLE_SCALE_STDERR_PCT:
+        if scale > MAX_ANGLE_SCALE_STDERR_PCT and result.get("shared") is not False:  # else no trial uses it
             circle = result["circle"]
             result["warnings"].append(
                 f"the pivot, {circle['radius_px']:.0f} px from the swing's arc of {circle['arc_span_deg']:.1f}°, is "
