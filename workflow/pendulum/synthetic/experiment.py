@@ -42,6 +42,7 @@ from pendulum.synthetic.scene import (
     letterbox_mask,
     occlusion_schedule,
     pendulum_shades,
+    sensor_noise,
     stripe_coverage,
 )
 from pendulum.synthetic.specs import Bob, Camera, TrialSpec
@@ -259,7 +260,7 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
         background += cover * (np.float32(faults.stripes.level) - background)
     border = letterbox_mask(background.shape, faults.letterbox) if faults.letterbox.active else None
     rng = np.random.default_rng(spec.seed + 15485863)
-    noise_bank = [rng.standard_normal(background.shape).astype(np.float32) * cam.noise_sigma for _ in range(4)]
+    noise = sensor_noise(rng, background.shape, cam.noise_sigma, n)
     release_frame = int(np.searchsorted(times, release_time_s(spec)))
     schedule = occlusion_schedule(spec, n - n_lead, release_frame - n_lead)
     events = [(start + n_lead, length) for start, length in schedule]
@@ -301,7 +302,7 @@ def render_trial(spec: TrialSpec, progress=None) -> RenderedTrial:
                 )
                 d = math.hypot(ox - truth.marker_x_px[i], oy - truth.marker_y_px[i])
                 truth.loc[i, "occluded_fraction"] = disk_overlap_fraction(cam.marker_radius_px, r_occ, d)
-        frame += noise_bank[i % len(noise_bank)] if i % 2 == 0 else np.flip(noise_bank[i % len(noise_bank)], axis=1)
+        frame += noise(i)
         image = np.clip(np.rint(frame), 0, 255).astype(np.uint8)
         if border is not None:
             image[border] = np.uint8(np.clip(round(faults.letterbox.level), 0, 255))
