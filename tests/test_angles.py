@@ -27,7 +27,8 @@ def test_pooled_pivot_is_found_to_a_fraction_of_a_pixel(demo):
     tracks, truth = demo
     geometry = estimate_rig_geometry(tracks, vertical_deg=0.0)
     true_pivot = next(iter(truth.values()))["camera"]["pivot_px"]
-    assert np.hypot(*np.subtract(geometry["pivot_px"], true_pivot)) < 0.05  # measured 0.024 (was 0.039)
+    # measured 0.057 px since each demo frame has its own noise (0.024 with 4 repeated noise images; 0.039 before)
+    assert np.hypot(*np.subtract(geometry["pivot_px"], true_pivot)) < 0.08
     assert geometry["circle"]["radius_px"] == pytest.approx(560.0, abs=0.1)
 
 
@@ -41,8 +42,9 @@ def test_demo_angles_match_truth(demo, trial):
     true = pd.read_csv(DEMO_TRUTH / f"{trial}.csv").set_index("frame").loc[table.frame]
     ok = table.flag.to_numpy() == "ok"
     err_deg = np.degrees(table.theta_rad.to_numpy()[ok] - true.theta_rad.to_numpy()[ok])
-    # Measured 0.0039–0.0046° RMS, max 0.018° (thresholded centroid: 0.0046–0.0056°, max 0.023°)
-    assert np.sqrt(np.mean(err_deg**2)) <= 0.005
+    # Measured 0.0045–0.0054° RMS, max 0.021° since each demo frame has its own noise (with 4 repeated noise images
+    # 0.0039–0.0046°, max 0.018°; a thresholded centroid then 0.0046–0.0056°, max 0.023°)
+    assert np.sqrt(np.mean(err_deg**2)) <= 0.006
     assert np.abs(err_deg).max() < 0.025
     assert info.release_detected
     assert info.release_time_s == pytest.approx(truth[trial]["release_time_s"], abs=1 / 60)

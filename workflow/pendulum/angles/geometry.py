@@ -335,6 +335,25 @@ def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None) -> tu
 
 
 MAX_ANGLE_SCALE_STDERR_PCT = 2.0  # an estimated pivot that leaves the angles' scale more uncertain: said
+# A track's slow bias across its arc (a glass's static reflection, a bob's shading and glint): 0.06–0.15 px in a
+# helper's renders of two clock pendulums (2026-12-05), whose arcs bend only 0.4–0.6 px from a line
+TRACK_BIAS_PX = 0.1
+
+
+def arc_sagitta_px(radius_px: float, arc_span_deg: float) -> float:
+    """How far an arc of span φ bends from its chord: s = R (1 − cos(φ/2))."""
+    return radius_px * (1.0 - math.cos(math.radians(min(arc_span_deg, 180.0)) / 2))
+
+
+def track_bias_covariance(radius_px: float, arc_span_deg: float, vertical_deg: float) -> np.ndarray:
+    """The pivot's covariance from a slow tracking bias b = :data:`TRACK_BIAS_PX` across the arc, which no circle
+    fit's scatter shows: a change δ of the arc's sagitta s = R (1 − cos(φ/2)) (φ its span) moves the fitted
+    radius by R δ / s, along the arm a = (sin v, cos v): (R b / s)² a aᵀ, the angles' scale by ± b / s.
+    Negligible on a wide swing (a 75° arc at R = 560 px: s = 116 px, 0.09 %), the whole scale on a clock's (a
+    3° arc at R = 300 px: s = 0.1 px)."""
+    along = radius_px * TRACK_BIAS_PX / max(arc_sagitta_px(radius_px, arc_span_deg), 1e-9)
+    a = np.array([math.sin(math.radians(vertical_deg)), math.cos(math.radians(vertical_deg))])
+    return along**2 * np.outer(a, a)
 
 
 def pivot_uncertainty(pivot_covariance_px2, radius_px: float, vertical_deg: float) -> dict:
@@ -419,15 +438,20 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         result["vertical_source"] = "given"
     result["vertical_deg"] = float(vertical_deg)
     if result.get("circle") and result["pivot_covariance_px2"] is not None:
-        result.update(pivot_uncertainty(result["pivot_covariance_px2"], result["circle"]["radius_px"], vertical_deg))
+        circle = result["circle"]
+        bias = track_bias_covariance(circle["radius_px"], circle["arc_span_deg"], vertical_deg)
+        result["pivot_covariance_px2"] = (np.asarray(result["pivot_covariance_px2"]) + bias).tolist()
+        result["pivot_track_bias_px"] = TRACK_BIAS_PX  # in the covariance beside the circle fit's own
+        result.update(pivot_uncertainty(result["pivot_covariance_px2"], circle["radius_px"], vertical_deg))
         scale = result["angle_scale_stderr_pct"]
         if scale > MAX_ANGLE_SCALE_STDERR_PCT and result.get("shared") is not False:  # else no trial uses it
-            circle = result["circle"]
+            sagitta = arc_sagitta_px(circle["radius_px"], circle["arc_span_deg"])
             result["warnings"].append(
                 f"the pivot, {circle['radius_px']:.0f} px from the swing's arc of {circle['arc_span_deg']:.1f}°, is "
                 f"known along the arm only to ± {scale * circle['radius_px'] / 100:.0f} px: every angle's scale is "
-                f"uncertain by ± {scale:.1f} % (1σ of the circle fit; a track's slow bias can make it more), and the "
-                "amplitude-dependent coefficients with it (drag, friction): give pivot_px (the pivot's place in the "
-                "picture, measured in a frame that shows it) or film a wider swing"
+                f"uncertain by ± {scale:.1f} % (1σ: the circle fit's scatter and a slow tracking bias of "
+                f"{TRACK_BIAS_PX:g} px against the arc's {sagitta:.2g} px sagitta), and the amplitude-dependent "
+                "coefficients with it (drag, friction): give pivot_px (the pivot's place in the picture, measured in "
+                "a frame that shows it) or film a wider swing"
             )
     return result
