@@ -262,7 +262,8 @@ def test_with_a_start_hint_the_tracker_stays_on_the_marker_beside_a_reflection(f
     """The marker passes 16 px (2.6 radii) from the reflection every half period: frames where the
     reflection reaches the ring the marker's background is taken from (capsule r + 2.5 px, ring 4 px
     wider) are flagged, never an ``ok`` position pulled towards it; frames just clear of it are ``ok``
-    and unbiased. Measured: 75 % ok; beside it 1 frame ok of 45, 0.09 px off."""
+    and unbiased. Measured: 75 % ok; beside it 1 frame ok of 45, 0.15 px off (0.09 px while the renders repeated
+    4 noise images)."""
     truth, start = reflection
     track = track_video(folder / "reflection.mp4", replace(SMALL, start_px=start))
     errors = errors_by_time(track, truth)
@@ -272,7 +273,7 @@ def test_with_a_start_hint_the_tracker_stays_on_the_marker_beside_a_reflection(f
     reaching = distance < 6.0 + 2.5 + 4.0 + 6.0  # the reflection's disk (r 6) reaches into the ring
     assert reaching.sum() >= 20 and not (errors.flag[reaching] == "ok").any()
     beside = (distance < 2 * 6.0 + 7.5) & (errors.flag == "ok")
-    assert (errors.error_px[beside] <= 0.15).all()
+    assert (errors.error_px[beside] <= 0.2).all()  # within 3σ of the marker's noise (0.07 px RMS)
 
 
 def test_a_dimmer_reflection_does_not_disturb_the_tracker(folder):
