@@ -684,11 +684,12 @@ def test_a_small_bob_on_a_long_rod_is_the_body_not_a_thick_piece_of_its_rod(tmp_
 @pytest.mark.slow
 def test_a_body_that_never_leaves_its_place_before_a_patterned_wall_is_refused(tmp_path):
     """The same bob before a patterned wall (a fine grain of 16 grey levels SD): the scene behind its middle cannot
-    be filled from its surroundings (a fill there 26 grey levels off, where checked, above the limit of 16): a clear
-    refusal, never a biased record. Before the refusal such a record was kept, 0.79° off with 66 % of the frames ok.
-    (A grain of 8 fills to within 12–13 grey levels, below the cut: four such held-out scenes of 0.8–1.3 radii
-    tracked to 0.003–0.022°. A grain of 12 was refused while the renders repeated 4 noise images; with each
-    frame's own noise its fill, 17 grey levels off, is within its limit and its record 0.011° off, 100 % ok.)"""
+    be filled from its surroundings (a fill there 26 grey levels off, where checked, above the limit of 16: a fifth
+    of the body's contrast as the grain lets it be measured): a clear refusal, never a biased record. Before the
+    refusal such a record was kept, 0.79° off with 66 % of the frames ok. (A grain of 8 fills to within 12–13 grey
+    levels, below the cut: four such held-out scenes of 0.8–1.3 radii tracked to 0.003–0.022°. A grain of 12 was
+    refused while the renders repeated 4 noise images; with each frame's own noise its contrast measures 124 grey
+    levels, its fill, 17 off, is within the limit of 25, and its record is 0.011° off, 100 % ok.)"""
     from pendulum.camera.video import VideoError
     from pendulum.synthetic.wall import random_clock_pair, write_wall_trial
 

@@ -421,6 +421,29 @@ def test_a_clocks_short_arc_says_how_little_its_pivot_fixes_the_angles_scale(bia
     assert any("is known along the arm only" in w and "sagitta" in w for w in geometry["warnings"]), geometry
 
 
+def test_an_arc_too_short_for_any_scale_says_so_and_its_bias_term_is_held_to_half_the_arm():
+    """±0.3° on a 300 px arm (0.01 px of sagitta): the bias term alone would put the pivot's σ 9 arms off, and the
+    fits' budget, which moves each angle by its linear change with the pivot, would turn every angle's sign. Held
+    to half the arm, it says the scale is unknown (± 50 % or more); a reviewer's case."""
+    from pendulum.angles.geometry import MAX_BIAS_ARM_SHARE, track_bias_covariance
+
+    assert math.sqrt(track_bias_covariance(300.0, 0.6, 0.0)[1, 1]) == pytest.approx(MAX_BIAS_ARM_SHARE * 300.0)
+    assert math.sqrt(track_bias_covariance(300.0, 6.0, 0.0)[1, 1]) == pytest.approx(300 * 0.1 / 0.411, rel=0.01)
+    assert np.allclose(track_bias_covariance(300.0, 6.0, 90.0), [[73.0**2, 0], [0, 0]], rtol=0.01, atol=1e-9)
+    angle = math.radians(0.3) * np.cos(np.linspace(0, 40 * np.pi, 1200))
+    rng = np.random.default_rng(3)
+    track = pd.DataFrame(
+        {
+            "x_px": 640 + 300 * np.sin(angle) + rng.normal(0, 0.03, angle.size),
+            "y_px": 80 + 300 * np.cos(angle) + rng.normal(0, 0.03, angle.size),
+            "flag": "ok",
+        }
+    )
+    geometry = estimate_rig_geometry({"clock": track}, vertical_deg=0.0)
+    assert geometry["angle_scale_stderr_pct"] >= 50
+    assert any("% or more (1σ" in w for w in geometry["warnings"]), geometry["warnings"]
+
+
 @pytest.mark.parametrize("seed", range(5))
 def test_good_tracks_are_never_left_out(seed):
     tracks = {f"t{k}": arc_track(PIVOT, 520, a, seed=seed * 7 + k) for k, a in enumerate((3, 5, 20, 75))}

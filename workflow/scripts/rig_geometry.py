@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.angles.geometry import estimate_rig_geometry
+from pendulum.angles.geometry import MAX_ANGLE_SCALE_STDERR_PCT, estimate_rig_geometry
 from pendulum.camera.view import ImageToPlane, map_point, map_track, path_tilt
 from pendulum.io import script_logger, write_json
 from pendulum.status import is_failed, require_ok, run_stage
@@ -74,6 +74,7 @@ def work():
         circle
         and shared
         and max(geometry.get("pivot_stderr_px", [0, 0])) > PIVOT_STDERR_WARN_FRACTION * circle["radius_px"]
+        and geometry.get("angle_scale_stderr_pct", 0.0) <= MAX_ANGLE_SCALE_STDERR_PCT  # else said with its scale
     ):
         geometry["warnings"].append(
             f"the pivot is poorly determined by the marker paths (standard error {max(geometry['pivot_stderr_px']):.3g}"

@@ -338,6 +338,7 @@ MAX_ANGLE_SCALE_STDERR_PCT = 2.0  # an estimated pivot that leaves the angles' s
 # A track's slow bias across its arc (a glass's static reflection, a bob's shading and glint): 0.06–0.15 px in a
 # helper's renders of two clock pendulums (2026-12-05), whose arcs bend only 0.4–0.6 px from a line
 TRACK_BIAS_PX = 0.1
+MAX_BIAS_ARM_SHARE = 0.5  # that bias's σ along the arm at most half the arm: the angles' scale ± 50 % or more
 
 
 def arc_sagitta_px(radius_px: float, arc_span_deg: float) -> float:
@@ -347,11 +348,14 @@ def arc_sagitta_px(radius_px: float, arc_span_deg: float) -> float:
 
 def track_bias_covariance(radius_px: float, arc_span_deg: float, vertical_deg: float) -> np.ndarray:
     """The pivot's covariance from a slow tracking bias b = :data:`TRACK_BIAS_PX` across the arc, which no circle
-    fit's scatter shows: a change δ of the arc's sagitta s = R (1 − cos(φ/2)) (φ its span) moves the fitted
-    radius by R δ / s, along the arm a = (sin v, cos v): (R b / s)² a aᵀ, the angles' scale by ± b / s.
-    Negligible on a wide swing (a 75° arc at R = 560 px: s = 116 px, 0.09 %), the whole scale on a clock's (a
-    3° arc at R = 300 px: s = 0.1 px)."""
+    fit's scatter shows: a change δ of the arc's sagitta s = R (1 − cos(φ/2)) (φ its span), its chord held, moves
+    the fitted centre by R δ / s along the arm a = (sin v, cos v): (R b / s)² a aᵀ, the angles' scale by ± b / s.
+    Its σ is held to :data:`MAX_BIAS_ARM_SHARE` of R (beyond, the scale is unknown, and the fits' budget, which
+    moves each angle by its linear change with the pivot, would flip their signs). On a wide swing the scale's
+    part is negligible (a 75° arc at R = 560 px: s = 116 px, 0.09 %); a clock's 3° arc at R = 300 px (s = 0.1 px)
+    leaves it unknown."""
     along = radius_px * TRACK_BIAS_PX / max(arc_sagitta_px(radius_px, arc_span_deg), 1e-9)
+    along = min(along, MAX_BIAS_ARM_SHARE * radius_px)
     a = np.array([math.sin(math.radians(vertical_deg)), math.cos(math.radians(vertical_deg))])
     return along**2 * np.outer(a, a)
 
@@ -449,7 +453,8 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
             result["warnings"].append(
                 f"the pivot, {circle['radius_px']:.0f} px from the swing's arc of {circle['arc_span_deg']:.1f}°, is "
                 f"known along the arm only to ± {scale * circle['radius_px'] / 100:.0f} px: every angle's scale is "
-                f"uncertain by ± {scale:.1f} % (1σ: the circle fit's scatter and a slow tracking bias of "
+                f"uncertain by ± {scale:.1f} %{' or more' if scale >= 100 * MAX_BIAS_ARM_SHARE else ''} (1σ: the "
+                "circle fit's scatter and a slow tracking bias of "
                 f"{TRACK_BIAS_PX:g} px against the arc's {sagitta:.2g} px sagitta), and the amplitude-dependent "
                 "coefficients with it (drag, friction): give pivot_px (the pivot's place in the picture, measured in "
                 "a frame that shows it) or film a wider swing"

@@ -31,16 +31,18 @@ def occlusion_schedule(spec: TrialSpec, n_frames: int, first_frame: int) -> list
     return [(int(s0), occ.event_frames) for s0 in starts]
 
 
-NOISE_SHIFTS = 128  # the noise field's extra rows and columns: 128² windows, two frames alike 1 time in 16,384
+NOISE_SHIFTS = 128  # the noise field's extra rows and columns: 128² offsets, a pair of frames alike 1 in 16,384
 
 
 def sensor_noise(rng: np.random.Generator, shape: tuple[int, int], sigma: float, n_frames: int):
     """Each frame's own sensor noise, N(0, σ²) per pixel: ``noise(i)`` is frame i's (a read-only view).
 
     One field (``shape`` plus :data:`NOISE_SHIFTS` rows and columns) drawn once, each frame a window of it at its
-    own random offset: no two frames share a pattern, at the cost of one frame's draw. (A bank of 4 noise images,
-    repeated, made every 4th frame alike, and so the every-k-th frames a scene model takes from a clip, k a power
-    of two: noise-free against each other, as no camera's are.)"""
+    own random offset: at any pixel two frames' noise is independent unless their offsets coincide (1 pair in
+    16,384), at the cost of about 1.5 frames' draw. (The frames are shifted copies of one field: a registration
+    of whole noisy frames against each other could find the shift; the trackers align to medians and blurred
+    images.) A bank of 4 noise images, repeated, made every 4th frame alike, and so the every-k-th frames a scene
+    model takes from a clip (k a power of two) noise-free against each other, as no camera's are."""
     h, w = shape
     field = rng.standard_normal((h + NOISE_SHIFTS, w + NOISE_SHIFTS), dtype=np.float32)
     field *= np.float32(sigma)

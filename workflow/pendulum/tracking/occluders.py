@@ -79,8 +79,9 @@ def hidden_frames(
 
     ``found_elsewhere``: the box of such a place another view of the clip found (the brightness view's, for the
     colour view, where a neutral bar need not stand out): the body's unseen pixels within it, if there are as
-    many as a hidden place needs, are that place in this view too (``seen_in`` ``brightness``). Where this view
-    sees the body there, nothing hides it: the other view lost it against a wall of its own grey or colour."""
+    many as a hidden place needs, are that place in this view too (``seen_in`` ``brightness``; besides any place
+    this view finds itself, and ``box_px`` then holds both). Where this view sees the body there, nothing hides
+    it: the other view lost it against a wall of its own grey or colour."""
     none = np.zeros(xs.size, bool), {"hidden_px": 0, "box_px": None}
     if counts.n < MIN_EXPECTED:
         return none
@@ -99,12 +100,15 @@ def hidden_frames(
     wall = cv2.medianBlur(np.clip(np.rint(background), 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
     stands_out = np.abs(background - wall) > threshold_grey
     hidden = unseen & (cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0)
+    hidden &= hidden.sum() >= least  # a few stray pixels are no place
     facts = {}
-    if hidden.sum() < least and found_elsewhere is not None:
+    if found_elsewhere is not None:  # beside any place of this view's own: the other view's, if unseen here too
         x0, y0, width, height = found_elsewhere
-        hidden = np.zeros_like(unseen)
-        hidden[y0 : y0 + height, x0 : x0 + width] = unseen[y0 : y0 + height, x0 : x0 + width]
-        facts = {"seen_in": "brightness"}
+        there = np.zeros_like(unseen)
+        there[y0 : y0 + height, x0 : x0 + width] = unseen[y0 : y0 + height, x0 : x0 + width]
+        if there.sum() >= least:
+            hidden |= there
+            facts = {"seen_in": "brightness"}
     if hidden.sum() < least:
         return none
     frames = np.zeros(xs.size, bool)
