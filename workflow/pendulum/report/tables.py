@@ -199,10 +199,8 @@ class TableSections(ReportData):
         (``key → sorted values``, the second dict)."""
         used, per_trial = dict(self.rigs[rig]["values"]), {}
         trials = self.rig_trials(rig)
-        for given, replaced in (
-            BUOYANCY_KEYS,
-            BUOYANCY_KEYS[::-1],
-        ):  # every trial's own buoyancy replaces the rig's (as fitted)
+        # every trial's own buoyancy (a volume or a weighing) replaces the rig's other one, as fitted
+        for given, replaced in (BUOYANCY_KEYS, BUOYANCY_KEYS[::-1]):
             if trials and all(given in (self.trials[t].get("overrides") or {}) for t in trials):
                 used.pop(replaced, None)
         for key in RIG_LABELS:

@@ -117,13 +117,3 @@ def hidden_frames(
     ys_h, xs_h = np.nonzero(hidden)
     box = [int(xs_h.min()), int(ys_h.min()), int(xs_h.max() - xs_h.min() + 1), int(ys_h.max() - ys_h.min() + 1)]
     return frames, {"hidden_px": int(hidden.sum()), "box_px": box, **facts}
-
-
-def reaching_box(xs: np.ndarray, ys: np.ndarray, box: list, radius_px: float) -> np.ndarray:
-    """The frames whose body (a disk of ``radius_px`` + 2 px about each x, y) reaches ``box`` (x, y, width, height:
-    :func:`hidden_frames`' place): where a view in which the thing in front does not stand out (the colour view,
-    before a neutral bar) shows only part of the body."""
-    x0, y0, width, height = box
-    dx = np.maximum(np.maximum(x0 - xs, xs - (x0 + width - 1)), 0.0)
-    dy = np.maximum(np.maximum(y0 - ys, ys - (y0 + height - 1)), 0.0)
-    return np.hypot(dx, dy) <= radius_px + 2
