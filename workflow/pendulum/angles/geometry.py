@@ -265,7 +265,10 @@ SHARED_PIVOT_CHI2 = 30.0  # a track's own pivot this far (Mahalanobis², its own
 def unshared_pivot(tracks: dict[str, pd.DataFrame], circle: CircleFit) -> str | None:
     """Why the tracks do not share one pivot, or None: their pooled circle's RMS is more than
     OUTLIER_TRACK_FACTOR × the median of each track's RMS off its own circle, or a track's own pivot lies
-    farther from the pooled one than SHARED_PIVOT_CHI2 allows under its own covariance (and > 1 px).
+    farther from the pooled one than SHARED_PIVOT_CHI2 allows under its own covariance (and > 1 px), the circle
+    fit's and a slow tracking bias's along its arm (:func:`track_bias_covariance`: two clips of one clock's ±3° arc,
+    biased ∓0.1 px, have pivots 150 px apart along it, 30–50 σ of the fits' own; said to share none before
+    2026-12-05).
 
     Two tracks leave no majority to tell which one moved (:func:`pooled_pivot`), and tracks from unrelated
     clips all lie far off any one circle, none farther than the rest: their pooled circle is no pivot at all
@@ -284,7 +287,8 @@ def unshared_pivot(tracks: dict[str, pd.DataFrame], circle: CircleFit) -> str | 
         own_rms.append(_radial_rms_px(track, own))
         offset = pooled - [own.pivot_x_px, own.pivot_y_px]
         if own.pivot_covariance_px2 is not None and math.hypot(*offset) > OUTLIER_TRACK_FLOOR_PX:
-            chi2 = float(offset @ np.linalg.pinv(np.asarray(own.pivot_covariance_px2, float)) @ offset)
+            covariance = np.asarray(own.pivot_covariance_px2, float) + _own_bias_covariance(track, own)
+            chi2 = float(offset @ np.linalg.pinv(covariance) @ offset)
             if chi2 > SHARED_PIVOT_CHI2:
                 apart.append(f"{name}'s own pivot is {math.hypot(*offset):.0f} px from it ({math.sqrt(chi2):.0f} σ)")
     own_px = float(np.median([v for v in own_rms if math.isfinite(v)] or [math.inf]))
@@ -298,6 +302,14 @@ def unshared_pivot(tracks: dict[str, pd.DataFrame], circle: CircleFit) -> str | 
         else "; ".join(apart)
     )
     return f"the paths of its {len(tracks)} trials do not share one pivot: {why}: {ELSEWHERE}"
+
+
+def _own_bias_covariance(track: pd.DataFrame, own: CircleFit) -> np.ndarray:
+    """:func:`track_bias_covariance` of a track's own circle, along its arm to the path's middle (the vertical is not
+    known yet): two clips of one short arc, each with its own slow bias, have pivots that far apart along it."""
+    x, y = path_points(track)
+    vertical_deg = math.degrees(math.atan2(np.median(x) - own.pivot_x_px, np.median(y) - own.pivot_y_px))
+    return track_bias_covariance(own.radius_px, own.arc_span_deg, vertical_deg)
 
 
 def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
