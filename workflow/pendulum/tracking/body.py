@@ -1,15 +1,14 @@
 """Body tracking: the swinging object itself, where there is no marker disk to measure.
 
-What a Tracker (Open Source Physics) user does by hand, made precise for real footage
-(an apple on a string, a two-tone ball, a bauble, a vehicle on its rod):
+What a Tracker (Open Source Physics) user does by hand, made precise for real footage (an apple, a ball, a vehicle):
 
 1. **Scene.** ≤ 2 × :data:`SCENE_SAMPLES` frames spread over the clip, each brought to one exposure
    (gain and offset against their median: auto-exposure drift), and their per-pixel median (where it holds a
    body at rest over half the clip, from the samples that show its ghost: ``body_scene.scene_states``); then
    again, up to :data:`SCENE_PASSES` times, with each sample's moving objects (by their hulls) left out;
-   pixels almost no sample shows clear (a swing narrower than the body) filled from around them, refused
-   where that fill is likely off by max(3σ, :data:`UNSEEN_FILL_SHARE` C) or cannot be checked, and warned
-   of where the silhouette then changes mid-swing (``unseen_scene``, ``warning`` in the facts).
+   pixels almost no sample shows clear (a swing narrower than the body) filled from around them, refused where
+   that fill is likely off by max(3σ, :data:`UNSEEN_FILL_SHARE` C) or cannot be checked (a rigid body is then
+   followed by its look: :mod:`pendulum.tracking.look`), else warned of where the silhouette changes mid-swing.
    Static shadows, wall gradients and stripes are part of the scene; σ is the MAD of I − B.
 2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
    window's offset, a line in the row fitted to its border, which follows slow exposure drift and a light's
@@ -62,8 +61,7 @@ behind it, a two-tone ball's light half before a shadow band): then a one-sided 
 ``warning`` in the track's body facts.
 
 ``view`` (in :func:`find_body` and :func:`track_body`): the image taken of each frame, its luma by default
-(:func:`pendulum.tracking.colour.colour_view`: its colour's difference from the wall's). ECC alignment of the
-body's look was measured and not taken (docs/footage.md)."""
+(:func:`pendulum.tracking.colour.colour_view`: its colour's difference from the wall's)."""
 
 from __future__ import annotations
 
@@ -142,7 +140,8 @@ UNSEEN_FILL_SHARE = 0.8 * CONTRAST_FRACTION  # a scene filled in behind the body
 
 
 class BodyError(VideoError):
-    """No single moving body can be followed; the message says what was seen and what settles it."""
+    """No single moving body can be followed; the message says what was seen and what settles it (``refused``: the
+    track and scene refused for a scene the body hides, where set: :mod:`pendulum.tracking.look`)."""
 
 
 @dataclass(frozen=True)
@@ -487,7 +486,8 @@ def track_body(
     if unseen_facts:
         table.attrs["body"]["unseen_scene"] = unseen_facts
     if refusal:
-        raise BodyError(f"{path}: {refusal}")
+        (error := BodyError(f"{path}: {refusal}")).refused = (table, scene)
+        raise error
     if rest_place_from:  # earlier scenes held the body (their tracks' mid-swing area ratios)
         table.attrs["body"]["scene_from_swing_ends"] = {"earlier_mid_swing_area_ratios": list(rest_place_from)}
     table.attrs["marker"] = None

@@ -19,6 +19,7 @@ from pendulum.camera.video import VideoError
 from pendulum.tracking import samples
 from pendulum.tracking.body import BodyError, track_body
 from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour, track_marker_by_colour
+from pendulum.tracking.look import track_by_look
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.outline import centre_by_outline
 from pendulum.tracking.settings import TrackerSettings
@@ -69,9 +70,15 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         return track
     if method == "body":
         tried = {}
-        track = track_body(path, settings, progress=progress)
-        tried["body"] = _usable(track)
-        track = _by_colour(path, settings, track, tried, progress)
+        try:
+            track = track_body(path, settings, progress=progress)
+        except BodyError as error:
+            track = _by_look(path, settings, error, tried, progress)
+            if track is None:
+                raise
+        else:
+            tried["body"] = _usable(track)
+            track = _by_colour(path, settings, track, tried, progress)
         track.attrs["method"] = {
             "used": "body",
             "reason": "method: body given in the settings" + _view(track, tried),
@@ -110,7 +117,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         body = _by_colour(path, settings, body, tried, progress)
     except VideoError as error:
         tried["body"] = f"failed: {error}"
-        body = None
+        body = _by_look(path, settings, error, tried, progress) if isinstance(error, BodyError) else None
         if not isinstance(error, BodyError):  # too few frames usable, not a refusal (two bodies, not a pendulum)
             body, facts = track_by_colour(path, settings, None, progress)  # its colour, where its brightness fails
             tried["body_by_colour"] = facts.get("colour", "") if body is None else _usable(body)
@@ -180,6 +187,20 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
     return body
 
 
+def _by_look(path, settings: TrackerSettings, error: BodyError, tried: dict, progress=None) -> pd.DataFrame | None:
+    """The body followed by its look (:func:`pendulum.tracking.look.track_by_look`) where its silhouette was refused
+    for a scene it hides (``error.refused``); None otherwise. What it gave goes into ``tried`` as ``body_by_look``."""
+    if getattr(error, "refused", None) is None:
+        return None
+    try:
+        track = track_by_look(path, settings, *error.refused, progress=progress)
+    except VideoError as failure:
+        tried["body_by_look"] = f"failed: {failure}"
+        return None
+    tried["body_by_look"] = _usable(track)
+    return track
+
+
 def _marker_by_colour(path, settings: TrackerSettings, marker, tried: dict, progress=None):
     """The dot at the given ``start_px`` tracked by its colour (:func:`track_marker_by_colour`) where its brightness
     track is not usable in :data:`MARKER_USABLE_FRACTION` of the frames (or stopped before), and kept (returned)
@@ -236,7 +257,12 @@ def _usable(track: pd.DataFrame) -> str:
 
 
 def _view(body: pd.DataFrame, tried: dict) -> str:
-    """The reason's clause for a body measured by its colour (empty for its brightness)."""
+    """The reason's clause for a body measured by its colour or followed by its look (empty for its brightness)."""
+    if body.attrs.get("body", {}).get("by") == "look":
+        return (
+            "; the scene it hides cannot be filled in: followed by its look (its picture aligned in every frame), "
+            f"{tried['body_by_look']}"
+        )
     if body.attrs.get("body", {}).get("view") != "colour":
         return ""
     if tried["body"].startswith("failed"):

@@ -53,6 +53,23 @@ class SilhouetteCounts:
             self.n += 1
 
 
+MAX_MEDIAN_KERNEL = 255  # OpenCV's 8-bit median over a larger window counts in 16 bits (a 350 px vehicle's failed)
+
+
+def _median_wall(image: np.ndarray, size: int) -> np.ndarray:
+    """The median of ``image`` (uint8) over ``size`` × ``size`` windows; above :data:`MAX_MEDIAN_KERNEL`, on the
+    image reduced by the least power of two that brings the window within it, and enlarged back (the wall's
+    large-scale look, all that is asked of it)."""
+    if size <= MAX_MEDIAN_KERNEL:
+        return cv2.medianBlur(image, size)
+    factor = 2 ** math.ceil(math.log2(size / MAX_MEDIAN_KERNEL))
+    small = cv2.resize(
+        image, (max(image.shape[1] // factor, 1), max(image.shape[0] // factor, 1)), interpolation=cv2.INTER_AREA
+    )
+    wall = cv2.medianBlur(small, (size // factor) | 1)
+    return cv2.resize(wall, (image.shape[1], image.shape[0]), interpolation=cv2.INTER_LINEAR)
+
+
 def _stamps(image_shape, stamp: np.ndarray, half: int, xs: np.ndarray, ys: np.ndarray):
     """(index, image slice, stamp slice) of ``stamp`` centred at each finite (x, y), clipped to the image."""
     height, width = image_shape
@@ -97,7 +114,7 @@ def hidden_frames(
     unseen = (expected >= MIN_EXPECTED) & (counts.seen < SEEN_SHARE * expected)
     least = max(4, MIN_HIDDEN_SHARE * core.sum())
     # something in front shows in the static scene: it stands out of the wall around it
-    wall = cv2.medianBlur(np.clip(np.rint(background), 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
+    wall = _median_wall(np.clip(np.rint(background), 0, 255).astype(np.uint8), 2 * (counts.half // 2) + 1)
     stands_out = np.abs(background - wall) > threshold_grey
     hidden = unseen & (cv2.dilate(stands_out.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0)
     hidden &= hidden.sum() >= least  # a few stray pixels are no place
