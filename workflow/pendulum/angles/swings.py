@@ -214,6 +214,9 @@ def differences_sigma(time_s: np.ndarray, values: np.ndarray, order: int, least:
     return float(1.4826 * np.median(np.abs(z - np.median(z))))
 
 
+SWINGING_LIMITS = 10  # |θ − θ_h| beyond this many departure thresholds: swinging for certain
+HOLD_EDGE_SAMPLES = 10  # the hold's last samples, which may already move, left out of its band
+HOLD_JITTER_SIGMAS = 5.0  # the hold's band: this many robust σ of its own samples (a trembling hold), at least
 MIN_HELD_FRAMES = 3  # held frames before the first free one: a release by hand in view
 HAND_RELEASE_FIT_S = 0.25  # of the free swing's start, fitted to find where a hand let it go
 MAX_CROSSING_GAP = 0.2  # a crossing is timed across flagged samples spanning up to this share of the half swing
@@ -234,7 +237,9 @@ def detect_release(
 
     While held, θ = θ_h; after release θ_h − θ ≈ ½ a (t − t_r)², so √|θ − θ_h| is
     linear in t and its zero is t_r. A record that starts already moving has no hold:
-    the release is its first sample.
+    the release is its first sample. A hold that trembles (a hand, a swaying rig: a helper's render, ±0.3 px at
+    2 Hz, gave a release 1.05 s early) counts from where the record last leaves the hold's own band, 5 robust σ
+    of its samples, before it departs by :data:`SWINGING_LIMITS` thresholds.
     """
     t = np.asarray(time_s, float)
     th = np.asarray(theta, float)
@@ -250,6 +255,17 @@ def detect_release(
             f"the angle never moves more than {math.degrees(limit):.2g}° from its start: no swing, no release found"
         )
     first_departure = int(departed[0])
+    moving = valid[np.abs(th[valid] - hold) > SWINGING_LIMITS * limit]
+    if moving.size and np.searchsorted(valid, first_departure) >= 5:
+        # a hold that trembles (a hand, a rig that sways) leaves its band slowly and comes back: the release is
+        # where the record last left the hold's own band before it swings for certain
+        before = valid[valid < moving[0]]
+        held_part = th[before[: max(5, before.size - HOLD_EDGE_SAMPLES)]]
+        hold = float(np.median(held_part))
+        jitter = 1.4826 * float(np.median(np.abs(held_part - hold)))
+        limit = max(limit, HOLD_JITTER_SIGMAS * jitter)
+        inside = before[np.abs(th[before] - hold) <= limit]
+        first_departure = int(valid[np.searchsorted(valid, inside[-1]) + 1]) if inside.size else int(before[0])
     if np.searchsorted(valid, first_departure) < 5:
         return Release(False, float(t[valid[0]]), None, int(valid[0]))
     held = valid[valid < first_departure]
