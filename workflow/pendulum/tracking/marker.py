@@ -192,6 +192,7 @@ def track_video(
     :class:`pendulum.tracking.colour.MarkerColourView`), with the marker given (no detection).
     """
     found_by = "detection" if detection is not None or settings.needs_detection else "given in the settings"
+    asked = settings  # as the user gave them (detection fills the rest)
     if detection is None:
         settings, detection = resolve_settings(path, settings, progress)
         if detection is None and found_by == "detection":
@@ -474,12 +475,19 @@ def track_video(
                 f"{where}: the polarity given ({settings.polarity}, in config tracking or the trial's sidecar) "
                 "looks wrong"
             )
+        if asked.polarity == "auto" and asked.marker_radius_px is None and asked.start_px is None:  # none given
+            advice = (
+                f"detection's {settings.polarity} spot (radius {settings.marker_radius_px:.3g} px) is not a disk in "
+                "any frame (a part of the body, where it has no marker dot)"
+            )
+        else:
+            advice = (
+                f"check tracking polarity ({settings.polarity}) and marker_radius_px ({settings.marker_radius_px:.3g})"
+                + (", or give start_px in the trial's sidecar" if asked.start_px is None else ", and start_px (given)")
+            )
         raise VideoError(
             f"{path}: no marker found in any of its {n_frames} frames ({score}; a marker needs "
-            f"{settings.min_acquire_score:g}); check tracking polarity ({settings.polarity}) and marker_radius_px "
-            f"({settings.marker_radius_px:.3g})"
-            + (", or give start_px in the trial's sidecar" if settings.start_px is None else ", and start_px (given)")
-            + seen
+            f"{settings.min_acquire_score:g}); {advice}{seen}"
         )
     signal.finish(table)  # the first frames' ratios; frames flagged for their signal alone judged again
     usable = (table.flag == "ok").to_numpy()
