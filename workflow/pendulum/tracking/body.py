@@ -140,8 +140,7 @@ UNSEEN_FILL_SHARE = 0.8 * CONTRAST_FRACTION  # a scene filled in behind the body
 
 
 class BodyError(VideoError):
-    """No single moving body can be followed; the message says what was seen and what settles it (``refused``: the
-    track and scene refused for a scene the body hides, where set: :mod:`pendulum.tracking.look`)."""
+    """No single moving body can be followed; the message says what was seen (``refused``: the track and scene)."""
 
 
 @dataclass(frozen=True)
@@ -530,7 +529,6 @@ def track_body(
         )
         return table
     if held:  # not a refusal of the clip: its colour may do (method.py)
-        where = "smaller mid-swing" if ratio < 1 else "larger mid-swing"
         ok = table[table.flag == "ok"]
         reach = np.ptp(np.hypot(ok.x_px - ok.x_px.median(), ok.y_px - ok.y_px.median())) / max(scene.radius_px, 1)
         why = (
@@ -541,10 +539,12 @@ def track_body(
             else f"the swing is {reach:.0f} body radii wide, so the still scene itself changes (light rippling off "
             "water, caustics, a flickering or moving light) and its positions would be biased; light it evenly"
         )
-        raise VideoError(
-            f"{path}: the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {where} than at the ends of its swing, "
-            f"also with the scene taken from the ends of the swing: {why}"
+        error = VideoError(
+            f"{path}: the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} "
+            f"mid-swing than at the ends of its swing, also with the scene taken from the ends of the swing: {why}"
         )
+        error.refused = (table, scene)  # a rigid body's look may do (pendulum.tracking.look)
+        raise error
     if unseen_facts and ratio is not None and not FILLED_CLEAN_RATIO <= ratio <= 1 / FILLED_CLEAN_RATIO:
         table.attrs["body"]["warning"] = filled_warning(ratio)
     return table

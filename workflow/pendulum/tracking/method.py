@@ -74,7 +74,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         tried = {}
         try:
             track = track_body(path, settings, progress=progress)
-        except BodyError as error:
+        except VideoError as error:  # a scene the body hides: its look
             track = _by_look(path, settings, error, tried, progress)
             if track is None:
                 raise
@@ -123,6 +123,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         if not isinstance(error, BodyError):  # too few frames usable, not a refusal (two bodies, not a pendulum)
             body, facts = track_by_colour(path, settings, None, progress)  # its colour, where its brightness fails
             tried["body_by_colour"] = facts.get("colour", "") if body is None else _usable(body)
+            body = body if body is not None else _by_look(path, settings, error, tried, progress)  # a scene it hides
     if body is None:
         if _might_beat(stopped, colour):  # the whole marker pass after all: its record, or why there is none
             marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
@@ -189,7 +190,7 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
     return body
 
 
-def _by_look(path, settings: TrackerSettings, error: BodyError, tried: dict, progress=None) -> pd.DataFrame | None:
+def _by_look(path, settings: TrackerSettings, error: VideoError, tried: dict, progress=None) -> pd.DataFrame | None:
     """The body followed by its look (:func:`pendulum.tracking.look.track_by_look`) where its silhouette was refused
     for a scene it hides (``error.refused``); None otherwise. What it gave goes into ``tried`` as ``body_by_look``."""
     if getattr(error, "refused", None) is None:
