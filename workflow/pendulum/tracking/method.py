@@ -123,7 +123,10 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         if not isinstance(error, BodyError):  # too few frames usable, not a refusal (two bodies, not a pendulum)
             body, facts = track_by_colour(path, settings, None, progress)  # its colour, where its brightness fails
             tried["body_by_colour"] = facts.get("colour", "") if body is None else _usable(body)
-            body = body if body is not None else _by_look(path, settings, error, tried, progress)  # a scene it hides
+            look = _by_look(path, settings, error, tried, progress)  # a scene it hides: its look, if more usable
+            body = (
+                look if look is not None and (body is None or usable_fraction(look) >= usable_fraction(body)) else body
+            )
     if body is None:
         if _might_beat(stopped, colour):  # the whole marker pass after all: its record, or why there is none
             marker, tried["marker"] = _whole_marker_pass(path, settings, stopped, progress)
