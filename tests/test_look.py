@@ -79,14 +79,20 @@ def _clip(path) -> np.ndarray:
     return _theta_rad(times)
 
 
+@pytest.fixture(scope="module")
+def rov(tmp_path_factory):
+    path = tmp_path_factory.mktemp("rov") / "rov.mp4"
+    return path, _clip(path)
+
+
 @pytest.mark.slow
-def test_a_vehicle_wider_than_its_swing_before_tiles_is_followed_by_its_look(tmp_path):
+@pytest.mark.parametrize("method", ["auto", "body"])
+def test_a_vehicle_wider_than_its_swing_before_tiles_is_followed_by_its_look(rov, method):
     from pendulum.tracking.method import track_trial, usable_fraction
     from pendulum.tracking.settings import TrackerSettings
 
-    path = tmp_path / "rov.mp4"
-    theta = _clip(path)
-    track = track_trial(path, TrackerSettings())
+    path, theta = rov
+    track = track_trial(path, TrackerSettings(method=method))
     assert track.attrs["method"]["used"] == "body" and track.attrs["body"]["by"] == "look", track.attrs["method"]
     assert "followed by its look" in track.attrs["method"]["reason"]
     free = (track.flag != "held").to_numpy()

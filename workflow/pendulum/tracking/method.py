@@ -75,6 +75,7 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         try:
             track = track_body(path, settings, progress=progress)
         except VideoError as error:  # a scene the body hides: its look
+            tried["body"] = f"failed: {error}"
             track = _by_look(path, settings, error, tried, progress)
             if track is None:
                 raise
@@ -292,7 +293,7 @@ def _view(body: pd.DataFrame, tried: dict) -> str:
     """The reason's clause for a body measured by its colour or followed by its look (empty for its brightness)."""
     if body.attrs.get("body", {}).get("by") == "look":
         why = (
-            "the scene it hides cannot be filled in"
+            "its silhouette has no scene to be measured against where it hides it"
             if tried["body"].startswith("failed")
             else f"measured against a scene filled in behind its path, it leaves "
             f"{body.attrs['body']['silhouette_unexplained_rms_px']:.2f} px RMS off one circle"
