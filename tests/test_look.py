@@ -137,3 +137,22 @@ def test_the_wall_beside_a_large_body_is_its_median_over_a_window_wider_than_ope
     inner = np.s_[200:880, 200:1720]  # away from the borders (replicated there)
     assert median.shape == image.shape and np.abs(median - wall)[inner].max() <= 2.0
     assert np.array_equal(_median_wall(image, 101), cv2.medianBlur(image, 101))
+
+
+def test_the_report_says_a_body_was_followed_by_its_look_and_why():
+    """The tracking table's note named the refused silhouette ("tracked the body itself by its silhouette, failed:
+    … film a wider swing") for a trial followed by its look (a helper's tank run, 2026-12-06)."""
+    from pendulum.report.checks import method_note
+
+    tried = {
+        "marker": "failed: no marker found",
+        "body": "failed: the scene behind the body near (743, 431) px is seen clear in almost no sampled frame",
+        "body_by_look": "usable in 98.2 % of the frames",
+    }
+    note = method_note({"tried": tried}, {"by": "look", "look": {"rotation": {"slope": -0.9992}}})
+    assert note.startswith("tracked the body itself by its look (its picture aligned in every frame), usable in 98.2 %")
+    assert "had no scene to be measured against" in note
+    assert "-0.999× the arm's (rigid: −1)" in note and "film a wider swing" not in note
+    tried["body"] = "usable in 96.2 % of the frames"
+    note = method_note({"tried": tried}, {"by": "look", "look": {"rotation": {"slope": -1.0017}}})
+    assert "its silhouette usable in 96.2 % of the frames, measured against a scene filled in behind its path" in note

@@ -109,10 +109,22 @@ def method_note(method: dict, body: dict) -> str:
     if not tried:  # forced, or a track from before ``tried`` existed
         return f"tracked the body: {method.get('reason', '')}"
     colour = body.get("view") == "colour"
-    usable = tried.get("body_by_colour" if colour else "body", "")
+    look = body.get("by") == "look"  # its own picture aligned in every frame (tracking.look)
+    usable = tried.get("body_by_look" if look else "body_by_colour" if colour else "body", "")
     # the shares each method gave when one was chosen (before the frames the phone lost or repeated were found:
     # the flags column has the record's final count)
-    note = f"tracked the body itself by its {'colour' if colour else 'silhouette'}, {usable} when the method was chosen"
+    how = "look (its picture aligned in every frame)" if look else "colour" if colour else "silhouette"
+    note = f"tracked the body itself by its {how}, {usable} when the method was chosen"
+    if look:
+        silhouette = tried.get("body", "")
+        rotation = (body.get("look") or {}).get("rotation") or {}
+        note += "; its silhouette " + (
+            "had no scene to be measured against where the body hides it"
+            if silhouette.startswith("failed")
+            else f"{silhouette}, measured against a scene filled in behind its path"
+        )
+        if "slope" in rotation:
+            note += f"; its turn {rotation['slope']:+.3f}× the arm's (rigid: −1)"
     if colour:
         brightness = tried.get("body", "")
         note += "; its brightness silhouette " + (

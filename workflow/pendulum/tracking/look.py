@@ -17,10 +17,11 @@ refuses it). Its look needs no scene: a rigid body is the same picture in every 
    silhouette track's position where that fails). Always against the one template: no drift.
 
 Flags from the alignment's own evidence: ``lost`` (no convergence), ``occluded`` (a misfit 1 − ρ above
-:data:`MISFIT_RATIO` × the clip's median: a hand, a bubble cloud, a reflection over it), ``edge`` (the template's
-place reaches the frame's border), ``held`` as the silhouette track found it (a hand before the release), then
-``jump`` as for every track. The turn of the template is a second measure of the swing: on a body rigid on its
-rod it follows the arm's angle about the path's centre with slope −1 (image axes); ``rotation`` says how closely,
+:data:`MISFIT_RATIO` × the clip's median: a hand, a bubble cloud, a reflection over it), ``edge`` (the body's
+outline reaches the frame's border), then ``jump`` as for every track; a body held still before its release is
+measured there too (the silhouette's ``held`` is not taken: its area grew with the filled scene, not a hand). The
+turn of the template is a second measure of the swing: on a body rigid on its rod it follows the arm's angle
+about the path's centre with slope −1 (image axes); ``rotation`` says how closely,
 and a body that turns otherwise (a ball on a string) is warned of.
 """
 
@@ -183,8 +184,6 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
     measured = flags != "lost"
     misfit = np.median(1.0 - rho[measured]) if measured.any() else 1.0
     flags[measured & (1.0 - rho > MISFIT_RATIO * max(misfit, 1e-4))] = "occluded"
-    held = refused.flag.to_numpy(object)[: len(flags)] == "held"
-    flags[: held.size][held] = "held"
     px, py = table.x_px.to_numpy(float), table.y_px.to_numpy(float)
     usable = flags == "ok"
     flags[flag_jumps(px, py, usable, settings) & usable] = "jump"
