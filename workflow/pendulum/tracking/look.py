@@ -13,8 +13,9 @@ refuses it). Its look needs no scene: a rigid body is the same picture in every 
    holes filled (its markings), less the pixels no sampled frame showed clear (the fill there is a guess): only the
    body, never wall; at least :data:`MIN_TEMPLATE_SHARE` of its area. Its centroid is the point followed.
 3. **Alignment.** Every frame: OpenCV's ECC (``findTransformECCWithMask``, Euclidean: a shift and a turn) of the
-   template into a window about the predicted place, started from the last frame's warp and speed (from the
-   silhouette track's position where that fails). Always against the one template: no drift.
+   template into a window about the predicted place, started from its neighbour's warp and speed (from the
+   silhouette's move since the reference where that fails), forward from the reference frame and back from it to
+   the first (the frames before it held until it is reached). Always against the one template: no drift.
 
 Flags from the alignment's own evidence: ``lost`` (no convergence), ``occluded`` (a misfit 1 − ρ above
 :data:`MISFIT_RATIO` × the clip's median: a hand, a bubble cloud, a reflection over it), ``edge`` (the body's
@@ -150,34 +151,49 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
     point = np.array(centre)
     warp = np.array([[1.0, 0.0, corner[0]], [0.0, 1.0, corner[1]]])
     hull = cv2.convexHull(cv2.findNonZero(mask)).reshape(-1, 2).astype(float)
-    n, rows, turns, report = len(refused), [], [], {}
+    n, report = len(refused), {}
     height, width = reference.shape
+
+    def measure(k: int, image, previous, speed) -> tuple[list, np.ndarray | None]:
+        """Frame k aligned from the neighbour's warp and speed (the silhouette's move since the reference where that
+        fails): its place, ρ, turn and flag, and its warp (None where lost)."""
+        aligned = None if previous is None else _align(template, mask, image, previous + np.c_[np.zeros((2, 2)), speed])
+        if aligned is None and k < n and np.isfinite(x[k]):  # moved as the silhouette moved since the reference
+            aligned = _align(template, mask, image, warp + np.c_[np.zeros((2, 2)), (x[k] - x[row], y[k] - y[row])])
+        if aligned is None:
+            return [math.nan, math.nan, 0.0, math.nan, "lost"], None
+        rho, found = aligned
+        px, py = found[:, :2] @ point + found[:, 2]
+        outline = found[:, :2] @ hull.T + found[:, 2:3]  # the body's outline where it is now
+        inside = outline.min() >= 0 and outline[0].max() <= width - 1 and outline[1].max() <= height - 1
+        return [px, py, rho, math.degrees(math.atan2(found[1, 0], found[0, 0])), "ok" if inside else "edge"], found
+
+    # from the reference frame on, and back from it to the first (held in memory until the reference is reached):
+    # every frame starts from a neighbour already aligned, the hold before the release too
+    measured, before, stamps = {}, [], {}
     previous, speed = None, np.zeros(2)
     for index, time_s, image in iter_luma(path, report=report):
-        k = len(rows)
-        aligned = None
-        if previous is not None:
-            guess = previous.copy()
-            guess[:, 2] += speed
-            aligned = _align(template, mask, image, guess)
-        if aligned is None and k < n and np.isfinite(x[k]):  # moved as the silhouette moved since the reference
-            guess = warp.copy()
-            guess[:, 2] += (x[k] - x[row], y[k] - y[row])
-            aligned = _align(template, mask, image, guess)
-        flag, px, py, rho, turn = "lost", math.nan, math.nan, 0.0, math.nan
-        if aligned is not None:
-            rho, found_warp = aligned
-            px, py = found_warp[:, :2] @ point + found_warp[:, 2]
-            turn = math.degrees(math.atan2(found_warp[1, 0], found_warp[0, 0]))
-            outline = found_warp[:, :2] @ hull.T + found_warp[:, 2:3]  # the body's outline where it is now
-            inside = outline.min() >= 0 and outline[0].max() <= width - 1 and outline[1].max() <= height - 1
-            flag = "ok" if inside else "edge"
-            speed = found_warp[:, 2] - previous[:, 2] if previous is not None else np.zeros(2)
-            previous = found_warp
-        rows.append([index, float(time_s), px, py, rho, rho, flag])
-        turns.append(turn)
+        k = len(stamps)
+        stamps[k] = (index, float(time_s))
+        if k < row:
+            before.append(image.copy())
+            continue
+        measured[k], found = measure(k, image, previous if k > row else warp, speed)
+        if found is not None:
+            speed = found[:, 2] - previous[:, 2] if previous is not None and k > row else np.zeros(2)
+            previous = found
+        if k == row:
+            back, back_speed = previous, np.zeros(2)
+            for j in range(row - 1, -1, -1):
+                measured[j], found = measure(j, before[j], back, back_speed)
+                if found is not None:
+                    back_speed = found[:, 2] - back[:, 2] if back is not None and j < row - 1 else np.zeros(2)
+                    back = found
+            before.clear()
         if progress and index and index % 500 == 0:
             progress(f"{path}: body aligned by its look through frame {index}")
+    rows = [[*stamps[k], m[0], m[1], m[2], m[2], m[4]] for k, m in sorted(measured.items())]
+    turns = [m[3] for _, m in sorted(measured.items())]
     table = pd.DataFrame(rows, columns=["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"])
     flags = table.flag.to_numpy(object)
     rho = table.quality.to_numpy(float)
