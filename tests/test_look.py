@@ -156,3 +156,22 @@ def test_the_report_says_a_body_was_followed_by_its_look_and_why():
     tried["body"] = "usable in 96.2 % of the frames"
     note = method_note({"tried": tried}, {"by": "look", "look": {"rotation": {"slope": -1.0017}}})
     assert "its silhouette usable in 96.2 % of the frames, measured against a scene filled in behind its path" in note
+
+
+def test_the_reference_is_the_widest_turning_point_within_the_frames_it_may_hold():
+    """A decaying swing: its first turning point is its widest; within a budget of frames the widest there."""
+    import pandas as pd
+
+    from pendulum.tracking.look import reference_frame
+
+    t = np.arange(600) / 30.0
+    angle = np.radians(20.0) * np.exp(-t / 5.0) * np.cos(2 * np.pi * t / 2.0 + 0.3)
+    track = pd.DataFrame({"x_px": 300 + 400 * np.sin(angle), "y_px": 400 * np.cos(angle), "flag": "ok"})
+    swing = np.abs(angle)
+    first_turn = next(k for k in range(1, 599) if swing[k] >= swing[k - 1] and swing[k] >= swing[k + 1])
+    widest = reference_frame(track)  # the first turning point (frame 0, wider, is mid-swing: blurred)
+    assert abs(widest - first_turn) <= 1, (widest, first_turn)
+    later = track.assign(flag=np.where(np.arange(600) < 200, "held", "ok"))
+    assert reference_frame(later) >= 200
+    assert reference_frame(later, within=100) >= 200  # nothing free within the budget: the widest anywhere
+    assert reference_frame(later, within=260) < 260

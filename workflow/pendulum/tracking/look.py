@@ -41,6 +41,7 @@ from pendulum.tracking.checks import flag_jumps
 from pendulum.tracking.settings import TrackerSettings
 
 EDGE_RING_PX = 3  # the template's mask reaches this far past the body's outline (ECC's blur: ECC_BLUR)
+HELD_BEFORE_MB = 500  # the frames before the reference, held (8-bit luma): at 1080p within its first 241 frames
 MIN_TEMPLATE_SHARE = 0.4  # the template holds at least this share of the body's area (π r²)
 MISFIT_RATIO = 3.0  # a frame's misfit 1 − ρ above this many times the clip's median: something over the body
 SEARCH_PX = 12  # the window about the predicted place: the template's box and this much more, plus the speed
@@ -49,11 +50,14 @@ ECC_BLUR = 3  # ECC's own Gaussian (px)
 RIGID_SLOPE_TOLERANCE = 0.05  # a turn of the body within this of the arm's (slope −1): rigid on its rod
 
 
-def reference_frame(track: pd.DataFrame) -> int:
+def reference_frame(track: pd.DataFrame, within: int | None = None) -> int:
     """Index (row) of the track's widest turning point: the free, measured frame farthest from the path's median
-    place whose neighbours are as far or nearer (the body at rest there: no blur)."""
+    place whose neighbours are as far or nearer (the body at rest there: no blur); among the first ``within`` rows
+    where any is free there (the frames before it are held in memory for the alignment back to the first)."""
     x, y = track.x_px.to_numpy(float), track.y_px.to_numpy(float)
     free = np.isfinite(x) & (track.flag != "held").to_numpy() & (track.flag != "lost").to_numpy()
+    if within is not None and free[:within].any():
+        free[within:] = False
     if not free.any():
         raise VideoError("no frame of the body was measured")
     distance = np.where(free, np.hypot(x - np.nanmedian(x[free]), y - np.nanmedian(y[free])), -np.inf)
@@ -129,7 +133,7 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
     shows the scene behind the body's widest place, or too few frames are usable."""
     radius = max(scene.radius_px, 2.0)
     x, y = refused.x_px.to_numpy(float), refused.y_px.to_numpy(float)
-    row = reference_frame(refused)
+    row = reference_frame(refused, max(1, int(HELD_BEFORE_MB * 1e6 / scene.background.size)))
     wanted = int(refused.frame.iloc[row])
     reference = None
     with closing(iter_luma(path)) as frames:
