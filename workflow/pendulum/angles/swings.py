@@ -215,7 +215,6 @@ def differences_sigma(time_s: np.ndarray, values: np.ndarray, order: int, least:
 
 
 SWINGING_LIMITS = 10  # |θ − θ_h| beyond this many departure thresholds: swinging for certain
-HOLD_EDGE_SAMPLES = 10  # the hold's last samples, which may already move, left out of its band
 HOLD_JITTER_SIGMAS = 5.0  # the hold's band: this many robust σ of its own samples (a trembling hold), at least
 MIN_HELD_FRAMES = 3  # held frames before the first free one: a release by hand in view
 HAND_RELEASE_FIT_S = 0.25  # of the free swing's start, fitted to find where a hand let it go
@@ -238,8 +237,9 @@ def detect_release(
     While held, θ = θ_h; after release θ_h − θ ≈ ½ a (t − t_r)², so √|θ − θ_h| is
     linear in t and its zero is t_r. A record that starts already moving has no hold:
     the release is its first sample. A hold that trembles (a hand, a swaying rig: a helper's render, ±0.3 px at
-    2 Hz, gave a release 1.05 s early) counts from where the record last leaves the hold's own band, 5 robust σ
-    of its samples, before it departs by :data:`SWINGING_LIMITS` thresholds.
+    2 Hz, gave a release 1.05 s early), one that leaves the threshold and comes back before it departs by
+    :data:`SWINGING_LIMITS` thresholds, counts from where the record last leaves the hold's own band, 5 robust σ
+    of its samples to its last return; a still hold as before.
     """
     t = np.asarray(time_s, float)
     th = np.asarray(theta, float)
@@ -256,11 +256,13 @@ def detect_release(
         )
     first_departure = int(departed[0])
     moving = valid[np.abs(th[valid] - hold) > SWINGING_LIMITS * limit]
-    if moving.size and np.searchsorted(valid, first_departure) >= 5:
-        # a hold that trembles (a hand, a rig that sways) leaves its band slowly and comes back: the release is
-        # where the record last left the hold's own band before it swings for certain
+    between = valid[(valid > first_departure) & (valid < moving[0])] if moving.size else valid[:0]
+    back_inside = between[np.abs(th[between] - hold) <= limit]
+    if back_inside.size and np.searchsorted(valid, first_departure) >= 5:
+        # a hold that trembles (a hand, a rig that sways) leaves its band and comes back before it swings: the
+        # release is where the record last left the hold's own band (its samples to its last return) before that
         before = valid[valid < moving[0]]
-        held_part = th[before[: max(5, before.size - HOLD_EDGE_SAMPLES)]]
+        held_part = th[valid[valid <= back_inside[-1]]]
         hold = float(np.median(held_part))
         jitter = 1.4826 * float(np.median(np.abs(held_part - hold)))
         limit = max(limit, HOLD_JITTER_SIGMAS * jitter)

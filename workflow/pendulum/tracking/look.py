@@ -55,7 +55,9 @@ def reference_frame(track: pd.DataFrame, within: int | None = None) -> int:
     place whose neighbours are as far or nearer (the body at rest there: no blur); among the first ``within`` rows
     where any is free there (the frames before it are held in memory for the alignment back to the first)."""
     x, y = track.x_px.to_numpy(float), track.y_px.to_numpy(float)
-    free = np.isfinite(x) & (track.flag != "held").to_numpy() & (track.flag != "lost").to_numpy()
+    free = np.isfinite(x) & (track.flag == "ok").to_numpy()  # not a jump, a hand over it, the border
+    if not free.any():
+        free = np.isfinite(x) & (track.flag != "held").to_numpy() & (track.flag != "lost").to_numpy()
     if within is not None and free[:within].any():
         free[within:] = False
     if not free.any():
@@ -69,8 +71,9 @@ def template_of(
     reference: np.ndarray, scene: np.ndarray, hidden: np.ndarray, place, radius_px: float, threshold: float
 ):
     """The body's picture in ``reference`` where it differs from ``scene`` and the scene is seen (not ``hidden``:
-    module docstring, step 2): the template (float32), its mask (uint8, 255 on the body), its top-left corner in the
-    frame, and its centroid in the template; None where nothing differs at ``place``."""
+    module docstring, step 2): the template (float32), its mask (uint8, 255 on the body and its ring), its top-left
+    corner in the frame, its centroid in the template and the body's area in it (px, no ring); None where nothing
+    differs at ``place``."""
     height, width = reference.shape
     half = int(2.5 * radius_px + 8)
     x0, y0 = max(int(place[0]) - half, 0), max(int(place[1]) - half, 0)
@@ -89,8 +92,10 @@ def template_of(
     outline, _ = cv2.findContours(body, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     cv2.drawContours(body, outline, -1, 1, thickness=cv2.FILLED)  # its holes filled: markings, windows
     body[hidden[y0:y1, x0:x1]] = 0  # no scene to tell the body from there: left out, not guessed
+    area = int(np.count_nonzero(body))
     ring = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * EDGE_RING_PX + 1, 2 * EDGE_RING_PX + 1))
     body = cv2.dilate(body, ring)  # its outline in: the edges that fix its place (a ring of wall the width of a blur)
+    body[hidden[y0:y1, x0:x1]] = 0  # ... not grown back into the unseen
     if not body.any():
         return None
     ys, xs = np.nonzero(body)
@@ -98,7 +103,7 @@ def template_of(
     bx1, by1 = min(xs.max() + 5, x1 - x0), min(ys.max() + 5, y1 - y0)
     template = window[by0:by1, bx0:bx1].copy()
     mask = (255 * body[by0:by1, bx0:bx1]).astype(np.uint8)
-    return template, mask, (x0 + bx0, y0 + by0), (float(xs.mean() - bx0), float(ys.mean() - by0))
+    return template, mask, (x0 + bx0, y0 + by0), (float(xs.mean() - bx0), float(ys.mean() - by0)), area
 
 
 def _align(template, mask, frame, guess: np.ndarray):
@@ -133,7 +138,8 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
     shows the scene behind the body's widest place, or too few frames are usable."""
     radius = max(scene.radius_px, 2.0)
     x, y = refused.x_px.to_numpy(float), refused.y_px.to_numpy(float)
-    row = reference_frame(refused, max(1, int(HELD_BEFORE_MB * 1e6 / scene.background.size)))
+    budget = max(1, int(HELD_BEFORE_MB * 1e6 / scene.background.size))
+    row = reference_frame(refused, budget)
     wanted = int(refused.frame.iloc[row])
     reference = None
     with closing(iter_luma(path)) as frames:
@@ -146,12 +152,12 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
     threshold = max(5.0 * scene.noise_grey, 4.0, 0.25 * scene.contrast_grey)
     hidden = np.zeros(reference.shape, bool) if scene.unseen is None else scene.unseen
     found = template_of(reference, scene.background, hidden, (x[row], y[row]), radius, threshold)
-    if found is None or np.count_nonzero(found[1]) < MIN_TEMPLATE_SHARE * math.pi * radius**2:
+    if found is None or found[4] < MIN_TEMPLATE_SHARE * math.pi * radius**2:
         raise VideoError(
             f"{path}: the body by its look: at the swing's widest (frame {wanted}) too little of the body lies "
             "before scene that some frame shows clear (a swing narrower than about the body's width)"
         )
-    template, mask, corner, centre = found
+    template, mask, corner, centre, _ = found
     point = np.array(centre)
     warp = np.array([[1.0, 0.0, corner[0]], [0.0, 1.0, corner[1]]])
     hull = cv2.convexHull(cv2.findNonZero(mask)).reshape(-1, 2).astype(float)
@@ -179,14 +185,16 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
     for index, time_s, image in iter_luma(path, report=report):
         k = len(stamps)
         stamps[k] = (index, float(time_s))
-        if k < row:
+        if k < row and row <= budget:
             before.append(image.copy())
             continue
-        measured[k], found = measure(k, image, previous if k > row else warp, speed)
-        if found is not None:
-            speed = found[:, 2] - previous[:, 2] if previous is not None and k > row else np.zeros(2)
+        measured[k], found = measure(k, image, warp if k == row else previous, speed)
+        if found is None:
+            speed = np.zeros(2)  # after a lost frame: from where it was last found, at rest
+        else:
+            speed = found[:, 2] - previous[:, 2] if previous is not None and k != row else np.zeros(2)
             previous = found
-        if k == row:
+        if k == row and before:
             back, back_speed = previous, np.zeros(2)
             for j in range(row - 1, -1, -1):
                 measured[j], found = measure(j, before[j], back, back_speed)

@@ -81,7 +81,8 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
                 raise
         else:
             tried["body"] = _usable(track)
-            track = _by_look_if_closer(path, settings, _by_colour(path, settings, track, tried, progress), tried)
+            track = _by_colour(path, settings, track, tried, progress)
+            track = _by_look_if_closer(path, settings, track, tried, progress)
         track.attrs["method"] = {
             "used": "body",
             "reason": "method: body given in the settings" + _view(track, tried),
@@ -229,7 +230,8 @@ def _by_look_if_closer(path, settings: TrackerSettings, body: pd.DataFrame, trie
     left_look = by_look.get("unexplained_rms_px", math.inf)
     look.attrs["body"]["silhouette_unexplained_rms_px"] = left_silhouette
     rigid = "warning" not in look.attrs["body"]["look"]["rotation"]
-    if rigid and usable_fraction(look) >= usable_fraction(body) and left_look <= 0.5 * left_silhouette:
+    measured = math.isfinite(left_look) and math.isfinite(left_silhouette)  # both paths judged (≥ 30 ok frames)
+    if measured and rigid and usable_fraction(look) >= usable_fraction(body) and left_look <= 0.5 * left_silhouette:
         return look
     return body
 
