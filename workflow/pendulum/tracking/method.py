@@ -145,6 +145,11 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
             f"Body: {tried['body'][8:]}"
             + (f" The dot by its colour: {tried['marker_by_colour']}." if "marker_by_colour" in tried else "")
             + (f" By its colour: {tried['body_by_colour']}" if "body_by_colour" in tried else "")
+            + (
+                f" By its look: {tried['body_by_look'][8:]}"
+                if tried.get("body_by_look", "").startswith("failed")
+                else ""
+            )
         )
     body_fraction = usable_fraction(body)
     if _might_beat(stopped, colour) and stopped.most_usable >= body_fraction:  # the marker might do as well
