@@ -130,39 +130,49 @@ def _align(template, mask, frame, guess: np.ndarray):
     return float(rho), warp.astype(np.float64)
 
 
-def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene, progress=None) -> pd.DataFrame:
-    """The body followed by its look (module docstring) from its silhouette track ``refused`` and that track's
-    ``scene`` (:class:`pendulum.tracking.body.BodyScene`); columns as :func:`.marker.track_video`, ``quality`` and
-    ``signal_ratio`` the alignment's correlation ρ relative to its median. ``attrs["body"]``: the scene's facts with
-    ``by: look`` and the alignment's (``look``). Raises :class:`~pendulum.camera.video.VideoError` where no frame
-    shows the scene behind the body's widest place, or too few frames are usable."""
-    radius = max(scene.radius_px, 2.0)
-    x, y = refused.x_px.to_numpy(float), refused.y_px.to_numpy(float)
-    budget = max(1, int(HELD_BEFORE_MB * 1e6 / scene.background.size))
-    row = reference_frame(refused, budget)
-    wanted = int(refused.frame.iloc[row])
-    reference = None
+def _decoded(path, wanted: int) -> np.ndarray:
+    """The clip's frame ``wanted`` (luma)."""
     with closing(iter_luma(path)) as frames:
         for index, _, image in frames:
             if index == wanted:
-                reference = image.astype(np.float32)
-                break
-    if reference is None:
-        raise VideoError(f"{path}: the body by its look: its frame {wanted} could not be decoded again")
+                return image
+    raise VideoError(f"{path}: the body by its look: its frame {wanted} could not be decoded again")
+
+
+def _cut(path, image: np.ndarray, scene, place, wanted: int):
+    """The template cut from the reference frame ``image`` at ``place`` (:func:`template_of`): the template, its
+    mask, the point followed in it, its warp into the frame and its mask's hull; raises where too little is cut."""
+    radius = max(scene.radius_px, 2.0)
+    reference = image.astype(np.float32)
     threshold = max(5.0 * scene.noise_grey, 4.0, 0.25 * scene.contrast_grey)
     hidden = np.zeros(reference.shape, bool) if scene.unseen is None else scene.unseen
-    found = template_of(reference, scene.background, hidden, (x[row], y[row]), radius, threshold)
+    found = template_of(reference, scene.background, hidden, place, radius, threshold)
     if found is None or found[4] < MIN_TEMPLATE_SHARE * math.pi * radius**2:
         raise VideoError(
             f"{path}: the body by its look: at the swing's widest (frame {wanted}) too little of the body lies "
             "before scene that some frame shows clear (a swing narrower than about the body's width)"
         )
     template, mask, corner, centre, _ = found
-    point = np.array(centre)
     warp = np.array([[1.0, 0.0, corner[0]], [0.0, 1.0, corner[1]]])
     hull = cv2.convexHull(cv2.findNonZero(mask)).reshape(-1, 2).astype(float)
+    return template, mask, np.array(centre), warp, hull
+
+
+def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene, progress=None) -> pd.DataFrame:
+    """The body followed by its look (module docstring) from its silhouette track ``refused`` and that track's
+    ``scene`` (:class:`pendulum.tracking.body.BodyScene`); columns as :func:`.marker.track_video`, ``quality`` and
+    ``signal_ratio`` the alignment's correlation ρ relative to its median. ``attrs["body"]``: the scene's facts with
+    ``by: look`` and the alignment's (``look``). Raises :class:`~pendulum.camera.video.VideoError` where no frame
+    shows the scene behind the body's widest place, or too few frames are usable."""
+    x, y = refused.x_px.to_numpy(float), refused.y_px.to_numpy(float)
+    budget = max(1, int(HELD_BEFORE_MB * 1e6 / scene.background.size))
+    row = reference_frame(refused, budget)
+    wanted = int(refused.frame.iloc[row])
+    held_before = row <= budget  # the frames before the reference held: its picture cut as the pass reaches it
+    if not held_before:  # the frames before it aligned forward: its picture first
+        template, mask, point, warp, hull = _cut(path, _decoded(path, wanted), scene, (x[row], y[row]), wanted)
     n, report = len(refused), {}
-    height, width = reference.shape
+    height, width = scene.background.shape
 
     def measure(k: int, image, previous, speed) -> tuple[list, np.ndarray | None]:
         """Frame k aligned from the neighbour's warp and speed (the silhouette's move since the reference where that
@@ -180,15 +190,17 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
 
     # from the reference frame on, and back from it to the first (held in memory until the reference is reached):
     # every frame starts from a neighbour already aligned, the hold before the release too
-    measured, before, stamps = {}, [], {}
+    places, before, stamps = {}, [], {}
     previous, speed = None, np.zeros(2)
     for index, time_s, image in iter_luma(path, report=report):
         k = len(stamps)
         stamps[k] = (index, float(time_s))
-        if k < row and row <= budget:
+        if k < row and held_before:
             before.append(image.copy())
             continue
-        measured[k], found = measure(k, image, warp if k == row else previous, speed)
+        if k == row and held_before:
+            template, mask, point, warp, hull = _cut(path, image, scene, (x[row], y[row]), wanted)
+        places[k], found = measure(k, image, warp if k == row else previous, speed)
         if found is None:
             speed = np.zeros(2)  # after a lost frame: from where it was last found, at rest
         else:
@@ -197,15 +209,17 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
         if k == row and before:
             back, back_speed = previous, np.zeros(2)
             for j in range(row - 1, -1, -1):
-                measured[j], found = measure(j, before[j], back, back_speed)
+                places[j], found = measure(j, before[j], back, back_speed)
                 if found is not None:
                     back_speed = found[:, 2] - back[:, 2] if back is not None and j < row - 1 else np.zeros(2)
                     back = found
             before.clear()
         if progress and index and index % 500 == 0:
             progress(f"{path}: body aligned by its look through frame {index}")
-    rows = [[*stamps[k], m[0], m[1], m[2], m[2], m[4]] for k, m in sorted(measured.items())]
-    turns = [m[3] for _, m in sorted(measured.items())]
+    if row not in places:
+        raise VideoError(f"{path}: the body by its look: its frame {wanted} could not be decoded again")
+    rows = [[*stamps[k], m[0], m[1], m[2], m[2], m[4]] for k, m in sorted(places.items())]
+    turns = [m[3] for _, m in sorted(places.items())]
     table = pd.DataFrame(rows, columns=["frame", "time_s", "x_px", "y_px", "quality", "signal_ratio", "flag"])
     flags = table.flag.to_numpy(object)
     rho = table.quality.to_numpy(float)
