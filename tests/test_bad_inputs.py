@@ -222,6 +222,39 @@ def test_no_marker_visible(folder, monkeypatch):
         track_video(folder / "blank.mp4", SMALL)
 
 
+def test_a_pass_with_detection_s_values_filled_in_advises_on_what_the_user_gave(folder):
+    """A stopped marker pass run whole holds detection's polarity and radius in its settings: where the user gave
+    none, its "no marker" advice names detection's spot, not "polarity (bright) … and start_px (given)"."""
+    write_video([np.full((240, 320), 90, np.uint8)] * 30, folder / "blank_asked.mp4", 30.0, 22, "veryfast")
+    filled = replace(SMALL, start_px=(160.0, 120.0))
+    nothing_given = replace(SMALL, polarity="auto", marker_radius_px=None, start_px=None)
+    with pytest.raises(VideoError) as given:
+        track_video(folder / "blank_asked.mp4", filled)
+    assert "check tracking polarity (bright)" in str(given.value) and "start_px (given)" in str(given.value)
+    with pytest.raises(VideoError) as detected:
+        track_video(folder / "blank_asked.mp4", filled, asked=nothing_given)
+    message = str(detected.value)
+    assert "detection's bright spot" in message and "is not a disk in any frame" in message, message
+    assert "check tracking polarity" not in message and "(given)" not in message, message
+
+
+def test_a_stopped_marker_pass_run_whole_is_told_what_the_user_gave(monkeypatch):
+    from pendulum.tracking import method
+    from pendulum.tracking.marker import MarkerAbandoned
+
+    seen = {}
+
+    def track_video(path, settings, **kw):
+        seen.update(kw, settings=settings)
+        return pd.DataFrame({"flag": ["ok"] * 4})
+
+    monkeypatch.setattr(method, "track_video", track_video)
+    user = replace(SMALL, polarity="auto", marker_radius_px=None, start_px=None)
+    stopped = MarkerAbandoned("stopped", 0.5, SMALL, object(), 40)
+    method._whole_marker_pass("clip.mp4", user, stopped)
+    assert seen["settings"] is SMALL and seen["asked"] is user and seen["detection"] is stopped.detection
+
+
 def test_marker_leaving_the_frame_for_a_few_frames_is_flagged(folder):
     """Released at −60°, the first swing takes the marker past the right border (x > 272) for 6 frames."""
     truth = render(folder, spec("edge_some", release_deg=-60.0, pivot_px=(200.3, 30.6), width_px=272))

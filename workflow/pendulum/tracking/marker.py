@@ -152,6 +152,7 @@ def track_video(
     detection=None,
     abandon_below: float | None = None,
     view=None,
+    asked: TrackerSettings | None = None,
 ) -> pd.DataFrame:
     """Track the marker through the whole video in one decode pass.
 
@@ -190,9 +191,12 @@ def track_video(
 
     ``view``: the image the marker is measured in (its luma when None; a colour view of a coloured dot:
     :class:`pendulum.tracking.colour.MarkerColourView`), with the marker given (no detection).
+
+    ``asked``: the settings as the user gave them where ``settings`` already holds detection's values (a stopped
+    pass run whole): its advice names only the values given as given.
     """
     found_by = "detection" if detection is not None or settings.needs_detection else "given in the settings"
-    asked = settings  # as the user gave them (detection fills the rest)
+    asked = asked or settings  # as the user gave them (detection fills the rest)
     if detection is None:
         settings, detection = resolve_settings(path, settings, progress)
         if detection is None and found_by == "detection":

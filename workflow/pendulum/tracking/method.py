@@ -336,7 +336,7 @@ def _whole_marker_pass(
     and what it gave, as ``tried`` says it."""
     try:
         if stopped.detection is not None:
-            marker = track_video(path, stopped.settings, progress=progress, detection=stopped.detection)
+            marker = track_video(path, stopped.settings, progress=progress, detection=stopped.detection, asked=settings)
         else:
             marker = track_video(path, settings, progress=progress)
     except VideoError as error:
