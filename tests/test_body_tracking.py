@@ -994,11 +994,11 @@ def test_a_marker_pass_stopped_early_decides_as_the_whole_pass_would(
 
     calls = []
 
-    def fake_marker(path, settings, progress=None, abandon_below=None, detection=None):
+    def fake_marker(path, settings, progress=None, abandon_below=None, detection=None, asked=None):
         calls.append(abandon_below)
         if abandon_below is not None:
             raise MarkerAbandoned("stopped", most, settings, detection="found", at_frame=7)
-        assert detection == "found"  # the whole pass reuses the stopped pass's detection
+        assert detection == "found" and asked is not None  # the stopped pass's detection, and what was asked
         return _flags_track(whole_ok)
 
     def fake_body(path, settings, progress=None):

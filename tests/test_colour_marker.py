@@ -280,7 +280,7 @@ def test_the_dot_by_its_colour_competes_with_the_marker_and_the_body_by_usable_f
         frame.attrs.update(attrs)
         return frame
 
-    def grey(path, settings, progress=None, abandon_below=None, detection=None):
+    def grey(path, settings, progress=None, abandon_below=None, detection=None, asked=None):
         if abandon_below is not None:
             raise MarkerAbandoned("stopped", 0.90, settings, detection="found", at_frame=12)
         return track(whole_ok, marker={"view": None})

@@ -415,19 +415,36 @@ def silhouette_fraction(values: np.ndarray) -> float:
     return max(STRONG_FRACTION, cut / top)
 
 
+def _strong_hull(diff: np.ndarray, component: np.ndarray, fraction: float) -> tuple[np.ndarray | None, float]:
+    """The convex hull of the component's strong pixels (D > ``fraction`` C_f) and C_f (:func:`silhouette`), from
+    their outer boundaries (every extreme pixel lies on one: the same hull as from all of them, a large body's
+    tens of thousands of pixels not handed over), all taken within the component's box."""
+    contrast = float(np.percentile(diff[component], 90))
+    bx, by, bw, bh = cv2.boundingRect(component.view(np.uint8))
+    box = np.s_[by : by + bh, bx : bx + bw]
+    strong = (component[box] & (diff[box] > fraction * contrast)).astype(np.uint8)
+    count = cv2.countNonZero(strong)
+    if count < 3:
+        return None, contrast
+    outlines, _ = cv2.findContours(strong, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(bx, by))
+    return cv2.convexHull(np.concatenate(outlines)), contrast
+
+
 def silhouette(
     diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION
 ) -> tuple[np.ndarray | None, float]:
     """The body's silhouette: its strong pixels (D > ½ C_f, C_f the component's 90th percentile of D) filled to
     their convex hull, and C_f. A part that hardly differs from the wall (a bright half before a bright
     wall, the light squares of a print) is left out or filled in the same way in every frame."""
-    contrast = float(np.percentile(diff[component], 90))
-    strong = cv2.findNonZero((component & (diff > fraction * contrast)).astype(np.uint8))
-    if strong is None or len(strong) < 3:
+    hull, contrast = _strong_hull(diff, component, fraction)
+    if hull is None:
         return None, contrast
     filled = np.zeros(diff.shape, np.uint8)
-    cv2.fillConvexPoly(filled, cv2.convexHull(strong), 1)
+    cv2.fillConvexPoly(filled, hull, 1)
     return filled > 0, contrast
+
+
+SOFT_EDGE_REACH_PX = 5  # soft_centroid looks this far past the silhouette: its 2 px edge and the core's 3 px reach
 
 
 def soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION):
@@ -436,22 +453,31 @@ def soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = STR
     w = 1 in the silhouette's core (:func:`silhouette` less its outer 2 px); in the 2 px on either side
     of its outline, the pixel's coverage D / C_local, C_local the largest D of the core within 3 px (an
     edge pixel of a body of contrast C covering a fraction f of it differs by f·C): no pixel locking.
+    Computed within the silhouette's box and :data:`SOFT_EDGE_REACH_PX` more (the same numbers as over the
+    window: no pixel farther away takes part).
     """
-    inside, contrast = silhouette(diff, component, fraction)
-    if inside is None:
+    hull, _ = _strong_hull(diff, component, fraction)
+    if hull is None:
         return math.nan, math.nan, 0.0, math.nan, math.nan
+    h, w = diff.shape
+    hx, hy, hw, hh = cv2.boundingRect(hull)
+    x0, y0 = max(hx - SOFT_EDGE_REACH_PX, 0), max(hy - SOFT_EDGE_REACH_PX, 0)
+    x1, y1 = min(hx + hw + SOFT_EDGE_REACH_PX, w), min(hy + hh + SOFT_EDGE_REACH_PX, h)
+    hull_mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    cv2.fillConvexPoly(hull_mask, hull - np.int32((x0, y0)), 1)
+    diff = diff[y0:y1, x0:x1]
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
-    hull = inside.astype(np.uint8)
-    core = cv2.erode(hull, disk)
-    grown = cv2.dilate(hull, disk) > 0
+    core = cv2.erode(hull_mask, disk)
+    grown = cv2.dilate(hull_mask, disk) > 0
     if core.sum() < 5:  # a body a few pixels across: the whole silhouette is its edge
-        core = hull
+        core = hull_mask
     local = cv2.dilate(np.where(core > 0, diff, 0).astype(np.float32), np.ones((7, 7), np.uint8))
     yy, xx = np.nonzero(grown)
     edge = np.minimum(diff[yy, xx] / np.maximum(local[yy, xx], 1e-6), 1.0)
     ww = np.where(core[yy, xx] > 0, 1.0, np.where(local[yy, xx] > 0, edge, 0.0))
     total = float(ww.sum())
-    ys, xs = np.nonzero(inside)
+    ys, xs = np.nonzero(hull_mask)
+    xx, yy, xs, ys = xx + x0, yy + y0, xs + x0, ys + y0  # in the window, as the callers measure
     return float(ww @ xx / total), float(ww @ yy / total), total, float(xs.mean()), float(ys.mean())
 
 
