@@ -20,7 +20,7 @@ from pendulum.tracking.camera_motion import steady_camera
 from pendulum.tracking.method import track_trial, usable_fraction
 from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
-from pendulum.tracking.timing import break_sentence, slip_sentence
+from pendulum.tracking.timing_notes import break_sentence, slip_sentence
 
 sm = snakemake  # noqa: F821
 log = script_logger(sm.log[0], "tracks")

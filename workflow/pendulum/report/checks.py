@@ -20,7 +20,7 @@ from pendulum.report.format import (
     td,
     with_minus_sign,
 )
-from pendulum.tracking.timing import slip_sentence
+from pendulum.tracking.timing_notes import slip_sentence
 
 # One note a line; the table within the page, its column 1400 px wide (in a 1120 px column a minimum of 14em cut the
 # notes mid-word and 10em made each real clip's row 1,000 px tall: two reviewers, 2026-12-02).

@@ -7,7 +7,7 @@ import math
 
 from pendulum.report.data import is_ok
 from pendulum.report.format import fmt, is_finite
-from pendulum.tracking.timing import slip_counts
+from pendulum.tracking.timing_notes import slip_counts
 
 
 def tracking_note(tracks: dict | None, angles: dict | None) -> str:
