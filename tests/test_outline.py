@@ -182,8 +182,9 @@ def _track(
         (0.25, 0.0, 0.13, 0.06, "outline", "the better pendulum"),  # a print's centroid: off its circle by only 1.3
         # times its noise, the outline's path half as far off and half as noisy: the better pendulum on both counts
         # (seed 7031), not said to be a ball turning on its string
-        (0.0, 0.0, 0.03, 0.15, "silhouette", None),  # an apple: its outline no circle, its centre noisier
-        (0.0, 0.0, 0.05, 0.05, "silhouette", None),  # a uniform ball: the two agree
+        (0.0, 0.0, 0.03, 0.15, "silhouette", "no better pendulum"),  # an apple: its outline no circle, its centre
+        # noisier
+        (0.0, 0.0, 0.05, 0.05, "silhouette", "no better pendulum"),  # a uniform ball: the two agree
     ],
 )
 def test_the_outline_is_kept_only_where_its_path_is_the_better_pendulum(
@@ -213,3 +214,4 @@ def test_a_track_too_short_for_a_path_fit_keeps_its_centroid():
     """Under 30 usable frames neither path is fitted (their figures unknown): no evidence for the outline."""
     out = centre_by_outline(_track(0.25, 0.13, 0.06).iloc[:20])
     assert out.attrs["body"]["centre"]["by"] == "silhouette", out.attrs["body"]["centre"]
+    assert "could not both be fitted" in out.attrs["body"]["centre"]["why"], out.attrs["body"]["centre"]

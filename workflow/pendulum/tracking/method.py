@@ -105,7 +105,12 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         if fraction >= MARKER_USABLE_FRACTION:
             marker.attrs["method"] = {
                 "used": "marker",
-                "reason": f"a marker disk was found and is usable in {100 * fraction:.1f} % of the frames",
+                "reason": (
+                    "detection's disk-like spot (a marker dot, or a round body itself: a ball, a bauble) is"
+                    if (marker.attrs.get("marker") or {}).get("found_by") == "detection"
+                    else "a marker disk was found and is"
+                )
+                + f" usable in {100 * fraction:.1f} % of the frames",
                 "tried": tried,
             }
             return marker

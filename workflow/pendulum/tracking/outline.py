@@ -285,6 +285,10 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
     facts = {"by": "silhouette", "outline_seen_frames": int(seen.sum())}
     centroid.attrs["body"]["centre"] = facts
     if not ok.any() or seen.sum() < MIN_SEEN_SHARE * ok.sum():
+        facts["why"] = (
+            f"its outline was seen as a circle's in {int(seen.sum())} of its {int(ok.sum())} usable frames "
+            f"({100 * MIN_SEEN_SHARE:.0f} % needed to be measured by it): by its silhouette's centroid"
+        )
         return centroid
     radius = float(np.nanmedian(track.outline_r_px.to_numpy(float)[seen]))
     outline = centroid.copy()
@@ -322,6 +326,13 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
     )
     # a wander slow enough to pass for the camera creeping: the centroid's creep not the outline's
     if not (wanders or better or (creeps_differ and left_outline <= left_centroid + noise_centroid)):
+        facts["why"] = (
+            "its two centres' paths could not both be fitted (too few usable frames): by its silhouette's centroid"
+            if not math.isfinite(left_centroid + left_outline + noise_centroid + noise_outline)
+            else f"its silhouette's centroid {left_centroid:.2f} px RMS off a circle about the pivot (noise "
+            f"{noise_centroid:.2f} px), its round outline's centre {left_outline:.2f} px (noise "
+            f"{noise_outline:.2f} px): no better pendulum, by its silhouette's centroid"
+        )
         return centroid
     unseen = int((ok & ~seen).sum())
     facts["by"] = "outline"
