@@ -162,15 +162,16 @@ def test_an_off_frame_pivot_is_found_with_its_uncertainty():
     geometry = estimate_rig_geometry({"t": track})
     err = np.subtract(geometry["pivot_px"], [320.0, -180.0])
     assert np.all(np.abs(err) < 4 * np.asarray(geometry["pivot_stderr_px"]) + 1e-3)
-    # across the arm the circle fit's scatter (0.03 px); along it mostly a slow 0.1 px tracking bias against the
-    # arc's 42 px sagitta (±1.1 px; geometry.TRACK_BIAS_PX), which no scatter shows
-    assert geometry["pivot_stderr_px"][0] < 0.1 and 0.9 < geometry["pivot_stderr_px"][1] < 1.5
+    # across the arm the circle fit's scatter (0.03 px); along it mostly a slow 0.2 px tracking bias against the
+    # arc's 42 px sagitta (±2.1 px; geometry.TRACK_BIAS_PX), which no scatter shows
+    assert geometry["pivot_stderr_px"][0] < 0.1 and 1.8 < geometry["pivot_stderr_px"][1] < 2.8
     assert geometry["vertical_deg"] == pytest.approx(0.0, abs=0.02)
     # σ_θ = σ_x / R at a vertical of 0°
     assert geometry["angle_offset_stderr_deg"] == pytest.approx(
         math.degrees(geometry["pivot_stderr_px"][0] / geometry["circle"]["radius_px"]), rel=1e-3
     )
-    assert geometry["angle_scale_stderr_pct"] < 0.3 and geometry["warnings"] == []
+    assert geometry["angle_scale_stderr_pct"] < 0.6 and geometry["warnings"] == []
+    assert geometry["slow_departure_px"] < 0.02 and geometry["pivot_track_bias_px"] == 0.2  # its own: noise alone
 
 
 def test_a_clock_s_short_arc_says_its_angles_scale_is_uncertain():

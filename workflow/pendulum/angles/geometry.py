@@ -347,9 +347,12 @@ def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None) -> tu
 
 
 MAX_ANGLE_SCALE_STDERR_PCT = 2.0  # an estimated pivot that leaves the angles' scale more uncertain: said
-# A track's slow bias across its arc (a glass's static reflection, a bob's shading and glint): 0.06–0.15 px in a
-# helper's renders of two clock pendulums (2026-12-05), whose arcs bend only 0.4–0.6 px from a line
-TRACK_BIAS_PX = 0.1
+# The least slow bias of a track across its arc (a glass's static reflection, a bob's shading and glint) assumed:
+# 0.06–0.15 px in a helper's renders of two clock pendulums (2026-12-05), 0.12 px in a two-tone ball's outline
+# centre (2026-12-05), 0.14–0.2 px in another helper's clock dots measured against their truth (2026-12-06: the
+# pivot 1–3.4 % off along the arm where 0.1 px said ±1.4–2.5 %)
+TRACK_BIAS_PX = 0.2
+SLOW_BIAS_BINS = 16  # the arc's stretches over which a track's slow departure from its circle is measured
 MAX_BIAS_ARM_SHARE = 0.5  # that bias's σ along the arm at most half the arm: the angles' scale ± 50 % or more
 
 
@@ -358,15 +361,40 @@ def arc_sagitta_px(radius_px: float, arc_span_deg: float) -> float:
     return radius_px * (1.0 - math.cos(math.radians(min(arc_span_deg, 180.0)) / 2))
 
 
-def track_bias_covariance(radius_px: float, arc_span_deg: float, vertical_deg: float) -> np.ndarray:
-    """The pivot's covariance from a slow tracking bias b = :data:`TRACK_BIAS_PX` across the arc, which no circle
+def slow_bias_px(tracks: dict[str, pd.DataFrame], circle: CircleFit) -> float:
+    """The largest slow departure of a track from ``circle``: the RMS over :data:`SLOW_BIAS_BINS` stretches of its arc
+    (equal numbers of its points) of its mean distance from the circle, less its own mean and the noise's share
+    (√(mean m_k² − mean σ_k²/n_k)). A circle fit absorbs the part of a slow bias that bends the arc as a moved pivot
+    would, and leaves the rest: a body's highlight sliding over it, a print's centroid (a helper's clock bobs tracked
+    by their silhouettes: 0.15–0.3 px, their pivots 2–21 % off along the arm)."""
+    largest = 0.0
+    for track in tracks.values():
+        x, y = path_points(track)
+        if x.size < 4 * SLOW_BIAS_BINS:
+            continue
+        angle = np.arctan2(x - circle.pivot_x_px, y - circle.pivot_y_px)
+        off = np.hypot(x - circle.pivot_x_px, y - circle.pivot_y_px) - circle.radius_px
+        off = off - off.mean()
+        stretch = np.argsort(np.argsort(angle)) * SLOW_BIAS_BINS // angle.size  # equal numbers of points
+        counts = np.bincount(stretch, minlength=SLOW_BIAS_BINS)
+        means = np.bincount(stretch, weights=off, minlength=SLOW_BIAS_BINS) / counts
+        spread = np.bincount(stretch, weights=off**2, minlength=SLOW_BIAS_BINS) / counts - means**2
+        largest = max(largest, math.sqrt(max(float(np.mean(means**2) - np.mean(spread / counts)), 0.0)))
+    return largest
+
+
+def track_bias_covariance(
+    radius_px: float, arc_span_deg: float, vertical_deg: float, bias_px: float = TRACK_BIAS_PX
+) -> np.ndarray:
+    """The pivot's covariance from a slow tracking bias b = ``bias_px`` (:data:`TRACK_BIAS_PX` where not measured
+    larger: :func:`slow_bias_px`) across the arc, which no circle
     fit's scatter shows: a change δ of the arc's sagitta s = R (1 − cos(φ/2)) (φ its span), its chord held, moves
     the fitted centre by R δ / s along the arm a = (sin v, cos v): (R b / s)² a aᵀ, the angles' scale by ± b / s.
     Its σ is held to :data:`MAX_BIAS_ARM_SHARE` of R (beyond, the scale is unknown, and the fits' budget, which
     moves each angle by its linear change with the pivot, would flip their signs). On a wide swing the scale's
     part is negligible (a 75° arc at R = 560 px: s = 116 px, 0.09 %); a clock's 3° arc at R = 300 px (s = 0.1 px)
     leaves it unknown."""
-    along = radius_px * TRACK_BIAS_PX / max(arc_sagitta_px(radius_px, arc_span_deg), 1e-9)
+    along = radius_px * bias_px / max(arc_sagitta_px(radius_px, arc_span_deg), 1e-9)
     along = min(along, MAX_BIAS_ARM_SHARE * radius_px)
     a = np.array([math.sin(math.radians(vertical_deg)), math.cos(math.radians(vertical_deg))])
     return along**2 * np.outer(a, a)
@@ -455,9 +483,12 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
     result["vertical_deg"] = float(vertical_deg)
     if result.get("circle") and result["pivot_covariance_px2"] is not None:
         circle = result["circle"]
-        bias = track_bias_covariance(circle["radius_px"], circle["arc_span_deg"], vertical_deg)
+        measured = slow_bias_px(tracks, CircleFit(**circle))
+        bias_px = max(TRACK_BIAS_PX, measured)
+        bias = track_bias_covariance(circle["radius_px"], circle["arc_span_deg"], vertical_deg, bias_px)
         result["pivot_covariance_px2"] = (np.asarray(result["pivot_covariance_px2"]) + bias).tolist()
-        result["pivot_track_bias_px"] = TRACK_BIAS_PX  # in the covariance beside the circle fit's own
+        result["pivot_track_bias_px"] = round(bias_px, 4)  # in the covariance beside the circle fit's own
+        result["slow_departure_px"] = round(measured, 4)  # the tracks' own, measured (slow_bias_px)
         result.update(pivot_uncertainty(result["pivot_covariance_px2"], circle["radius_px"], vertical_deg))
         scale = result["angle_scale_stderr_pct"]
         if scale > MAX_ANGLE_SCALE_STDERR_PCT and result.get("shared") is not False:  # else no trial uses it
@@ -467,7 +498,8 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
                 f"known along the arm only to ± {scale * circle['radius_px'] / 100:.0f} px: every angle's scale is "
                 f"uncertain by ± {scale:.1f} %{' or more' if scale >= 100 * MAX_BIAS_ARM_SHARE else ''} (1σ: the "
                 "circle fit's scatter and a slow tracking bias of "
-                f"{TRACK_BIAS_PX:g} px against the arc's {sagitta:.2g} px sagitta), and the amplitude-dependent "
+                f"{bias_px:.2g} px{' (its path off the circle by that much)' if measured > TRACK_BIAS_PX else ''} "
+                f"against the arc's {sagitta:.2g} px sagitta), and the amplitude-dependent "
                 "coefficients with it (drag, friction): give pivot_px (the pivot's place in the picture, measured in "
                 "a frame that shows it) or film a wider swing"
             )
