@@ -979,6 +979,7 @@ def _flags_track(n_ok: int, n: int = 100):
         (0.90, 85, 88, False, "marker", 2),  # the marker might do as well: its whole pass decides (88 >= 85)
         (0.90, 85, 80, False, "body", 2),
         (0.90, None, 88, True, "marker", 2),  # no body: the marker's whole record, as before the early stop
+        (0.90, 85, -1, False, "body", 2),  # the whole pass finds no marker: said as such, not "is failed: …"
     ],
 )
 def test_a_marker_pass_stopped_early_decides_as_the_whole_pass_would(
@@ -999,6 +1000,8 @@ def test_a_marker_pass_stopped_early_decides_as_the_whole_pass_would(
         if abandon_below is not None:
             raise MarkerAbandoned("stopped", most, settings, detection="found", at_frame=7)
         assert detection == "found" and asked is not None  # the stopped pass's detection, and what was asked
+        if whole_ok < 0:
+            raise VideoError("clip.mp4: no marker found in any of its 100 frames")
         return _flags_track(whole_ok)
 
     def fake_body(path, settings, progress=None):
@@ -1014,6 +1017,9 @@ def test_a_marker_pass_stopped_early_decides_as_the_whole_pass_would(
     if passes == 1:
         said = track.attrs["method"]["tried"]["marker"]
         assert "under 95 %" in said and "by frame 7" in said and said in track.attrs["method"]["reason"]
+    if whole_ok is not None and whole_ok < 0:
+        reason = track.attrs["method"]["reason"]
+        assert reason.startswith("the marker disk could not be followed (clip.mp4: no marker found"), reason
 
 
 def test_masks_read_at_full_size_are_cv2_s_nearest_enlargement():

@@ -169,9 +169,11 @@ def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame
         }
         return marker
     why = (
-        f"the marker disk is {tried['marker']}"
-        if marker is not None or stopped is not None
-        else "no marker disk could be followed"
+        "no marker disk could be followed"
+        if marker is None and stopped is None
+        else f"the marker disk could not be followed ({tried['marker'][8:]})"
+        if tried["marker"].startswith("failed: ")  # a stopped pass run whole that found none
+        else f"the marker disk is {tried['marker']}"
     )
     body.attrs["method"] = {
         "used": "body",
