@@ -18,7 +18,7 @@ follow the swing, and a shift would be found where only the curve is missed.
 A slip whose turning points moved across it (both sides, along the motion, by half the distance it implies
 and three times their usual move) is the picture moving, not the clock (a knock, a stabiliser): it is not applied
 and ``picture_steps`` says so; nor is one where the body's measured size steps across it (a print turning onto a
-ball's limb moves its centroid: ``look_steps``, :func:`_look_steps`), nor are :data:`PLACE_SLIPS` or more at one
+ball's limb moves its centroid: ``look_steps``, :func:`_size_step`), nor are :data:`PLACE_SLIPS` or more at one
 place of the path (the body passing it both ways: something behind it there pulls its track), which
 ``scene_places`` lists. A repeated frame (no motion from
 the frame before where the motion is fast) is taken out first and flagged ``duplicate``. Near the turning points,
@@ -54,8 +54,8 @@ PICTURE_USUAL = 3.0  # ... and by this many times their usual movement from one 
 PLACE_SLIPS = 3  # slips at least this many at one place of the path (both ways through it) are the scene's ...
 PLACE_SHARE, PLACE_MIN_PX = 0.05, 3.0  # ... within this share of the path's spread (SD), at least this, of each other,
 PLACE_PASSES = 0.5  # ... at this share of the body's passes through that place or more
-LOOK_STEP_FACTOR = 5.0  # a slip where the body's measured size steps by this × its usual frame-to-frame change ...
-LOOK_STEP_FLOOR = 1e-3  # ... (that change at least this share of its size): its look changed, not the clock
+LOOK_STEP_FACTOR = 5.0  # a slip across which the body's size steps by this × its usual step a frame period ...
+LOOK_STEP_FLOOR = 1e-3  # ... (that step at least this share of its size): its look changed, not the clock
 
 
 def _window_misfits(tau: np.ndarray, x: np.ndarray, y: np.ndarray, b: np.ndarray, shift) -> np.ndarray:
@@ -266,7 +266,7 @@ def find_slips(
         shift[i:] -= 1
     idx = idx[~repeated_mask]
     turning = path_turning_points(stamp_s[idx] / period, x[idx], y[idx])
-    look_step = _look_steps(size, idx)
+    sizes = None if size is None else np.nan_to_num(np.asarray(size, float)[idx])
     refused: set[int] = set()  # boundaries (usable frame after them) where the picture moved, not the clock
     applied_at: list[tuple[int, float]] = []  # (usable frame after the boundary, periods) of each slip applied
     for round_ in range(MAX_ROUNDS):
@@ -295,9 +295,10 @@ def find_slips(
         for k in found:
             j = b[suspect[k]]
             periods = round(float(best[k, 0]), 2)
-            if look_step[j] > LOOK_STEP_FACTOR:  # the body's look changed there (a turning print): not the clock
+            look = _size_step(tau, sizes, j, periods)
+            if look > LOOK_STEP_FACTOR:  # the body's look changed there (a turning print): not the clock
                 refused.add(int(idx[j + 1]))
-                result["look_steps"].append([int(frame[idx[j + 1]]), periods, round(float(look_step[j]), 1)])
+                result["look_steps"].append([int(frame[idx[j + 1]]), periods, round(look, 1)])
                 continue
             moved = _moved_picture(tau, x[idx], y[idx], j, periods, turning, stamp_s[idx[j]] / period)
             if moved is not None:  # the picture jumped (a knock, a stabiliser): not the clock
@@ -336,18 +337,21 @@ def find_slips(
     return result
 
 
-def _look_steps(size, idx: np.ndarray) -> np.ndarray:
-    """Per pair of consecutive usable frames ``idx``: the step of the body's measured size between them, per frame
-    between them, over its median (at least :data:`LOOK_STEP_FLOOR`); zeros where no size is given. A clock's slip
-    leaves the body's picture as it was; a two-tone ball's print turning onto its limb grows its silhouette and
-    moves its centroid (a helper's 1080p render: 7–12× the median step where 0.27 and 0.38 of a frame were taken for
-    slips; the real apple clip's lost frames 1.2–2.2×, its 99th percentile 3.9×)."""
-    if size is None or idx.size < 2:
-        return np.zeros(max(idx.size - 1, 0))
-    steps = np.abs(np.diff(np.asarray(size, float)[idx])) / np.diff(idx)  # per frame across flagged or repeated ones
-    finite = np.isfinite(steps)
-    usual = max(float(np.median(steps[finite])) if finite.any() else 0.0, LOOK_STEP_FLOOR)
-    return np.where(finite, steps / usual, 0.0)
+def _size_step(tau: np.ndarray, sizes, j: int, periods: float) -> float:
+    """The body's measured size (``sizes`` per usable frame; None where the track is not a silhouette's) across
+    boundary ``j``: its step per frame period the boundary spans with the frames after it ``periods`` later (a lost
+    frame: two), over its median step between consecutive frames (at least :data:`LOOK_STEP_FLOOR`); 0 where no size
+    is given. A slip of the clock leaves the body's picture as it was; a print turning onto a two-tone ball's limb
+    steps its colour silhouette's size and moves its centroid (a helper's 1080p render: 0.27 and 0.38 of a frame
+    taken for slips, its size stepping 9.3 and 5.3 times its usual rate; one frame deleted at 30 fast moments of
+    each of ten body tracks, the real apple's among them: 1.1–3.3 times)."""
+    if sizes is None:
+        return 0.0
+    consecutive = np.abs(np.diff(tau)) < 1.5
+    steps = np.abs(np.diff(sizes))[consecutive]
+    usual = max(float(np.median(steps)) if steps.size else 0.0, LOOK_STEP_FLOOR)
+    spanned = max(float(tau[j + 1] - tau[j]) + periods, 1.0)
+    return float(abs(sizes[j + 1] - sizes[j]) / spanned / usual)
 
 
 def _at_one_place(applied: list[tuple[int, float]], x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> list:
@@ -384,9 +388,10 @@ def _at_one_place(applied: list[tuple[int, float]], x: np.ndarray, y: np.ndarray
 
 def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
     """``track`` with ``time_s`` put right for lost and repeated frames (:func:`find_slips` on its ``ok`` and
-    ``jump`` frames; stamps rounded to a coarse tick first taken as the regular clock they round:
-    :func:`pendulum.camera.stamps.regular_times`), repeated frames flagged ``duplicate``, and ``jump`` frames
-    beside a slip that fit the corrected motion made ``ok``; ``attrs["timing"]`` says what was found."""
+    ``jump`` frames, with a body silhouette's size, its ``quality``; stamps rounded to a coarse tick first taken as
+    the regular clock they round: :func:`pendulum.camera.stamps.regular_times`), repeated frames flagged
+    ``duplicate``, and ``jump`` frames beside a slip that fit the corrected motion made ``ok``; ``attrs["timing"]``
+    says what was found."""
     if track.empty:
         return track
     # a frame the marker tracker saw repeat the one before (the same picture) is flagged duplicate already: its
@@ -398,7 +403,9 @@ def correct_slips(track: pd.DataFrame) -> pd.DataFrame:
     rounded = regular_times(stamp)  # stamps rounded to a coarse tick: the regular clock they round (camera.stamps)
     if rounded is not None:
         stamp = rounded[0]
-    size = track.quality.to_numpy(float) if "quality" in track else None
+    body = track.attrs.get("body") or {}
+    silhouette = bool(body) and body.get("by") != "look" and not track.attrs.get("marker")
+    size = track.quality.to_numpy(float) if silhouette and "quality" in track else None  # a silhouette's area
     found = find_slips(track.frame.to_numpy(), stamp, x, y, usable & np.isfinite(x) & np.isfinite(y), size)
     out = track.copy()
     out.attrs = dict(track.attrs)
