@@ -274,9 +274,9 @@ def unshared_pivot(tracks: dict[str, pd.DataFrame], circle: CircleFit) -> str | 
     clips all lie far off any one circle, none farther than the rest: their pooled circle is no pivot at all
     (four copies of one real track, scaled, rotated and at 3×, as four clips of one rig: 97 px RMS; two
     pendulums side by side swinging ±4°: 0.34 px RMS, its centre 234,000 px away; before 2026-11-28 the pivot
-    every one of them used). Measured Mahalanobis² on rigs that share a pivot: the demo's five trials ≤ 2.7,
-    the apple clip beside itself 0.0, beside the two-tone ball measured at its lower half 5.1; two pendulums
-    side by side 2.5·10⁴ and more.
+    every one of them used). Measured Mahalanobis² (with a 0.1 px bias; 0.2 px since 2026-12-06) on rigs that
+    share a pivot: the demo's five trials ≤ 2.7, the apple clip beside itself 0.0, beside the two-tone ball measured
+    at its lower half 5.1; two pendulums side by side 2.5·10⁴ and more.
     """
     if len(tracks) < 2:
         return None
@@ -483,7 +483,8 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
     result["vertical_deg"] = float(vertical_deg)
     if result.get("circle") and result["pivot_covariance_px2"] is not None:
         circle = result["circle"]
-        measured = slow_bias_px(tracks, CircleFit(**circle))
+        # measured against the pooled circle where the trials share it (else each trial's own: trial_geometry)
+        measured = slow_bias_px(tracks, CircleFit(**circle)) if result.get("shared") is not False else 0.0
         bias_px = max(TRACK_BIAS_PX, measured)
         bias = track_bias_covariance(circle["radius_px"], circle["arc_span_deg"], vertical_deg, bias_px)
         result["pivot_covariance_px2"] = (np.asarray(result["pivot_covariance_px2"]) + bias).tolist()
