@@ -211,6 +211,16 @@ def test_frames_flagged_at_the_bottom_of_every_swing_make_no_slips():
     assert clean == 40, clean
 
 
+def stepped_swing(seed: int, offset: int):
+    """Seed ``seed``'s 12 s swing (30 or 60 fps), a fast frame k in its middle third and a step of 2–3 px either way
+    (its own generator seeded ``offset + seed``): (that generator, fps, track, θ, k, step)."""
+    rng = np.random.default_rng(offset + seed)
+    fps = [30.0, 60.0][seed % 2]
+    track, _, theta = swing_track(np.random.default_rng(seed), fps=fps, duration_s=12.0)
+    k = fast_frame(rng, theta, theta.size // 3, theta.size // 2)
+    return rng, fps, track, theta, k, rng.uniform(2.0, 3.0) * float(rng.choice([-1, 1]))
+
+
 def test_a_picture_that_moves_along_the_swing_is_said_as_such_not_taken_for_a_slip():
     """A knock or a phone's stabiliser moving the whole picture 2–3 px along the swing at mid-swing looks, over
     the twelve frames of a window, like the clock slipping by a quarter of a period (a review found −0.26 to −0.39
@@ -221,12 +231,7 @@ def test_a_picture_that_moves_along_the_swing_is_said_as_such_not_taken_for_a_sl
     found, its times right within 0.1 period, in at least 38 of 40 (its turning points stay)."""
     clean = said = slipped = 0
     for seed in range(40):
-        rng = np.random.default_rng(700 + seed)
-        fps = [30.0, 60.0][seed % 2]
-        _, _, theta = swing_track(np.random.default_rng(seed), fps=fps, duration_s=12.0)
-        k = fast_frame(rng, theta, theta.size // 3, theta.size // 2)
-        bump = rng.uniform(2.0, 3.0) * float(rng.choice([-1, 1]))
-        track, _, _ = swing_track(np.random.default_rng(seed), fps=fps, duration_s=12.0)
+        rng, fps, track, theta, k, bump = stepped_swing(seed, 700)
         track.loc[k:, "x_px"] += bump
         timing = correct_slips(track).attrs["timing"]
         clean += not timing["slips"] and not timing["repeated"]
@@ -250,12 +255,8 @@ def test_a_print_turning_into_view_moves_the_measured_point_and_is_no_slip_of_th
     put right (times within 0.1 period) in at least 38 of 40."""
     clean = said = slipped = 0
     for seed in range(40):
-        rng = np.random.default_rng(900 + seed)
-        fps = [30.0, 60.0][seed % 2]
-        track, _, theta = swing_track(np.random.default_rng(seed), fps=fps, duration_s=12.0)
-        k = fast_frame(rng, theta, theta.size // 3, theta.size // 2)
+        rng, fps, track, theta, k, bump = stepped_swing(seed, 900)
         size = 1.0 + rng.normal(0.0, 0.004, theta.size)
-        bump = rng.uniform(2.0, 3.0) * float(rng.choice([-1, 1]))
         back = np.clip(1.0 - (np.arange(theta.size - k) / fps), 0.0, 1.0)  # the print turning on: back in 1 s
         track.loc[k:, "x_px"] += bump * back
         grown = rng.uniform(0.04, 0.05)  # the size's step: 3–5 % on the helper's ball
