@@ -415,33 +415,20 @@ def silhouette_fraction(values: np.ndarray) -> float:
     return max(STRONG_FRACTION, cut / top)
 
 
-def _strong_hull(diff: np.ndarray, component: np.ndarray, fraction: float) -> tuple[np.ndarray | None, float]:
-    """The convex hull of the component's strong pixels (D > ``fraction`` C_f) and C_f (:func:`silhouette`), from
-    their outer boundaries (every extreme pixel lies on one: the same hull as from all of them, a large body's
-    tens of thousands of pixels not handed over), all taken within the component's box."""
+def silhouette_hull(diff: np.ndarray, component: np.ndarray, fraction: float) -> tuple[np.ndarray | None, float]:
+    """The body's silhouette as a convex polygon, and C_f: the hull of the component's strong pixels (D > ``fraction``
+    C_f, C_f the component's 90th percentile of D; None under 3 of them). A part that hardly differs from the wall
+    (a bright half before a bright wall, the light squares of a print) is left out or filled in the same way in
+    every frame. Taken from the strong pixels' outer boundaries within the component's box (every extreme pixel
+    lies on one: the same hull as from all of them, a large body's tens of thousands of pixels not handed over)."""
     contrast = float(np.percentile(diff[component], 90))
     bx, by, bw, bh = cv2.boundingRect(component.view(np.uint8))
     box = np.s_[by : by + bh, bx : bx + bw]
     strong = (component[box] & (diff[box] > fraction * contrast)).astype(np.uint8)
-    count = cv2.countNonZero(strong)
-    if count < 3:
+    if cv2.countNonZero(strong) < 3:
         return None, contrast
     outlines, _ = cv2.findContours(strong, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(bx, by))
     return cv2.convexHull(np.concatenate(outlines)), contrast
-
-
-def silhouette(
-    diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION
-) -> tuple[np.ndarray | None, float]:
-    """The body's silhouette: its strong pixels (D > ½ C_f, C_f the component's 90th percentile of D) filled to
-    their convex hull, and C_f. A part that hardly differs from the wall (a bright half before a bright
-    wall, the light squares of a print) is left out or filled in the same way in every frame."""
-    hull, contrast = _strong_hull(diff, component, fraction)
-    if hull is None:
-        return None, contrast
-    filled = np.zeros(diff.shape, np.uint8)
-    cv2.fillConvexPoly(filled, hull, 1)
-    return filled > 0, contrast
 
 
 SOFT_EDGE_REACH_PX = 5  # soft_centroid looks this far past the silhouette: its 2 px edge and the core's 3 px reach
@@ -450,13 +437,13 @@ SOFT_EDGE_REACH_PX = 5  # soft_centroid looks this far past the silhouette: its 
 def soft_centroid(diff: np.ndarray, component: np.ndarray, fraction: float = STRONG_FRACTION):
     """Soft-silhouette centroid: (x, y, Σw, the filled silhouette's plain centroid x, y).
 
-    w = 1 in the silhouette's core (:func:`silhouette` less its outer 2 px); in the 2 px on either side
+    w = 1 in the silhouette's core (:func:`silhouette_hull` filled, less its outer 2 px); in the 2 px on either side
     of its outline, the pixel's coverage D / C_local, C_local the largest D of the core within 3 px (an
     edge pixel of a body of contrast C covering a fraction f of it differs by f·C): no pixel locking.
     Computed within the silhouette's box and :data:`SOFT_EDGE_REACH_PX` more (the same numbers as over the
     window: no pixel farther away takes part).
     """
-    hull, _ = _strong_hull(diff, component, fraction)
+    hull, _ = silhouette_hull(diff, component, fraction)
     if hull is None:
         return math.nan, math.nan, 0.0, math.nan, math.nan
     h, w = diff.shape
