@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from pendulum.tracking.body_scene import soft_centroid
-from pendulum.tracking.outline import LIMB_RAYS, centre_by_outline, edge_points, outline_centres
+from pendulum.tracking.outline import LIMB_RAYS, centre_by_outline, edge_points, outline_centres, sharper_outline
 
 RADIUS_PX = 20.0
 TILT_DEG = 25.0
@@ -215,3 +215,57 @@ def test_a_track_too_short_for_a_path_fit_keeps_its_centroid():
     out = centre_by_outline(_track(0.25, 0.13, 0.06).iloc[:20])
     assert out.attrs["body"]["centre"]["by"] == "silhouette", out.attrs["body"]["centre"]
     assert "could not both be fitted" in out.attrs["body"]["centre"]["why"], out.attrs["body"]["centre"]
+
+
+def _dotted_half_ball(cx: float, cy: float, phi_deg: float, size: int = 80) -> np.ndarray:
+    """A colour view of a two-tone ball (:func:`_half_ball`) whose coloured half is faint (70 levels, a navy half's
+    chroma) beside two bright printed dots on its other half (220 levels, 5 px in radius, 5 px inside its limb:
+    dots' edges nearer the limb are taken for it, as before)."""
+    yy, xx = np.mgrid[0:size, 0:size] + 0.5
+    dots = sum(((xx - (cx + dx)) ** 2 + (yy - (cy - 7.0)) ** 2 <= 25.0).astype(np.float32) for dx in (-6.5, 6.5))
+    return _half_ball(cx, cy, phi_deg, size) * (70.0 / 150.0) + cv2.GaussianBlur(220.0 * dots, (0, 0), 0.8)
+
+
+def test_a_faint_half_beside_bright_prints_shows_its_limb_at_its_own_level():
+    """The body's contrast is its prints' (220): its faint half (70) never reaches 0.8 of it and its limb was not
+    found (a helper's two-tone ball in the colour view: 19 rays of 96 in the median frame); measured at half each
+    ray's own level (``own_levels``, the colour view's), the limb is seen and its centre within 0.05 px RMS of the
+    truth (less a constant)."""
+    rng = np.random.default_rng(5)
+    truths, own, body = [], [], []
+    for k in range(40):
+        cx, cy = 40.0 + rng.uniform(-1, 1), 40.0 + rng.uniform(-1, 1)
+        diff = _dotted_half_ball(cx, cy, 150.0 * math.sin(2 * math.pi * k / 40))
+        component = diff > 0.25 * 70.0
+        assert np.percentile(diff[component], 90) > 180.0  # the prints set the body's contrast
+        truths.append((cx - 0.5, cy - 0.5))
+        own.append(edge_points(diff, component, own_levels=True))
+        body.append(edge_points(diff, component))
+    found, before = outline_centres(np.stack(own)), outline_centres(np.stack(body))
+    assert (np.nan_to_num(before[:, 3]) < LIMB_RAYS / 4).all(), before[:, 3]  # the limb not seen without
+    assert (found[:, 3] >= LIMB_RAYS / 3).all(), found[:, 3]
+    error = found[:, :2] - np.array(truths)
+    assert np.sqrt(np.mean((error - error.mean(axis=0)) ** 2, axis=0)).max() <= 0.05, error
+    assert np.hypot(*error.mean(axis=0)) <= 0.15, error.mean(axis=0)
+    assert abs(np.median(found[:, 2]) - RADIUS_PX) <= 0.5
+
+
+@pytest.mark.parametrize(
+    "colour_noise_px, brightness_noise_px, used", [(0.5, 0.05, "brightness"), (0.05, 0.5, "colour")]
+)
+def test_the_colour_tracks_outline_is_the_sharper_views(colour_noise_px, brightness_noise_px, used):
+    """A colour track's outline (its chroma at half the luma's resolution) against the brightness track's of the same
+    frames: the one nearer one circle kept, its centres in the track's outline columns."""
+    colour = _track(3.0, 0.1, colour_noise_px)
+    brightness = _track(3.0, 0.1, brightness_noise_px).sample(frac=1.0, random_state=1)  # matched by frame
+    colour.attrs["body"] = {"view": "colour"}
+    out = sharper_outline(colour, brightness)
+    facts = out.attrs["body"]["outline_view"]
+    assert facts["used"] == used, facts
+    assert (
+        facts["unexplained_rms_px"][used] < facts["unexplained_rms_px"]["brightness" if used == "colour" else "colour"]
+    )
+    source = brightness.set_index("frame").loc[colour.frame] if used == "brightness" else colour
+    assert np.array_equal(out.outline_x_px.to_numpy(), source.outline_x_px.to_numpy())
+    assert out.x_px.equals(colour.x_px) and out.attrs["body"]["view"] == "colour"
+    assert centre_by_outline(out).attrs["body"]["centre"]["by"] == "outline"

@@ -365,10 +365,9 @@ def track_body(
     """Follow the body through the whole video in one decode pass (columns as :func:`.marker.track_video`, and
     its outline's circle per frame: :data:`~pendulum.tracking.outline.OUTLINE_COLUMNS`, for ``method.track_trial``).
 
-    ``quality`` and ``signal_ratio`` are the body's covered area relative to its median.
-    ``attrs["body"]``: the scene's facts (:meth:`BodyScene.to_dict`). Raises
-    :class:`~pendulum.camera.video.VideoError` when fewer than ``min_usable_fraction`` of the frames are usable.
-    """
+    ``quality``, ``signal_ratio``: the body's covered area over its median; ``attrs["body"]``: the scene's facts
+    (:meth:`BodyScene.to_dict`); ``view``: the colour view's (its outline's faint rays at their own level). Raises
+    :class:`~pendulum.camera.video.VideoError` when fewer than ``min_usable_fraction`` of the frames are usable."""
     if scene is None:
         scene = find_body(path, settings.start_px, view=view)
     background = scene.background
@@ -408,7 +407,8 @@ def track_body(
                 sx, sy, mass, bx, by = soft_centroid(diff, component, scene.silhouette_fraction)
                 if math.isfinite(sx) and math.hypot(sx + x0 - px, sy + y0 - py) <= half:
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
-                    edges = edge_points(diff, component, signed, scene.polarity) + np.float32((x0, y0))  # its outline
+                    edges = edge_points(diff, component, signed, scene.polarity, view is not None)  # its outline
+                    edges += np.float32((x0, y0))
                     bx0, by0, bw, bh = box
                     touches = (
                         (bx0 + x0 <= 1 and x0 == 0)

@@ -22,7 +22,7 @@ from pendulum.tracking.body import BodyError, find_body, track_body
 from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour, track_marker_by_colour
 from pendulum.tracking.look import track_by_look
 from pendulum.tracking.marker import MarkerAbandoned, track_video
-from pendulum.tracking.outline import centre_by_outline
+from pendulum.tracking.outline import centre_by_outline, sharper_outline
 from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
 from pendulum.tracking.timing import at_capture_rate, correct_slips
@@ -203,7 +203,7 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
         colour.attrs["body"]["brightness"] = {"usable": tried["body"], "warning": body.attrs["body"].get("warning")}
         if (in_front := body.attrs["body"].get("in_front")) and "in_front" not in colour.attrs["body"]:
             colour.attrs["body"]["brightness"]["in_front_not_in_colour"] = in_front  # its colour seen there
-        return colour
+        return sharper_outline(colour, body)  # a limb at the luma's resolution, not the chroma's
     return body
 
 

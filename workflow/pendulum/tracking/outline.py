@@ -16,7 +16,9 @@ refitted (algebraic least squares) to the points within :data:`ON_CIRCLE_PX` of 
 refitted (Gauss–Newton) at the clip's median radius, from that circle or, where it holds under half the rays (a
 crescent's may have nearly the radius and not the centre), from a vote, whichever holds more points: points inside
 the circle (a seam, the part that does not stand out) are left out, the limb kept. A frame whose circle holds
-fewer than :data:`MIN_LIMB_SHARE` of the rays did not show its limb.
+fewer than :data:`MIN_LIMB_SHARE` of the rays did not show its limb (a sphere shows at least half of it whatever
+its markings; 24–31 rays of 96 where a band of darker wall hid part of a two-tone ball's navy half, its centre then
+as near the truth as from 32–40).
 
 :func:`centre_by_outline` keeps the outline's centres where the measurement itself says so
 (:func:`pendulum.tracking.path_shape.path_departure` on each track): the centroid's path wanders off one circle about
@@ -47,15 +49,19 @@ from pendulum.tracking.path_shape import MIN_MOTION_PX, MOTION_SIGMAS, path_depa
 LIMB_RAYS = 96
 RAY_STEP_PX = 0.25
 ON_CIRCLE_PX = (1.5, 1.0, 0.75)  # the successive fits' tolerances: |distance from the centre − radius|
-MIN_LIMB_SHARE = 1 / 3  # a sphere shows at least half its limb whatever its markings
+MIN_LIMB_SHARE = 1 / 4  # of the rays on its circle: its limb seen (a sphere shows half, a wall band hides some)
+RADIUS_RAY_SHARE = 1 / 3  # of the rays on its circle: a frame whose free circle's radius counts for the clip's
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 FULL_CONTRAST = 0.8  # of the body's contrast, reached along a ray whose edge is measured
 MIN_SIDE_SHARE = 0.05  # of the pixels looked at, standing out on a side of the scene, for its edge to be sought apart
 MIN_SIDE_CONTRAST = 0.25  # of the body's contrast: a fainter side is the part the silhouette leaves out too
 OTHER_SIDE_REACH = 1.3  # × the silhouette's enclosing radius (+ 2 px): where a dark body's light side is sought
+OWN_LEVEL_PX = 6.0  # a ray's own level: its highest within this far inside its faint edge (px)
+OWN_LEVEL_DEPTH_PX = 3.0  # … and above half of it this far inside its edge: not a sliver's tip
 MIN_POINTS = 8  # edge points a circle is fitted to
 VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every sixth ray's points
 VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 240 circles × 96 points)
+MAX_UNSEEN_SHARE = 0.01  # of a colour track's usable frames, the brightness view's outline may not see
 OUTLINE_GAIN = 0.5
 WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
 _RAYS = (
@@ -122,11 +128,19 @@ def _sides(
 
 
 def edge_points(
-    diff: np.ndarray, component: np.ndarray, signed: np.ndarray | None = None, polarity: str = "both"
+    diff: np.ndarray,
+    component: np.ndarray,
+    signed: np.ndarray | None = None,
+    polarity: str = "both",
+    own_levels: bool = False,
 ) -> np.ndarray:
     """The body's outermost edge along :data:`LIMB_RAYS` rays, (x, y) in ``diff``'s pixels, NaN where a ray finds
     none (module docstring); ``signed``: I − B, D being its size (``polarity`` both) or one side of it, each side's
-    edge then found at half its own contrast (:func:`_sides`), the outer of the two kept."""
+    edge then found at half its own contrast (:func:`_sides`), the outer of the two kept. ``own_levels``: a ray
+    that finds no edge at half the body's contrast is measured at half its own level (:func:`_own_level_edges`):
+    for a view in which nothing but the body stands out, no shadow (the colour view: a two-tone ball's navy half
+    there fainter than its bright prints, its limb otherwise not found: 19 rays of 96 in the median frame of a
+    helper's render, 50 with it)."""
     out = np.full((LIMB_RAYS, 2), np.nan, np.float32)
     points = cv2.findNonZero(component.astype(np.uint8))
     if points is None or len(points) < 5:
@@ -150,14 +164,47 @@ def edge_points(
             free = cv2.remap(side.astype(np.float32), at_x, at_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
             found &= free[:, 0] < level
         rows = np.nonzero(found & (last > outermost))[0]
-        j = last[rows]
-        inside, outside = profile[rows, j], profile[rows, j + 1]
-        distance[rows] = radii[j] + (inside - level) / np.maximum(inside - outside, 1e-6) * RAY_STEP_PX
-        outermost[rows] = j
+        distance[rows] = _crossing(profile, rows, last[rows], level, radii)
+        outermost[rows] = last[rows]
+        if own_levels and not in_disk:  # a part fainter than the body (a navy half beside bright prints): its level
+            rows, j, own = _own_level_edges(profile, contrast, radii, outermost)
+            distance[rows] = _crossing(profile, rows, j, own, radii)
+            outermost[rows] = j
     rows = np.nonzero(outermost >= 0)[0]
     out[rows, 0] = cx + cos[rows, 0] * distance[rows]
     out[rows, 1] = cy + sin[rows, 0] * distance[rows]
     return out
+
+
+def _crossing(profile: np.ndarray, rows: np.ndarray, j: np.ndarray, level, radii: np.ndarray) -> np.ndarray:
+    """Where each ray's profile falls through ``level`` between its samples j (above) and j + 1 (below), in px
+    from the rays' centre (linear interpolation)."""
+    inside, outside = profile[rows, j], profile[rows, j + 1]
+    return radii[j] + (inside - level) / np.maximum(inside - outside, 1e-6) * RAY_STEP_PX
+
+
+def _own_level_edges(
+    profile: np.ndarray, contrast: float, radii: np.ndarray, outermost: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The edge of each ray that found none at half the body's contrast (``outermost`` −1) at half its own level:
+    its profile's highest value within :data:`OWN_LEVEL_PX` inside the outermost sample at half
+    :data:`MIN_SIDE_CONTRAST` of the contrast, where that level is :data:`MIN_SIDE_CONTRAST` of the contrast or
+    more and the profile stays above its half for :data:`OWN_LEVEL_DEPTH_PX` inside the edge (a part of the body,
+    not a sliver's blurred tip). Returns the rays, their samples j above the level, and the levels."""
+    floor = MIN_SIDE_CONTRAST * contrast
+    above = profile >= 0.5 * floor
+    low = radii.size - 1 - np.argmax(above[:, ::-1], axis=1)
+    window = round(OWN_LEVEL_PX / RAY_STEP_PX)
+    samples = np.arange(radii.size)
+    near = (samples >= low[:, None] - window) & (samples <= low[:, None])
+    plateau = np.where(near, profile, 0.0).max(axis=1)
+    level = 0.5 * plateau
+    last = radii.size - 1 - np.argmax((profile >= level[:, None])[:, ::-1], axis=1)
+    depth = round(OWN_LEVEL_DEPTH_PX / RAY_STEP_PX)
+    body = (samples >= last[:, None] - depth) & (samples <= last[:, None])
+    thick = np.where(body, profile >= level[:, None], True).all(axis=1) & (last >= depth)
+    rows = np.nonzero((outermost < 0) & above.any(axis=1) & (plateau >= floor) & thick & (last + 1 < radii.size))[0]
+    return rows, last[rows], level[rows]
 
 
 def _circles(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -248,7 +295,7 @@ def outline_centres(points: np.ndarray) -> np.ndarray:
     radius and not the centre)."""
     x, y = points[..., 0].astype(float), points[..., 1].astype(float)
     free = _circles(x, y)
-    radii = free[free[:, 3] >= MIN_LIMB_SHARE * LIMB_RAYS, 2]
+    radii = free[free[:, 3] >= RADIUS_RAY_SHARE * LIMB_RAYS, 2]
     if radii.size == 0:
         return np.full((len(points), 4), np.nan)
     radius = float(np.median(radii))
@@ -273,6 +320,50 @@ def _creep(document: dict) -> tuple[np.ndarray, float]:
     return np.asarray(creep["start_to_end_px"], float), float(creep["motion_stderr_px"])
 
 
+def _outline_path(track: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
+    """The track with its outline's centres for positions wherever a circle was found, its ``ok`` frames whose
+    outline was not seen flagged ``occluded``; and its ok frames, and those with their outline seen."""
+    ok = (track.flag == "ok").to_numpy()
+    seen = ok & (track.outline_rays.to_numpy(float) >= MIN_LIMB_SHARE * LIMB_RAYS)
+    outline = track.drop(columns=OUTLINE_COLUMNS)
+    found = np.isfinite(track.outline_x_px.to_numpy(float))  # every frame with a circle, flagged or not: one measure
+    outline["x_px"] = np.where(found, track.outline_x_px, track.x_px)
+    outline["y_px"] = np.where(found, track.outline_y_px, track.y_px)
+    outline.loc[ok & ~seen, "flag"] = "occluded"
+    return outline, ok, seen
+
+
+def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFrame:
+    """The colour view's track with the brightness view's outline in place of its own where that is the better
+    pendulum (nearer one circle: :func:`~pendulum.tracking.path_shape.path_departure`'s unexplained RMS) and seen in
+    all but :data:`MAX_UNSEEN_SHARE` of the colour track's usable frames (each frame whose outline is not seen is
+    flagged: a red ball's limb before a hard-edged band was lost in 8 % of them). The colour view's chroma is sampled
+    at half the luma's resolution: a two-tone ball's limb in it was 0.34 px RMS off its path at 1080p and 0.57 px
+    at 550 × 310 (a helper's renders), in brightness 0.11 and 0.06 px, seen in 99.9–100 % of the frames, where the
+    brightness silhouette, fooled by a shadow band, was usable in fewer. ``attrs["body"]["outline_view"]``: which
+    was kept and the figures."""
+    if OUTLINE_COLUMNS[0] not in colour.columns or OUTLINE_COLUMNS[0] not in brightness.columns:
+        return colour
+    other = colour.copy()
+    other[OUTLINE_COLUMNS] = brightness.set_index("frame")[OUTLINE_COLUMNS].reindex(colour.frame).to_numpy()
+    left, seen = {}, {}
+    for name, track in (("colour", colour), ("brightness", other)):
+        path, ok, shown = _outline_path(track)
+        seen[name] = int(shown.sum())
+        enough = ok.any() and shown.sum() >= (MIN_SEEN_SHARE if name == "colour" else 1 - MAX_UNSEEN_SHARE) * ok.sum()
+        left[name] = path_departure(path)[1].get("unexplained_rms_px", math.inf) if enough else math.inf
+    kept = "brightness" if left["brightness"] < left["colour"] else "colour"
+    out = other if kept == "brightness" else colour
+    out.attrs = {**colour.attrs, "body": dict(colour.attrs.get("body") or {})}
+    out.attrs["body"]["outline_view"] = {
+        "used": kept,
+        "usable_frames": int(ok.sum()),  # the colour track's; an outline seen in too few: no figure
+        "seen_frames": seen,
+        "unexplained_rms_px": {name: _rounded(value) for name, value in left.items()},
+    }
+    return out
+
+
 def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
     """The track with its outline's centres where they make the better pendulum (module docstring), without the
     outline columns; ``attrs["body"]["centre"]``: what each gave and which was kept."""
@@ -280,8 +371,7 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         return track
     centroid = track.drop(columns=OUTLINE_COLUMNS)
     centroid.attrs = {**track.attrs, "body": dict(track.attrs.get("body") or {})}
-    ok = (track.flag == "ok").to_numpy()
-    seen = ok & (track.outline_rays.to_numpy(float) >= MIN_LIMB_SHARE * LIMB_RAYS)
+    outline, ok, seen = _outline_path(track)
     facts = {"by": "silhouette", "outline_seen_frames": int(seen.sum())}
     centroid.attrs["body"]["centre"] = facts
     if not ok.any() or seen.sum() < MIN_SEEN_SHARE * ok.sum():
@@ -291,11 +381,6 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         )
         return centroid
     radius = float(np.nanmedian(track.outline_r_px.to_numpy(float)[seen]))
-    outline = centroid.copy()
-    found = np.isfinite(track.outline_x_px.to_numpy(float))  # every frame with a circle, flagged or not: one measure
-    outline["x_px"] = np.where(found, track.outline_x_px, track.x_px)
-    outline["y_px"] = np.where(found, track.outline_y_px, track.y_px)
-    outline.loc[ok & ~seen, "flag"] = "occluded"
     _, by_centroid = path_departure(centroid)
     _, by_outline = path_departure(outline)
     left_centroid = by_centroid.get("unexplained_rms_px", math.inf)
@@ -351,6 +436,8 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
             f"the silhouette's centroid needs the camera to creep by ({sx:+.1f}, {sy:+.1f}) px over the clip, the "
             f"centre of its round outline ({radius:.1f} px in radius) by ({ox:+.1f}, {oy:+.1f}) px"
         )
+    if (track.attrs.get("body") or {}).get("outline_view", {}).get("used") == "brightness":
+        turns += " (its outline in the brightness view, sharper than its colour view's)"
     facts["why"] = f"{evidence}{turns}, measured by its outline's centre" + (
         f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else ""
     )
