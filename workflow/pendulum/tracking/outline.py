@@ -337,11 +337,11 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
     """The colour view's track with the brightness view's outline in place of its own where that is the better
     pendulum (nearer one circle: :func:`~pendulum.tracking.path_shape.path_departure`'s unexplained RMS) and seen in
     all but :data:`MAX_UNSEEN_SHARE` of the colour track's usable frames (each frame whose outline is not seen is
-    flagged: a red ball's limb before a hard-edged band was lost in 8 % of them). The colour view's chroma is sampled
-    at half the luma's resolution: a two-tone ball's limb in it was 0.34 px RMS off its path at 1080p and 0.57 px
-    at 550 × 310 (a helper's renders), in brightness 0.11 and 0.06 px, seen in 99.9–100 % of the frames, where the
-    brightness silhouette, fooled by a shadow band, was usable in fewer. ``attrs["body"]["outline_view"]``: which
-    was kept and the figures."""
+    flagged: a red ball whose brightness nearly matches a band of wall lost its limb in 8 % of them). The colour
+    view's chroma is sampled at half the luma's resolution: a two-tone ball's limb in it was 0.34 px RMS off its path
+    at 1080p and 0.57 px at 550 × 310 (a helper's renders), in brightness 0.11 and 0.06 px, seen in 99.9–100 % of
+    the frames, where the brightness silhouette, fooled by a shadow band, was usable in fewer.
+    ``attrs["body"]["outline_view"]``: which was kept and the figures."""
     if OUTLINE_COLUMNS[0] not in colour.columns or OUTLINE_COLUMNS[0] not in brightness.columns:
         return colour
     other = colour.copy()
