@@ -269,3 +269,62 @@ def test_the_colour_tracks_outline_is_the_sharper_views(colour_noise_px, brightn
     assert np.array_equal(out.outline_x_px.to_numpy(), source.outline_x_px.to_numpy())
     assert out.x_px.equals(colour.x_px) and out.attrs["body"]["view"] == "colour"
     assert centre_by_outline(out).attrs["body"]["centre"]["by"] == "outline"
+
+
+@pytest.mark.parametrize("faint_level, found", [(40.0, False), (70.0, True)])
+def test_a_ray_is_measured_at_its_own_level_only_where_that_is_a_quarter_of_the_bodys_contrast(faint_level, found):
+    """A bright disk (220 levels, 9 px) above a faint lower half-disk (20 px), as a print above a navy half: at 70
+    levels the half's limb is found at its radius; at 40, under a quarter of the body's contrast, it is the view's
+    noise, not a part of the body: no edge. (A ray that crosses the bright part first stops at its edge.)"""
+    yy, xx = np.mgrid[0:80, 0:80] + 0.5
+    r = np.hypot(xx - 40.0, yy - 40.0)
+    bright = np.hypot(xx - 40.0, yy - 29.0) <= 9.0
+    drawn = np.where(bright, 220.0, np.where((r <= 20.0) & (yy > 40.0), faint_level, 0.0))
+    diff = cv2.GaussianBlur(drawn.astype(np.float32), (0, 0), 0.8)
+    points = edge_points(diff, diff > 10.0, own_levels=True)
+    down = np.arange(LIMB_RAYS)[(np.arange(LIMB_RAYS) > LIMB_RAYS * 60 / 360) & (np.arange(LIMB_RAYS) < LIMB_RAYS / 3)]
+    radius = np.hypot(points[down, 0] - 39.5, points[down, 1] - 39.5)
+    if found:
+        assert np.abs(radius - 20.0).max() <= 0.3, radius
+    else:
+        assert np.isnan(radius).all(), radius
+
+
+def _two_views(unseen_share: float, lost_share: float = 0.0) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """A colour track with a noisy outline (0.5 px) and the brightness track of the same frames with a sharp one
+    (0.05 px), its limb not seen (10 rays) in ``unseen_share`` of the frames, and ``lost_share`` more: half lost by
+    its silhouette, half with a circle 15 px off (another thing's: a shadow merged with it)."""
+    colour, brightness = _track(3.0, 0.1, 0.5), _track(3.0, 0.1, 0.05)
+    rng = np.random.default_rng(8)
+    frames = rng.permutation(len(brightness))
+    unseen = frames[: round(unseen_share * len(brightness))]
+    lost = frames[len(unseen) : len(unseen) + round(lost_share * len(brightness))]
+    brightness.loc[unseen, "outline_rays"] = 10.0
+    brightness.loc[lost[::2], "flag"] = "lost"
+    brightness.loc[lost[1::2], ["flag", "outline_rays"]] = ["occluded", 60.0]
+    brightness.loc[lost[1::2], "outline_x_px"] += 15.0
+    colour.attrs["body"] = {"view": "colour"}
+    return colour, brightness
+
+
+@pytest.mark.parametrize("unseen_share, lost_share, used", [(0.02, 0.0, "colour"), (0.004, 0.005, "brightness")])
+def test_the_brightness_outline_is_taken_only_where_it_sees_all_but_one_percent(unseen_share, lost_share, used):
+    """The brightness view's limb is sharper, but each frame in which it is not seen is flagged: over 1 % of the
+    usable frames (a red ball whose brightness nearly matches a band of wall: 8 %), the colour view's is kept. A frame
+    whose brightness silhouette was lost, or whose circle is off the colour silhouette, has no brightness outline."""
+    colour, brightness = _two_views(unseen_share, lost_share)
+    out = sharper_outline(colour, brightness)
+    facts = out.attrs["body"]["outline_view"]
+    assert facts["used"] == used, facts
+    assert facts["usable_frames"] == len(colour)
+    assert facts["seen_frames"]["brightness"] == len(colour) - round((unseen_share + lost_share) * len(colour))
+    if used == "brightness":
+        lost = (brightness.flag != "ok").to_numpy()
+        assert out.outline_x_px[lost].isna().all() and out.outline_x_px[~lost].notna().all()
+        kept = centre_by_outline(out)
+        assert kept.attrs["body"]["centre"]["by"] == "outline", kept.attrs["body"]["centre"]
+        unseen = (brightness.outline_rays < 24).to_numpy() | lost
+        assert (kept.flag[unseen] == "occluded").all() and (kept.flag[~unseen] == "ok").all()
+        assert "in the brightness view" in kept.attrs["body"]["centre"]["why"]
+    else:
+        assert facts["unexplained_rms_px"]["brightness"] is None and out.outline_x_px.equals(colour.outline_x_px)

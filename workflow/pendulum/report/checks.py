@@ -139,6 +139,8 @@ def method_note(method: dict, body: dict) -> str:
             f"; measured by the centre of its round outline ({fmt(centre.get('outline_radius_px'), 3)} px in radius): "
             "only part of the ball stands out, and that part's centroid moves as it turns"
         )
+        if (body.get("outline_view") or {}).get("used") == "brightness":
+            note += " (its outline in the brightness view: the luma's limb is sharper than the chroma's)"
     return note
 
 

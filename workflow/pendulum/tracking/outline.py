@@ -10,7 +10,9 @@ Per frame (:func:`edge_points`): along :data:`LIMB_RAYS` rays from the silhouett
 outermost point where D (the body's difference from the scene, masked to its component grown by 2 px: not its
 thread) falls through half the body's contrast, interpolated between samples :data:`RAY_STEP_PX` apart; where the
 body differs from the scene on both sides (a print's dark squares and its light ones, whether its silhouette takes
-both sides or one), each side's edge at half that side's own contrast (:func:`_sides`), the outer kept. Per clip
+both sides or one), each side's edge at half that side's own contrast (:func:`_sides`), the outer kept; in the
+colour view (no shadow there), a ray that reaches no such edge at half its own level (:func:`_own_level_edges`). Per
+clip
 (:func:`outline_centres`): a circle through each frame's edge points, started from their enclosing circle and
 refitted (algebraic least squares) to the points within :data:`ON_CIRCLE_PX` of it, and then the centre alone
 refitted (Gauss–Newton) at the clip's median radius, from that circle or, where it holds under half the rays (a
@@ -20,21 +22,21 @@ fewer than :data:`MIN_LIMB_SHARE` of the rays did not show its limb (a sphere sh
 its markings; 24–31 rays of 96 where a band of darker wall hid part of a two-tone ball's navy half, its centre then
 as near the truth as from 32–40).
 
-:func:`centre_by_outline` keeps the outline's centres where the measurement itself says so
-(:func:`pendulum.tracking.path_shape.path_departure` on each track): the centroid's path wanders off one circle about
-a fixed or creeping pivot by more than :data:`WANDER_NOISE_RATIO` times its own noise (the RMS beyond the noise,
-√(RMS² − noise²): on a 6 s clip of a clock's bob, 1.2 times, the outline was 8 times worse), and the outline's
-by at most :data:`OUTLINE_GAIN` of that, with a smaller RMS; or the outline's path is the better pendulum on both
-counts, at most :data:`OUTLINE_GAIN` as far off its circle as the centroid's and no noisier, whatever the cause (a
-print's centroid wanders mostly along the swing, where a circle sees only part of it, and is noisier: seed 7031 of
-the body study, off its circle by 1.3 times its noise, its angles 0.054° off the truth, 0.020° by its outline; a
-ball whose outline is half as noisy as its centroid); or the two paths need different creeps of the camera
-(by more than path_shape's own least creep, and five of their standard errors: a wander slow enough to pass for
-a creep), the outline's path no farther off its circle than the centroid's plus its noise. The camera moves both
+A track measured by its colour is offered its brightness view's outline (:func:`sharper_outline`: the luma's limb,
+sharper than the chroma's). :func:`centre_by_outline` keeps the outline's centres where the measurement itself says
+so (:func:`pendulum.tracking.path_shape.path_departure` on each track): the centroid's path wanders off one circle
+about a fixed or creeping pivot by more than :data:`WANDER_NOISE_RATIO` times its own noise (the RMS beyond the
+noise, √(RMS² − noise²): on a 6 s clip of a clock's bob, 1.2 times, the outline was 8 times worse), and the
+outline's by at most :data:`OUTLINE_GAIN` of that, with a smaller RMS; or the outline's path is the better pendulum
+on both counts, at most :data:`OUTLINE_GAIN` as far off its circle as the centroid's and no noisier, whatever the
+cause (a print's centroid wanders mostly along the swing, where a circle sees only part of it, and is noisier: seed
+7031 of the body study, off its circle by 1.3 times its noise, its angles 0.054° off the truth, 0.020° by its
+outline; a ball whose outline is half as noisy as its centroid); or the two paths need different creeps of the
+camera (by more than path_shape's own least creep, and five of their standard errors: a wander slow enough to pass
+for a creep), the outline's path no farther off its circle than the centroid's plus its noise. The camera moves both
 centres alike; only a centre that moves on the body makes them differ, and a sphere's outline cannot. An apple (its
 outline no circle, its centre 2–4 times noisier) and a uniform ball (both centres on one path, equally noisy) keep
-the centroid.
-"""
+the centroid."""
 
 from __future__ import annotations
 
@@ -62,6 +64,7 @@ MIN_POINTS = 8  # edge points a circle is fitted to
 VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every sixth ray's points
 VOTE_FRAMES = 64  # frames voted on at once (memory: 64 × 240 circles × 96 points)
 MAX_UNSEEN_SHARE = 0.01  # of a colour track's usable frames, the brightness view's outline may not see
+OUTLINE_REACH = 0.6  # radii: a brightness circle farther from the colour silhouette's centroid is another thing's
 OUTLINE_GAIN = 0.5
 WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
 _RAYS = (
@@ -345,10 +348,17 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
     if OUTLINE_COLUMNS[0] not in colour.columns or OUTLINE_COLUMNS[0] not in brightness.columns:
         return colour
     other = colour.copy()
-    other[OUTLINE_COLUMNS] = brightness.set_index("frame")[OUTLINE_COLUMNS].reindex(colour.frame).to_numpy()
+    matched = brightness.set_index("frame").reindex(colour.frame)
+    other[OUTLINE_COLUMNS] = matched[OUTLINE_COLUMNS].to_numpy()
+    # its circle where the brightness view followed the body (not lost, held, at the border) and on it: its centre
+    # within OUTLINE_REACH radii of the colour silhouette's (a part's centroid is within half a radius of it)
+    off = np.hypot(other.outline_x_px - colour.x_px, other.outline_y_px - colour.y_px).to_numpy(float)
+    unfit = matched.flag.isin(["lost", "held", "edge"]).to_numpy() | ~(off <= OUTLINE_REACH * other.outline_r_px)
+    other.loc[unfit, OUTLINE_COLUMNS] = np.nan
+    ok = (colour.flag == "ok").to_numpy()
     left, seen = {}, {}
     for name, track in (("colour", colour), ("brightness", other)):
-        path, ok, shown = _outline_path(track)
+        path, _, shown = _outline_path(track)
         seen[name] = int(shown.sum())
         enough = ok.any() and shown.sum() >= (MIN_SEEN_SHARE if name == "colour" else 1 - MAX_UNSEEN_SHARE) * ok.sum()
         left[name] = path_departure(path)[1].get("unexplained_rms_px", math.inf) if enough else math.inf
@@ -437,7 +447,7 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
             f"centre of its round outline ({radius:.1f} px in radius) by ({ox:+.1f}, {oy:+.1f}) px"
         )
     if (track.attrs.get("body") or {}).get("outline_view", {}).get("used") == "brightness":
-        turns += " (its outline in the brightness view, sharper than its colour view's)"
+        turns += " (its outline in the brightness view)"
     facts["why"] = f"{evidence}{turns}, measured by its outline's centre" + (
         f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else ""
     )
