@@ -292,6 +292,10 @@ def test_the_tracking_table_says_briefly_how_a_body_was_tracked():
         "; measured by the centre of its round outline (18.8 px in radius): only part of the ball stands out, and "
         "that part's centroid moves as it turns"
     )
+    by_luma = {**outline, "outline_view": {"used": "brightness"}}  # its outline the brightness view's
+    assert method_note(method, by_luma).endswith(
+        "moves as it turns (its outline in the brightness view: the luma's limb is sharper than the chroma's)"
+    )
     failed = {**method, "tried": {**tried, "marker": "failed: no marker found", "body": "failed: two objects"}}
     assert method_note(failed, {"view": "colour"}) == (
         "tracked the body itself by its colour, usable in 99.7 % of the frames when the method was chosen; its "
