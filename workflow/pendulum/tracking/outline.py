@@ -338,9 +338,11 @@ def _outline_path(track: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray, np.nda
 
 def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFrame:
     """The colour view's track with the brightness view's outline in place of its own where that is the better
-    pendulum (nearer one circle: :func:`~pendulum.tracking.path_shape.path_departure`'s unexplained RMS) and seen in
-    all but :data:`MAX_UNSEEN_SHARE` of the colour track's usable frames (each frame whose outline is not seen is
-    flagged: a red ball whose brightness nearly matches a band of wall lost its limb in 8 % of them). The colour
+    pendulum (at most :data:`OUTLINE_GAIN` as far off one circle: :func:`~pendulum.tracking.path_shape.path_departure`'s
+    unexplained RMS; the real apple clip painted two-tone and turning, 0.45 against 0.48 px, keeps its colour view's
+    and its frames) and seen in all but :data:`MAX_UNSEEN_SHARE` of the colour track's usable frames (each frame whose
+    outline is not seen is flagged: a red ball whose brightness nearly matches a band of wall lost its limb in 8 % of
+    them). The colour
     view's chroma is sampled at half the luma's resolution: a two-tone ball's limb in it was 0.34 px RMS off its path
     at 1080p and 0.57 px at 550 × 310 (a helper's renders), in brightness 0.11 and 0.06 px, seen in 99.9–100 % of
     the frames, where the brightness silhouette, fooled by a shadow band, was usable in fewer.
@@ -362,7 +364,7 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
         seen[name] = int(shown.sum())
         enough = ok.any() and shown.sum() >= (MIN_SEEN_SHARE if name == "colour" else 1 - MAX_UNSEEN_SHARE) * ok.sum()
         left[name] = path_departure(path)[1].get("unexplained_rms_px", math.inf) if enough else math.inf
-    kept = "brightness" if left["brightness"] < left["colour"] else "colour"
+    kept = "brightness" if left["brightness"] <= OUTLINE_GAIN * left["colour"] else "colour"
     out = other if kept == "brightness" else colour
     out.attrs = {**colour.attrs, "body": dict(colour.attrs.get("body") or {})}
     out.attrs["body"]["outline_view"] = {
