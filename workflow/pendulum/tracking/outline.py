@@ -19,8 +19,7 @@ refitted (Gauss–Newton) at the clip's median radius, from that circle or, wher
 crescent's may have nearly the radius and not the centre), from a vote, whichever holds more points: points inside
 the circle (a seam, the part that does not stand out) are left out, the limb kept. A frame whose circle holds
 fewer than :data:`MIN_LIMB_SHARE` of the rays did not show its limb (a sphere shows at least half of it whatever
-its markings; 24–31 rays of 96 where a band of darker wall hid part of a two-tone ball's navy half, its centre then
-as near the truth as from 32–40).
+its markings).
 
 A track measured by its colour is offered its brightness view's outline (:func:`sharper_outline`: the luma's limb,
 sharper than the chroma's). :func:`centre_by_outline` keeps the outline's centres where the measurement itself says
@@ -51,8 +50,8 @@ from pendulum.tracking.path_shape import MIN_MOTION_PX, MOTION_SIGMAS, path_depa
 LIMB_RAYS = 96
 RAY_STEP_PX = 0.25
 ON_CIRCLE_PX = (1.5, 1.0, 0.75)  # the successive fits' tolerances: |distance from the centre − radius|
-MIN_LIMB_SHARE = 1 / 4  # of the rays on its circle: its limb seen (a sphere shows half, a wall band hides some)
-RADIUS_RAY_SHARE = 1 / 3  # of the rays on its circle: a frame whose free circle's radius counts for the clip's
+MIN_LIMB_SHARE = 1 / 3  # of the rays on its circle: its limb seen (a sphere shows at least half of it)
+CONFIRMED_LIMB_SHARE = 1 / 4  # … a brightness circle where the colour view's silhouette confirms its place
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 FULL_CONTRAST = 0.8  # of the body's contrast, reached along a ray whose edge is measured
 MIN_SIDE_SHARE = 0.05  # of the pixels looked at, standing out on a side of the scene, for its edge to be sought apart
@@ -298,7 +297,7 @@ def outline_centres(points: np.ndarray) -> np.ndarray:
     radius and not the centre)."""
     x, y = points[..., 0].astype(float), points[..., 1].astype(float)
     free = _circles(x, y)
-    radii = free[free[:, 3] >= RADIUS_RAY_SHARE * LIMB_RAYS, 2]
+    radii = free[free[:, 3] >= MIN_LIMB_SHARE * LIMB_RAYS, 2]
     if radii.size == 0:
         return np.full((len(points), 4), np.nan)
     radius = float(np.median(radii))
@@ -323,11 +322,12 @@ def _creep(document: dict) -> tuple[np.ndarray, float]:
     return np.asarray(creep["start_to_end_px"], float), float(creep["motion_stderr_px"])
 
 
-def _outline_path(track: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
+def _outline_path(track: pd.DataFrame, least_rays: float) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """The track with its outline's centres for positions wherever a circle was found, its ``ok`` frames whose
-    outline was not seen flagged ``occluded``; and its ok frames, and those with their outline seen."""
+    outline was not seen (fewer than ``least_rays`` on its circle) flagged ``occluded``; and its ok frames, and
+    those with their outline seen."""
     ok = (track.flag == "ok").to_numpy()
-    seen = ok & (track.outline_rays.to_numpy(float) >= MIN_LIMB_SHARE * LIMB_RAYS)
+    seen = ok & (track.outline_rays.to_numpy(float) >= least_rays)
     outline = track.drop(columns=OUTLINE_COLUMNS)
     found = np.isfinite(track.outline_x_px.to_numpy(float))  # every frame with a circle, flagged or not: one measure
     outline["x_px"] = np.where(found, track.outline_x_px, track.x_px)
@@ -338,15 +338,19 @@ def _outline_path(track: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray, np.nda
 
 def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFrame:
     """The colour view's track with the brightness view's outline in place of its own where that is the better
-    pendulum (at most :data:`OUTLINE_GAIN` as far off one circle: :func:`~pendulum.tracking.path_shape.path_departure`'s
-    unexplained RMS; the real apple clip painted two-tone and turning, 0.45 against 0.48 px, keeps its colour view's
-    and its frames) and seen in all but :data:`MAX_UNSEEN_SHARE` of the colour track's usable frames (each frame whose
-    outline is not seen is flagged: a red ball whose brightness nearly matches a band of wall lost its limb in 8 % of
-    them). The colour
-    view's chroma is sampled at half the luma's resolution: a two-tone ball's limb in it was 0.34 px RMS off its path
-    at 1080p and 0.57 px at 550 × 310 (a helper's renders), in brightness 0.11 and 0.06 px, seen in 99.9–100 % of
-    the frames, where the brightness silhouette, fooled by a shadow band, was usable in fewer.
-    ``attrs["body"]["outline_view"]``: which was kept and the figures."""
+    pendulum, at most :data:`OUTLINE_GAIN` as far off one circle (:func:`~pendulum.tracking.path_shape.path_departure`'s
+    unexplained RMS: the real apple clip painted two-tone and turning, 0.45 against 0.48 px, keeps its colour
+    view's), and seen in all but :data:`MAX_UNSEEN_SHARE` of the colour track's usable frames (each frame whose
+    outline is not seen is flagged: a red ball whose brightness nearly matches a band of wall lost its limb in 8 %).
+
+    The colour view's chroma is sampled at half the luma's resolution: a two-tone ball's limb in it was 0.34 px RMS
+    off its path at 1080p and 0.57 px at 550 × 310 (a helper's renders), in brightness 0.11 and 0.06 px, where the
+    brightness silhouette, fooled by a shadow band, was usable in fewer frames. A brightness circle counts where that
+    view followed the body (not ``lost``, ``held`` or at the ``edge``) within :data:`OUTLINE_REACH` radii of the
+    colour silhouette's centroid, from :data:`CONFIRMED_LIMB_SHARE` of the rays: where the band darkens the wall
+    behind part of the navy half, 24–31 of 96 remain, their centres as near the truth as from 32–40 (0.12 ± 0.06 px
+    against 0.09 ± 0.06 px at 550 × 310). ``attrs["body"]["outline_view"]``: which was kept, the figures, and the
+    ``least_rays`` a frame's limb then needs."""
     if OUTLINE_COLUMNS[0] not in colour.columns or OUTLINE_COLUMNS[0] not in brightness.columns:
         return colour
     other = colour.copy()
@@ -359,8 +363,9 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
     other.loc[unfit, OUTLINE_COLUMNS] = np.nan
     ok = (colour.flag == "ok").to_numpy()
     left, seen = {}, {}
+    least = {"colour": MIN_LIMB_SHARE * LIMB_RAYS, "brightness": CONFIRMED_LIMB_SHARE * LIMB_RAYS}
     for name, track in (("colour", colour), ("brightness", other)):
-        path, _, shown = _outline_path(track)
+        path, _, shown = _outline_path(track, least[name])
         seen[name] = int(shown.sum())
         enough = ok.any() and shown.sum() >= (MIN_SEEN_SHARE if name == "colour" else 1 - MAX_UNSEEN_SHARE) * ok.sum()
         left[name] = path_departure(path)[1].get("unexplained_rms_px", math.inf) if enough else math.inf
@@ -372,6 +377,7 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
         "usable_frames": int(ok.sum()),  # the colour track's; an outline seen in too few: no figure
         "seen_frames": seen,
         "unexplained_rms_px": {name: _rounded(value) for name, value in left.items()},
+        "least_rays": least[kept],  # on a frame's circle for its limb to be seen (centre_by_outline)
     }
     return out
 
@@ -383,7 +389,8 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         return track
     centroid = track.drop(columns=OUTLINE_COLUMNS)
     centroid.attrs = {**track.attrs, "body": dict(track.attrs.get("body") or {})}
-    outline, ok, seen = _outline_path(track)
+    least_rays = (track.attrs.get("body") or {}).get("outline_view", {}).get("least_rays", MIN_LIMB_SHARE * LIMB_RAYS)
+    outline, ok, seen = _outline_path(track, least_rays)
     facts = {"by": "silhouette", "outline_seen_frames": int(seen.sum())}
     centroid.attrs["body"]["centre"] = facts
     if not ok.any() or seen.sum() < MIN_SEEN_SHARE * ok.sum():
