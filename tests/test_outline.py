@@ -308,9 +308,9 @@ def _two_views(unseen_share: float, lost_share: float = 0.0) -> tuple[pd.DataFra
     return colour, brightness
 
 
-@pytest.mark.parametrize("unseen_share, lost_share, used", [(0.02, 0.0, "colour"), (0.004, 0.005, "brightness")])
-def test_the_brightness_outline_is_taken_only_where_it_sees_all_but_one_percent(unseen_share, lost_share, used):
-    """The brightness view's limb is sharper, but each frame in which it is not seen is flagged: over 1 % of the
+@pytest.mark.parametrize("unseen_share, lost_share, used", [(0.04, 0.0, "colour"), (0.01, 0.01, "brightness")])
+def test_the_brightness_outline_is_taken_only_where_it_sees_all_but_a_fortieth(unseen_share, lost_share, used):
+    """The brightness view's limb is sharper, but each frame in which it is not seen is flagged: over 2.5 % of the
     usable frames (a red ball whose brightness nearly matches a band of wall: 8 %), the colour view's is kept. A frame
     whose brightness silhouette was lost, or whose circle is off the colour silhouette, has no brightness outline."""
     colour, brightness = _two_views(unseen_share, lost_share)
