@@ -320,6 +320,7 @@ def test_a_long_clip_of_another_pendulum_is_left_out_and_the_rest_still_share_th
     assert math.hypot(circle.pivot_x_px - 640.0, circle.pivot_y_px - 70.0) < 0.2 and circle.rms_px < 0.1
     geometry = estimate_rig_geometry(tracks, vertical_deg=0.0)
     assert geometry["shared"] and geometry["warnings"] == [], geometry["warnings"]
+    assert "not used" not in geometry["pivot_source"]
     own, why = trial_geometry(tracks["apple"], geometry, vertical_deg=0.0)
     assert "its own track" in why and math.hypot(own["pivot_px"][0] - 301.0, own["pivot_px"][1] + 338.0) < 3.0
 
@@ -369,6 +370,7 @@ def test_clips_filmed_from_different_places_do_not_share_a_pivot(seed):
     }
     geometry = estimate_rig_geometry(tracks, vertical_deg=0.0)
     assert not geometry["shared"] and "do not share one pivot" in geometry["warnings"][0], geometry["warnings"]
+    assert "not used" in geometry["pivot_source"]  # the pooled circle's pivot, kept for the record, said unused
     for (name, track), pivot in zip(tracks.items(), pivots, strict=True):
         own, why = trial_geometry(track, geometry, vertical_deg=0.0)
         assert "do not share one pivot" in why

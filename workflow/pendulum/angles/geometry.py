@@ -444,7 +444,9 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         result["shared"] = unshared is None
         if unshared:
             result["warnings"].append(f"{unshared}; each trial's pivot is estimated from its own track")
-        result["pivot_source"] = f"estimated: circle fitted to the pooled marker paths of {len(tracks)} trial(s)"
+        result["pivot_source"] = f"estimated: circle fitted to the pooled marker paths of {len(tracks)} trial(s)" + (
+            "; not used: the trials share no pivot, each has its own (its angles JSON)" if unshared else ""
+        )
         result["circle"] = asdict(circle)
         result["pivot_covariance_px2"] = circle.pivot_covariance_px2
     else:
