@@ -11,9 +11,8 @@ outermost point where D (the body's difference from the scene, masked to its com
 thread) falls through half the body's contrast, interpolated between samples :data:`RAY_STEP_PX` apart; where the
 body differs from the scene on both sides (a print's dark squares and its light ones, whether its silhouette takes
 both sides or one), each side's edge at half that side's own contrast (:func:`_sides`), the outer kept; in the
-colour view (no shadow there), a ray that reaches no such edge at half its own level (:func:`_own_level_edges`). Per
-clip
-(:func:`outline_centres`): a circle through each frame's edge points, started from their enclosing circle and
+colour view (no shadow there), a ray that reaches no such edge at half its own level (:func:`_own_level_edges`).
+Per clip (:func:`outline_centres`): a circle through each frame's edge points, started from their enclosing circle and
 refitted (algebraic least squares) to the points within :data:`ON_CIRCLE_PX` of it, and then the centre alone
 refitted (Gauss–Newton) at the clip's median radius, from that circle or, where it holds under half the rays (a
 crescent's may have nearly the radius and not the centre), from a vote, whichever holds more points: points inside
