@@ -223,9 +223,10 @@ def test_where_the_brightness_silhouette_fails_the_colour_view_is_tried_without_
     assert np.sqrt(np.mean(error**2)) <= 0.3
 
 
-def _decided(monkeypatch, brightness_ok: int, colour_ok: int):
+def _decided(monkeypatch, brightness_ok: int, colour_ok: int, wall_gain: float | None = None):
     """What ``method._by_colour`` keeps of a brightness track with ``brightness_ok`` of 1,000 frames usable (a 10 %
-    smaller silhouette mid-swing, no warning) and a colour one with ``colour_ok`` (17 % smaller, warned of)."""
+    smaller silhouette mid-swing, no warning; its least ``wall_gain`` if given) and a colour one with ``colour_ok``
+    (17 % smaller, warned of)."""
     import pandas as pd
 
     from pendulum.tracking import method
@@ -237,6 +238,8 @@ def _decided(monkeypatch, brightness_ok: int, colour_ok: int):
         return frame
 
     brightness = track(brightness_ok, 0.895, None)
+    if wall_gain is not None:
+        brightness.attrs["body"]["wall_gain"] = wall_gain
     colour = track(colour_ok, 0.834, "in its colour view, the body's silhouette is 17 % smaller mid-swing ...")
     monkeypatch.setattr(method, "track_by_colour", lambda path, settings, luma, progress=None: (colour, {}))
     tried = {"body": method._usable(brightness)}
@@ -254,6 +257,20 @@ def test_the_colour_view_is_kept_where_it_is_usable_in_more_frames_whatever_its_
     assert tried["body_by_colour"] == "usable in 99.5 % of the frames"
     assert _decided(monkeypatch, brightness_ok=950, colour_ok=950)[0] == "brightness"
     assert _decided(monkeypatch, brightness_ok=990, colour_ok=960)[0] == "brightness"
+
+
+def test_a_brightness_silhouette_scaled_before_a_darker_band_leaves_the_track_to_a_colour_view_usable_in_95_percent(
+    monkeypatch,
+):
+    """A brightness track scaled by the wall's gain where the body passed a darker band (``wall_gain`` under 1) has
+    its colour view tried even with every frame usable, and kept where it is usable in 95 % of the frames: the
+    band leaves the body's colour as it was (the real clip made a two-tone ball before the band: its brightness
+    centroid 0.14–0.19° off against 0.06–0.07° in colour, both ≥ 99.8 % usable). Without the gain, a track with
+    every frame usable keeps its brightness; with it, a colour view under 95 % does not take over."""
+    assert _decided(monkeypatch, brightness_ok=1000, colour_ok=960, wall_gain=0.4)[0] == "colour"
+    assert _decided(monkeypatch, brightness_ok=1000, colour_ok=960)[0] == "brightness"
+    assert _decided(monkeypatch, brightness_ok=1000, colour_ok=940, wall_gain=0.4)[0] == "brightness"
+    assert _decided(monkeypatch, brightness_ok=1000, colour_ok=1000, wall_gain=1.0)[0] == "brightness"
 
 
 def test_the_frame_s_white_balance_is_the_static_scene_s_however_much_of_it_the_body_covers():

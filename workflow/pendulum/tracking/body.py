@@ -30,7 +30,9 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    or, where that differs from the median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by
    more than :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the
    body's contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
-   again above ¼ of its own contrast there.
+   again above ¼ of its own contrast there. A one-sided body's I − B is divided by the wall's gain
+   (``body_scene.wall_gain``: the share of its contrast the body keeps before each part of the wall): the
+   difference it would make before the light wall, so that its part before a darker band stays in its silhouette.
 3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
    contrast C_f fixed for the clip (``body_scene.silhouette_fraction``: ¼, or the Otsu split of a
    two-tone body), filled to their convex hull (a part that hardly differs from the wall, a bright half before
@@ -68,7 +70,6 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field, replace
-from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -76,11 +77,14 @@ import pandas as pd
 
 from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.body_parts import (
+    CONTRAST_FRACTION,
     MAX_AREA_RATIO,
     MIN_AREA_RATIO,
+    Seen,
     body_close_size,
     body_component,
     body_core,
+    body_measure,
     body_reach,
     open_size,
     own_centre,
@@ -97,9 +101,9 @@ from pendulum.tracking.body_scene import (
     rest_place_scene,
     sample_clip,
     scene_states,
-    silhouette_fraction,
     soft_centroid,
     unseen_behind,
+    wall_gain,
 )
 from pendulum.tracking.checks import flag_jumps, held_still_runs, robust_outliers
 from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
@@ -122,7 +126,6 @@ SCENE_SAMPLES = 60  # frames spread over the clip for the static scene
 EDGE_REACH = 1.2  # in view or not: what lies within this many inner radii of its thickest point (not its rod)
 SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the previous one showed
 NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
-CONTRAST_FRACTION = 0.25  # ... and a quarter of the body's own contrast (a soft shadow stays below)
 FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
 MOVING_PX = 0.3  # the body moves (px per frame): its area there is its own (MAX_AREA_RATIO, MIN_AREA_RATIO)
@@ -161,6 +164,7 @@ class BodyScene:
     one_sided: str | None = None  # the side of the scene the first-frame body lies on (body_polarity)
     unseen: np.ndarray | None = field(default=None, repr=False, compare=False)  # pixels no sample shows clear
     reach_px: float | None = None  # its silhouette's farthest pixel from its centre (body_parts.body_reach)
+    first_grey: tuple | None = None  # medians of the wall behind the body and of the body in the first frame
 
     def to_dict(self) -> dict:
         return {
@@ -243,11 +247,11 @@ def find_body(
     near = None if start_px is None else (float(start_px[0]), float(start_px[1]))
     close_px = close_size(background.shape)
 
-    def measured(polarity: str) -> tuple[_Seen | None, _Seen | None]:
+    def measured(polarity: str) -> tuple[Seen | None, Seen | None]:
         """The body in the first frame, and as most of the clip shows it: of samples spread over the clip, the
         body in full view of median area, where the first frame's is out of view in part or not of its size
         (within :data:`TYPICAL_AREA_RATIO`: a hand holding it before the release)."""
-        first = _body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near)
+        first = body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near)
         if first is None or first.component is None or near is not None:
             return first, first
         seen = []
@@ -259,7 +263,7 @@ def find_body(
             y0, y1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, background.shape[0])
             x0, x1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, background.shape[1])
             diff = one_sided(images[k][y0:y1, x0:x1] - background[y0:y1, x0:x1], polarity)
-            body = _body_measure(diff, threshold, close_px, None)
+            body = body_measure(diff, threshold, close_px, None)
             if body is None or body.component is None:
                 continue
             if not touches_border(body.component, (y0, y1, x0, x1), background.shape):  # in full view
@@ -311,6 +315,7 @@ def find_body(
         polarity=polarity,
         one_sided=side,  # the vote above a quarter of the body's contrast, not its soft shadow nor the noise
         reach_px=body_reach(whole.component),
+        first_grey=(float(np.median(background[first.component])), float(np.median(images[0][first.component]))),
         # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
         # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body
         rest_place_clear=None
@@ -321,42 +326,6 @@ def find_body(
             < CLEAR_REST_PLACE * whole.component.sum()
         ),
     )
-
-
-class _Seen(NamedTuple):
-    """The body in one frame: soft centre, contrast, silhouette fraction, pixels (None: a thread or rod only)."""
-
-    x: float
-    y: float
-    contrast: float
-    fraction: float
-    component: np.ndarray | None
-    inner_radius_px: float
-
-
-def _body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> _Seen | None:
-    """The body in one frame's difference from the scene (:class:`_Seen`); None when nothing moves.
-
-    The heaviest moving object (or the one at ``near``), again above a quarter of its own contrast (a soft
-    shadow beside it falls away), then opened to cut its thread (the part at its thickest point kept)."""
-    component, _ = body_component(diff, threshold, 3, close_px, near=near)
-    if component is None:
-        return None
-    contrast = float(np.percentile(diff[component], 90))
-    threshold = max(threshold, CONTRAST_FRACTION * contrast)
-    strong, _ = body_component(diff, threshold, 3, close_px, near=near)
-    component = component if strong is None else strong
-    depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
-    inner, (ty, tx) = float(depth.max()), np.unravel_index(int(np.argmax(depth)), depth.shape)
-    close_px = max(close_px, body_close_size(inner))
-    # of its parts after the opening, the one at ``near``, else at its thickest point (its centre may be on a rod)
-    opened, _ = body_component(diff, threshold, open_size(inner), close_px, near=near or (float(tx), float(ty)))
-    if opened is None:
-        return _Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
-    inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
-    fraction = silhouette_fraction(diff[opened])
-    x, y, _, _, _ = soft_centroid(diff, opened, fraction)
-    return _Seen(x, y, contrast, fraction, opened, inner)
 
 
 def track_body(
@@ -382,6 +351,11 @@ def track_body(
     vx, vy, lost_run = 0.0, 0.0, 0
     rows, binary, outlines, report = [], [], [], {}
     seen = SilhouetteCounts(background.shape, scene.radius_px)
+    gain = (
+        None
+        if view is not None or scene.first_grey is None
+        else wall_gain(background, scene.polarity, *scene.first_grey)
+    )
     for index, time_s, image in iter_luma(path, report=report, view=view):
         half = reach + 2.0 * math.hypot(vx, vy) + 6 * lost_run
         px, py = x_prev + vx, y_prev + vy
@@ -392,6 +366,8 @@ def track_body(
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             signed -= border_offset(signed)
+            if gain is not None:  # before a darker band of wall: the difference it would make before its first place
+                signed /= gain[y0:y1, x0:x1]
             diff = one_sided(signed, scene.polarity)
             component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
@@ -476,6 +452,13 @@ def track_body(
     n_ok = int(counts.get("ok", 0))
     table.attrs["video"] = report
     table.attrs["body"] = {**scene.to_dict(), **({"in_front": in_front} if in_front["hidden_px"] else {})}
+    if gain is not None and usable.any():  # the least gain of the wall behind the body where it was usable
+        side = 2 * int(scene.radius_px) + 1
+        least = cv2.erode(gain, np.ones((side, side), np.uint8))[
+            np.round(y[usable]).astype(int), np.round(x[usable]).astype(int)
+        ]
+        if least.min() < 1.0:
+            table.attrs["body"]["wall_gain"] = round(float(least.min()), 3)
     fill_limit = max(3 * scene.noise_grey, UNSEEN_FILL_SHARE * contrast)
     unseen_facts, refusal = (
         unseen_behind(background, scene.unseen, np.column_stack([x, y])[usable], scene.radius_px, fill_limit)

@@ -1,15 +1,23 @@
 """The body's pixels in one frame (:mod:`pendulum.tracking.body`): the moving component to take for it, whether it
-touches the frame's border, its core without a rod, and its own centre where it meets something else.
+touches the frame's border, its core without a rod, its own centre where it meets something else, and the body as a
+scene's first frame shows it (:func:`body_measure`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
-from pendulum.tracking.body_scene import MIN_BODY_AREA_PX, components
+from pendulum.tracking.body_scene import (
+    MIN_BODY_AREA_PX,
+    STRONG_FRACTION,
+    components,
+    silhouette_fraction,
+    soft_centroid,
+)
 
 REACH_SLACK, REACH_MARGIN_PX = 1.3, 4.0  # a part joined to the body lies within this × its reach (+ this) of it
 MAX_AREA_RATIO, MIN_AREA_RATIO = 1.5, 0.5  # the body with something else, or a part of it: its area's range
@@ -122,3 +130,42 @@ def body_close_size(inner_radius_px: float) -> int:
 def open_size(inner_radius_px: float) -> int:
     """Opening disk (odd, px) that removes strings and thin rods but keeps the body: ~⅔ of its inner radius."""
     return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
+
+
+CONTRAST_FRACTION = 0.25  # a body pixel differs by more than this share of its own contrast (a soft shadow less)
+
+
+class Seen(NamedTuple):
+    """The body in one frame: soft centre, contrast, silhouette fraction, pixels (None: a thread or rod only)."""
+
+    x: float
+    y: float
+    contrast: float
+    fraction: float
+    component: np.ndarray | None
+    inner_radius_px: float
+
+
+def body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> Seen | None:
+    """The body in one frame's difference from the scene (:class:`Seen`); None when nothing moves.
+
+    The heaviest moving object (or the one at ``near``), again above a quarter of its own contrast (a soft
+    shadow beside it falls away), then opened to cut its thread (the part at its thickest point kept)."""
+    component, _ = body_component(diff, threshold, 3, close_px, near=near)
+    if component is None:
+        return None
+    contrast = float(np.percentile(diff[component], 90))
+    threshold = max(threshold, CONTRAST_FRACTION * contrast)
+    strong, _ = body_component(diff, threshold, 3, close_px, near=near)
+    component = component if strong is None else strong
+    depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
+    inner, (ty, tx) = float(depth.max()), np.unravel_index(int(np.argmax(depth)), depth.shape)
+    close_px = max(close_px, body_close_size(inner))
+    # of its parts after the opening, the one at ``near``, else at its thickest point (its centre may be on a rod)
+    opened, _ = body_component(diff, threshold, open_size(inner), close_px, near=near or (float(tx), float(ty)))
+    if opened is None:
+        return Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
+    inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
+    fraction = silhouette_fraction(diff[opened])
+    x, y, _, _, _ = soft_centroid(diff, opened, fraction)
+    return Seen(x, y, contrast, fraction, opened, inner)

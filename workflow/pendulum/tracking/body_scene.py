@@ -476,3 +476,25 @@ def filled_warning(ratio: float) -> str:
         f"{abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} mid-swing than at the ends of its "
         "swing: what is followed may not be the body alone (a rod, a ghost of it), and its positions may be biased"
     )
+
+
+WALL_GAIN_KNEE = 0.8  # a wall where the body keeps this share of its contrast or more is left as it is
+MIN_WALL_GAIN = 0.2  # a wall nearer the body's grey than this: its differences amplified at most 1 / this
+
+
+def wall_gain(background: np.ndarray, polarity: str, wall_grey: float, body_grey: float) -> np.ndarray | None:
+    """Per pixel, the share of a one-sided body's contrast it keeps before that part of the wall, where that is
+    under :data:`WALL_GAIN_KNEE` of its full contrast (a band of shadow on a light wall behind a dark body):
+    g = clip(E / (k E₀), g_min, 1), E = ±(B − b) the contrast of the body's grey b (its median in the first frame)
+    before the wall B, E₀ the larger of its contrast before the wall behind it there (``wall_grey``) and E's median
+    over the frame (its first place may lie in the band). I − B divided by g is the difference the body would make
+    before the light wall: its silhouette keeps its parts before a darker band (its centroid no longer moving away
+    from the band). None where g is 1 everywhere, or for a body both lighter and darker than the wall (polarity
+    ``both``)."""
+    sign = {"dark": 1.0, "bright": -1.0}.get(polarity)
+    if sign is None or not sign * (wall_grey - body_grey) > 0:
+        return None
+    expected = sign * (background - body_grey)
+    full = max(sign * (wall_grey - body_grey), float(np.median(expected)))
+    gain = np.clip(expected / (WALL_GAIN_KNEE * full), MIN_WALL_GAIN, 1.0)
+    return gain.astype(np.float32) if gain.min() < 1.0 else None

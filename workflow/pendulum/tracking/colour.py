@@ -171,10 +171,12 @@ def _body_contrasts(samples, difference: np.ndarray, luma_track: pd.DataFrame) -
 
 def brightness_depends_on_wall(track: pd.DataFrame) -> bool:
     """Whether a brightness silhouette's track shows it changing with the wall behind the body: more than
-    :data:`WALL_DEPENDENT_SHARE` of its frames ``occluded`` or ``lost``, or a warning that it is smaller or larger
-    mid-swing."""
+    :data:`WALL_DEPENDENT_SHARE` of its frames ``occluded`` or ``lost``, a warning that it is smaller or larger
+    mid-swing, or its differences scaled by the wall's gain where it passed a darker part of the wall
+    (``wall_gain`` under 1: :func:`pendulum.tracking.body_scene.wall_gain`)."""
     unseen = float(track.flag.isin(["occluded", "lost"]).mean()) if len(track) else 0.0
-    return unseen > WALL_DEPENDENT_SHARE or bool(track.attrs.get("body", {}).get("warning"))
+    body = track.attrs.get("body", {})
+    return unseen > WALL_DEPENDENT_SHARE or bool(body.get("warning")) or body.get("wall_gain", 1.0) < 1.0
 
 
 def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame | None, progress=None):
