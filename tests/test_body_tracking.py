@@ -1178,26 +1178,28 @@ def test_a_camera_in_the_hand_is_steadied_from_the_still_scene(tmp_path):
 
 
 def test_the_walls_gain_is_the_share_of_its_contrast_a_one_sided_body_keeps_before_a_darker_band():
-    """A dark body (grey 80) first seen before a light wall (180, its contrast 100) keeps (110 − 80) / 100 of it
-    before a band of wall at 110: the gain there is that over the knee (0.8), 1 on the light wall and on a wall
-    within the knee (170); the same map when its first place lies in the band (the light wall, the frame's
-    median, is the full contrast); mirrored for a bright body before a lighter band; None for a plain wall and for
-    a body both lighter and darker than the wall; never below the floor (a band of the body's own grey)."""
+    """A dark body (grey 80) before a light wall (180: its contrast 100) keeps (110 − 80) / 100 of it before a band
+    of wall at 110: the gain there is that over the knee (0.8), 1 on the light wall and on a wall within the knee
+    (170); the same map when its first place lies in the band (the wall behind its swing is the light one);
+    mirrored for a bright body before a lighter band; None for a plain wall and for a body both lighter and darker
+    than the wall, or lighter than the wall it is called darker than; never below the floor (a band of the body's
+    own grey)."""
     from pendulum.tracking.body_scene import MIN_WALL_GAIN, WALL_GAIN_KNEE, wall_gain
 
     wall = np.full((40, 100), 180.0, np.float32)
     wall[:, 40:50] = 110.0  # the band
     wall[:, 60:62] = 170.0  # within the knee
     wall[:, 70:72] = 80.0  # the body's own grey
-    gain = wall_gain(wall, "dark", 180.0, 80.0)
+    gain = wall_gain(wall, "dark", 80.0, 180.0, 180.0)
     assert gain[0, 45] == pytest.approx(30.0 / 100.0 / WALL_GAIN_KNEE)
     assert gain[0, 10] == gain[0, 61] == 1.0
     assert gain[0, 71] == pytest.approx(MIN_WALL_GAIN)
-    np.testing.assert_allclose(wall_gain(wall, "dark", 110.0, 80.0), gain)  # first seen in the band
-    np.testing.assert_allclose(wall_gain(255.0 - wall, "bright", 75.0, 175.0), gain)
-    assert wall_gain(wall, "both", 180.0, 80.0) is None
-    assert wall_gain(wall, "dark", 180.0, 200.0) is None  # a body lighter than the wall it was called darker than
-    assert wall_gain(np.full((40, 100), 180.0, np.float32), "dark", 180.0, 80.0) is None
+    np.testing.assert_allclose(wall_gain(wall, "dark", 80.0, 110.0, 180.0), gain)  # first seen in the band
+    np.testing.assert_allclose(wall_gain(wall, "dark", 80.0, 180.0, math.nan), gain)  # no swing seen
+    np.testing.assert_allclose(wall_gain(255.0 - wall, "bright", 175.0, 75.0, 75.0), gain)
+    assert wall_gain(wall, "both", 80.0, 180.0, 180.0) is None
+    assert wall_gain(wall, "dark", 200.0, 180.0, 180.0) is None
+    assert wall_gain(np.full((40, 100), 180.0, np.float32), "dark", 80.0, 180.0, 180.0) is None
 
 
 # A dark band of wall across the swing at its rest place (a shelf's shadow), the body there keeping 15–35 grey
@@ -1226,10 +1228,10 @@ def _band_across_the_swing(seed: int, directory):
 
 @pytest.mark.slow
 def test_a_body_crossing_a_dark_band_of_wall_keeps_its_silhouette(tmp_path):
-    """Before a band that leaves the body a fifth of its contrast, its silhouette lost its part over the band, its
-    centroid moved away from it and the frames there were flagged: 2 of these 8 scenes were ≥ 95 % usable and
-    within 0.5 px RMS of the drawn centre in the band (its offset off the band taken out; 84.6–100 % usable, 0.12–2.8
-    px). With the wall's gain (``body_scene.wall_gain``): at least 7 of 8 (8 of 8 when written, 96.7–100 %,
+    """Before a band that leaves the body 15–35 grey levels of its contrast, its silhouette lost its part over the
+    band, its centroid moved away from it and the frames there were flagged: 2 of these 8 scenes were ≥ 95 % usable
+    and within 0.5 px RMS of the drawn centre in the band (its offset off the band taken out; 84.6–100 % usable,
+    0.12–2.8 px). With the wall's gain (``body_scene.wall_gain``): at least 7 of 8 (8 of 8 when written, 100 % usable,
     0.09–0.38 px; 12 of 12 development scenes)."""
     from pendulum.tracking.body import track_body
     from pendulum.tracking.settings import TrackerSettings

@@ -262,15 +262,19 @@ def test_the_colour_view_is_kept_where_it_is_usable_in_more_frames_whatever_its_
 def test_a_brightness_silhouette_scaled_before_a_darker_band_leaves_the_track_to_a_colour_view_usable_in_95_percent(
     monkeypatch,
 ):
-    """A brightness track scaled by the wall's gain where the body passed a darker band (``wall_gain`` under 1) has
+    """A brightness track scaled by the wall's gain where the body passed a darker band (``wall_gain`` under 0.8) has
     its colour view tried even with every frame usable, and kept where it is usable in 95 % of the frames: the
     band leaves the body's colour as it was (the real clip made a two-tone ball before the band: its brightness
     centroid 0.14–0.19° off against 0.06–0.07° in colour, both ≥ 99.8 % usable). Without the gain, a track with
-    every frame usable keeps its brightness; with it, a colour view under 95 % does not take over."""
+    every frame usable keeps its brightness, and so does one whose gain was hardly under 1 (a vignette: 0.98);
+    with it, a colour view under 95 % does not take over."""
+    from pendulum.tracking.colour import WALL_DEPENDENT_GAIN
+
     assert _decided(monkeypatch, brightness_ok=1000, colour_ok=960, wall_gain=0.4)[0] == "colour"
+    assert _decided(monkeypatch, brightness_ok=1000, colour_ok=960, wall_gain=WALL_DEPENDENT_GAIN - 0.01)[0] == "colour"
     assert _decided(monkeypatch, brightness_ok=1000, colour_ok=960)[0] == "brightness"
+    assert _decided(monkeypatch, brightness_ok=1000, colour_ok=1000, wall_gain=0.98)[0] == "brightness"
     assert _decided(monkeypatch, brightness_ok=1000, colour_ok=940, wall_gain=0.4)[0] == "brightness"
-    assert _decided(monkeypatch, brightness_ok=1000, colour_ok=1000, wall_gain=1.0)[0] == "brightness"
 
 
 def test_the_frame_s_white_balance_is_the_static_scene_s_however_much_of_it_the_body_covers():

@@ -30,9 +30,10 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    or, where that differs from the median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by
    more than :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the
    body's contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
-   again above ¼ of its own contrast there. A one-sided body's I − B is divided by the wall's gain
-   (``body_scene.wall_gain``: the share of its contrast the body keeps before each part of the wall): the
-   difference it would make before the light wall, so that its part before a darker band stays in its silhouette.
+   again above ¼ of its own contrast there. A one-sided body's I − B (where over its noise) is divided by the
+   wall's gain (``body_scene.wall_gain``: under 1 where the body keeps less than 0.8 of its contrast before the
+   light wall): about the difference it would make before the light wall, so that its part before a darker band
+   stays in its silhouette.
 3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
    contrast C_f fixed for the clip (``body_scene.silhouette_fraction``: ¼, or the Otsu split of a
    two-tone body), filled to their convex hull (a part that hardly differs from the wall, a bright half before
@@ -164,7 +165,8 @@ class BodyScene:
     one_sided: str | None = None  # the side of the scene the first-frame body lies on (body_polarity)
     unseen: np.ndarray | None = field(default=None, repr=False, compare=False)  # pixels no sample shows clear
     reach_px: float | None = None  # its silhouette's farthest pixel from its centre (body_parts.body_reach)
-    first_grey: tuple | None = None  # medians of the wall behind the body and of the body in the first frame
+    # medians of the body and of the wall behind it in the first frame, and of the wall behind its swing (wall_gain)
+    first_grey: tuple | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -315,7 +317,7 @@ def find_body(
         polarity=polarity,
         one_sided=side,  # the vote above a quarter of the body's contrast, not its soft shadow nor the noise
         reach_px=body_reach(whole.component),
-        first_grey=(float(np.median(background[first.component])), float(np.median(images[0][first.component]))),
+        first_grey=None if whole is not first else _greys(images[0], background, first.component, excluded),
         # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
         # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body
         rest_place_clear=None
@@ -326,6 +328,13 @@ def find_body(
             < CLEAR_REST_PLACE * whole.component.sum()
         ),
     )
+
+
+def _greys(image: np.ndarray, background: np.ndarray, body: np.ndarray, moving) -> tuple[float, float, float]:
+    """Medians of the body in the first frame (``image``), of the wall behind it there and of the wall behind
+    what moved in the samples (its swing), for :func:`pendulum.tracking.body_scene.wall_gain`."""
+    swept = moving.any_over_samples() if moving.any() else body
+    return float(np.median(image[body])), float(np.median(background[body])), float(np.median(background[swept]))
 
 
 def track_body(
@@ -366,8 +375,8 @@ def track_body(
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             signed -= border_offset(signed)
-            if gain is not None:  # before a darker band of wall: the difference it would make before its first place
-                signed /= gain[y0:y1, x0:x1]
+            if gain is not None:  # before a darker band of wall: the difference it would make before the light wall
+                signed /= np.where(np.abs(signed) < NOISE_SIGMAS * scene.noise_grey, 1.0, gain[y0:y1, x0:x1])
             diff = one_sided(signed, scene.polarity)
             component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
@@ -454,9 +463,9 @@ def track_body(
     table.attrs["body"] = {**scene.to_dict(), **({"in_front": in_front} if in_front["hidden_px"] else {})}
     if gain is not None and usable.any():  # the least gain of the wall behind the body where it was usable
         side = 2 * int(scene.radius_px) + 1
-        least = cv2.erode(gain, np.ones((side, side), np.uint8))[
-            np.round(y[usable]).astype(int), np.round(x[usable]).astype(int)
-        ]
+        at_y = np.clip(np.round(y[usable]).astype(int), 0, height - 1)
+        at_x = np.clip(np.round(x[usable]).astype(int), 0, width - 1)
+        least = cv2.erode(gain, np.ones((side, side), np.uint8))[at_y, at_x]
         if least.min() < 1.0:
             table.attrs["body"]["wall_gain"] = round(float(least.min()), 3)
     fill_limit = max(3 * scene.noise_grey, UNSEEN_FILL_SHARE * contrast)

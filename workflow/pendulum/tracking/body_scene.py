@@ -482,19 +482,18 @@ WALL_GAIN_KNEE = 0.8  # a wall where the body keeps this share of its contrast o
 MIN_WALL_GAIN = 0.2  # a wall nearer the body's grey than this: its differences amplified at most 1 / this
 
 
-def wall_gain(background: np.ndarray, polarity: str, wall_grey: float, body_grey: float) -> np.ndarray | None:
-    """Per pixel, the share of a one-sided body's contrast it keeps before that part of the wall, where that is
-    under :data:`WALL_GAIN_KNEE` of its full contrast (a band of shadow on a light wall behind a dark body):
-    g = clip(E / (k E₀), g_min, 1), E = ±(B − b) the contrast of the body's grey b (its median in the first frame)
-    before the wall B, E₀ the larger of its contrast before the wall behind it there (``wall_grey``) and E's median
-    over the frame (its first place may lie in the band). I − B divided by g is the difference the body would make
-    before the light wall: its silhouette keeps its parts before a darker band (its centroid no longer moving away
-    from the band). None where g is 1 everywhere, or for a body both lighter and darker than the wall (polarity
-    ``both``)."""
+def wall_gain(background: np.ndarray, polarity: str, body_grey: float, *walls: float) -> np.ndarray | None:
+    """Per pixel, g = clip(E / (k E₀), g_min, 1): E = ±(B − b) the contrast the body's grey b (its median in the
+    first frame) has before the wall B, E₀ its contrast before the lightest (for a bright body, darkest) of
+    ``walls`` (the wall behind its first silhouette and the median wall behind its swing: its first place may lie
+    in the band), k = :data:`WALL_GAIN_KNEE`. g is 1 wherever the body keeps at least k of E₀ (an even wall, a
+    mild vignette), under it before a darker band behind a dark body, never under g_min. I − B divided by g is then
+    about the difference the body would make before the light wall: its silhouette keeps its part before the band
+    (its centroid no longer moving away from it). None where g is 1 everywhere, or for a body both lighter and
+    darker than the wall (polarity ``both``)."""
     sign = {"dark": 1.0, "bright": -1.0}.get(polarity)
-    if sign is None or not sign * (wall_grey - body_grey) > 0:
+    contrasts = [sign * (wall - body_grey) for wall in walls if sign is not None and math.isfinite(wall)]
+    if not contrasts or not max(contrasts) > 0:
         return None
-    expected = sign * (background - body_grey)
-    full = max(sign * (wall_grey - body_grey), float(np.median(expected)))
-    gain = np.clip(expected / (WALL_GAIN_KNEE * full), MIN_WALL_GAIN, 1.0)
+    gain = np.clip(sign * (background - body_grey) / (WALL_GAIN_KNEE * max(contrasts)), MIN_WALL_GAIN, 1.0)
     return gain.astype(np.float32) if gain.min() < 1.0 else None

@@ -42,6 +42,7 @@ MIN_COLOUR_SNR = 10.0  # the body's colour contrast over the chroma noise below 
 GREY_SPREAD = 4  # a first frame whose chroma spans no more than this many levels has no colour (a grey video)
 DEAD_ZONE_NOISE = 3.0  # chroma differences up to this many times the chroma noise are left out (compression's blocks)
 WALL_DEPENDENT_SHARE = 0.01  # frames `occluded` or `lost` beyond this share: the brightness silhouette may be biased
+WALL_DEPENDENT_GAIN = 0.8  # ... or a wall gain below this on its path (the body kept under 0.64 of its contrast)
 # luma (x, y) → chroma (x / 2, (y − ½) / 2): 4:2:0 chroma sited with the even columns, between the rows
 _TO_CHROMA = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, -0.25]])
 
@@ -172,11 +173,16 @@ def _body_contrasts(samples, difference: np.ndarray, luma_track: pd.DataFrame) -
 def brightness_depends_on_wall(track: pd.DataFrame) -> bool:
     """Whether a brightness silhouette's track shows it changing with the wall behind the body: more than
     :data:`WALL_DEPENDENT_SHARE` of its frames ``occluded`` or ``lost``, a warning that it is smaller or larger
-    mid-swing, or its differences scaled by the wall's gain where it passed a darker part of the wall
-    (``wall_gain`` under 1: :func:`pendulum.tracking.body_scene.wall_gain`)."""
+    mid-swing, or its differences scaled by the wall's gain where it passed a darker band of wall (``wall_gain``
+    under :data:`WALL_DEPENDENT_GAIN`: :func:`pendulum.tracking.body_scene.wall_gain`)."""
     unseen = float(track.flag.isin(["occluded", "lost"]).mean()) if len(track) else 0.0
     body = track.attrs.get("body", {})
-    return unseen > WALL_DEPENDENT_SHARE or bool(body.get("warning")) or body.get("wall_gain", 1.0) < 1.0
+    return unseen > WALL_DEPENDENT_SHARE or bool(body.get("warning")) or scaled_by_wall(track)
+
+
+def scaled_by_wall(track: pd.DataFrame) -> bool:
+    """Whether a brightness track's differences were scaled by a wall gain under :data:`WALL_DEPENDENT_GAIN`."""
+    return (track.attrs.get("body") or {}).get("wall_gain", 1.0) < WALL_DEPENDENT_GAIN
 
 
 def track_by_colour(path, settings: TrackerSettings, luma_track: pd.DataFrame | None, progress=None):

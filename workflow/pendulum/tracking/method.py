@@ -19,7 +19,12 @@ import pandas as pd
 from pendulum.camera.video import VideoError
 from pendulum.tracking import samples
 from pendulum.tracking.body import BodyError, find_body, track_body
-from pendulum.tracking.colour import brightness_depends_on_wall, track_by_colour, track_marker_by_colour
+from pendulum.tracking.colour import (
+    brightness_depends_on_wall,
+    scaled_by_wall,
+    track_by_colour,
+    track_marker_by_colour,
+)
 from pendulum.tracking.look import track_by_look
 from pendulum.tracking.marker import MarkerAbandoned, track_video
 from pendulum.tracking.outline import centre_by_outline, sharper_outline
@@ -189,12 +194,11 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
     What the colour view gave goes into ``tried`` as ``body_by_colour``.
 
     Usable frames decide (where the brightness silhouette was scaled by the wall's gain before a darker band,
-    ``wall_gain``, a colour view usable in 95 % of the frames is kept: the band leaves a body's colour as it was,
-    and a two-tone ball's brightness centroid before it 0.14–0.19° off against 0.06–0.07° for its colour, on the
-    real clip made two-tone), not how much each silhouette's area changes mid-swing: on the real clip's two-tone
-    ball before hard-edged or bluish bands and filmed by hand, colour tracks 99.5–99.9 % usable were once
-    dropped for a smaller change, for brightness tracks 89.8–95.0 % usable whose usable positions were off the
-    clip without the band by as much or more (0.34–2.5 px RMS against 0.34–0.41 px, docs/footage.md)."""
+    :func:`~pendulum.tracking.colour.scaled_by_wall`, a colour view usable in 95 % of the frames is kept: the band
+    leaves a body's colour as it was; docs/footage.md), not how much each silhouette's area changes mid-swing: on
+    the real clip's two-tone ball before hard-edged or bluish bands and filmed by hand, colour tracks 99.5–99.9 %
+    usable were once dropped for a smaller change, for brightness tracks 89.8–95.0 % usable whose usable positions
+    were off the clip without the band by as much or more (0.34–2.5 px RMS against 0.34–0.41 px, docs/footage.md)."""
     if not brightness_depends_on_wall(body):
         return body
     colour, facts = track_by_colour(path, settings, body, progress)
@@ -202,7 +206,7 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
         tried["body_by_colour"] = facts.get("colour", "not taken")
         return body
     tried["body_by_colour"] = _usable(colour)
-    scaled = body.attrs["body"].get("wall_gain", 1.0) < 1.0  # its brightness scaled before a darker band: colour
+    scaled = scaled_by_wall(body)  # its brightness scaled before a darker band: its colour, where usable
     if usable_fraction(colour) > usable_fraction(body) or (
         scaled and usable_fraction(colour) >= MARKER_USABLE_FRACTION
     ):
