@@ -400,11 +400,13 @@ def test_zero_crossing_period_is_exact_on_a_cosine():
 # held-out clip) is measured by its colour (pendulum.tracking.colour): 99.9 % ok, where its brightness
 # silhouette gives 96.6 % and is 21 % smaller mid-swing (the apple before the band in colour: 93.5 -> 99.85 %,
 # in the study only; tests/test_colour_view.py checks the colour view against truth).
-SHORT_OF = {"shadow_band": 95.0}  # issue 23's share of usable frames, not yet met by these variants
+# The grey apple before the band: 93.6 % ok until 2026-12-06, its silhouette losing its part over the band; with
+# the wall's gain (pendulum.tracking.body_scene.wall_gain) 98.5 %, and 99.85 % for the grey two-tone ball.
+SHORT_OF: dict[str, float] = {}  # issue 23's share of usable frames, not yet met by these variants
 BY_COLOUR = {"two_tone_shadow_band_colour"}
 REAL_VARIANTS = {
-    "shadow_band": (92.5, 0.0),
-    "two_tone_shadow_band": (98.5, 0.0),
+    "shadow_band": (97.5, 0.0),
+    "two_tone_shadow_band": (99.0, 0.0),
     "two_tone_shadow_band_colour": (99.0, 0.0),
     "upside_down": (99.0, 180.0),
     "sideways": (99.0, -90.0),
@@ -461,6 +463,35 @@ def test_a_two_tone_ball_turning_on_its_string_is_measured_by_its_outlines_centr
     assert not path["not_a_pendulum"], path["verdict"]
 
 
+@pytest.mark.slow
+def test_a_body_held_by_hand_before_a_darker_band_is_measured_against_the_wall_behind_it(tmp_path):
+    """The grey apple before the band (``shadow_band``) held by a hand for its first 1.5 s (``hand_release``): the
+    body's grey and the wall behind it are taken from a sample that shows it as the clip usually does (the first
+    frame's silhouette is the apple with the hand), so the band is scaled out as without the hand. Before: no wall
+    gain where a hand held the first frame (1,215 of the 1,296 frames not held ok, 93.7 %); measured 1,290 (99.5 %)."""
+    if not APPLE.is_file():
+        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
+    from real_variants import APPLE_FPS, _hand_release, _shadow_band
+
+    from pendulum.camera.video import iter_luma
+    from pendulum.synthetic.experiment import write_video
+    from pendulum.tracking.method import track_trial
+
+    video = tmp_path / "held_before_band.mp4"
+    write_video(
+        _hand_release(_shadow_band([image.copy() for _, _, image in iter_luma(APPLE)])),
+        video,
+        APPLE_FPS,
+        18,
+        "veryfast",
+    )
+    track = track_trial(video, default_settings())
+    free = track[track.flag != "held"]
+    assert (free.flag == "ok").mean() >= 0.98, track.flag.value_counts().to_dict()
+    assert track.attrs["body"]["wall_gain"] < 0.5, track.attrs["body"]
+
+
 # the grey and the colour two-tone ball share their luma (made once per process): run on one worker
 SHARED_LUMA = pytest.mark.xdist_group("two_tone_before_band")
 
@@ -470,7 +501,7 @@ SHARED_LUMA = pytest.mark.xdist_group("two_tone_before_band")
 )
 def test_the_apple_filmed_other_ways(variant, tmp_path):
     """The same period (within 0.3 %) and record noise (≤ 0.03°) as the clip itself; the frames with the body partly
-    out of view flagged ``edge``; the vertical found, or said not to be found. 43 of the study's 45 variants pass."""
+    out of view flagged ``edge``; the vertical found, or said not to be found. 50 of the study's 51 variants pass."""
     if not APPLE.is_file():
         pytest.skip(f"{APPLE} not found (../shared beside the project)")
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))

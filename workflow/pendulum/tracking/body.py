@@ -269,7 +269,7 @@ def find_body(
             if body is None or body.component is None:
                 continue
             if not touches_border(body.component, (y0, y1, x0, x1), background.shape):  # in full view
-                seen.append(body)
+                seen.append(body._replace(sample=k, window=(y0, y1, x0, x1)))
         if not seen:
             return first, first
         typical = sorted(seen, key=lambda s: int(s.component.sum()))[len(seen) // 2]
@@ -317,7 +317,7 @@ def find_body(
         polarity=polarity,
         one_sided=side,  # the vote above a quarter of the body's contrast, not its soft shadow nor the noise
         reach_px=body_reach(whole.component),
-        first_grey=None if whole is not first else _greys(images[0], background, first.component, excluded),
+        first_grey=_greys(images[whole.sample], background, whole, excluded),
         # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
         # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body
         rest_place_clear=None
@@ -330,11 +330,16 @@ def find_body(
     )
 
 
-def _greys(image: np.ndarray, background: np.ndarray, body: np.ndarray, moving) -> tuple[float, float, float]:
-    """Medians of the body in the first frame (``image``), of the wall behind it there and of the wall behind
-    what moved in the samples (its swing), for :func:`pendulum.tracking.body_scene.wall_gain`."""
-    swept = moving.any_over_samples() if moving.any() else body
-    return float(np.median(image[body])), float(np.median(background[body])), float(np.median(background[swept]))
+def _greys(image: np.ndarray, background: np.ndarray, body: Seen, moving) -> tuple[float, float, float]:
+    """Medians of the body as the clip usually shows it (the first frame's, or a sample's where a hand holds it
+    there: ``image`` that sample), of the wall behind it there and of the wall behind what moved in the samples
+    (its swing), for :func:`pendulum.tracking.body_scene.wall_gain`."""
+    window = (
+        np.s_[:, :] if body.window is None else np.s_[body.window[0] : body.window[1], body.window[2] : body.window[3]]
+    )
+    pixels, behind = image[window][body.component], background[window][body.component]
+    swept = background[moving.any_over_samples()] if moving.any() else behind
+    return float(np.median(pixels)), float(np.median(behind)), float(np.median(swept))
 
 
 def track_body(

@@ -144,6 +144,8 @@ class Seen(NamedTuple):
     fraction: float
     component: np.ndarray | None
     inner_radius_px: float
+    sample: int = 0  # the sample it was seen in (find_body's), and the window (y0, y1, x0, x1) its pixels are in
+    window: tuple | None = None
 
 
 def body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> Seen | None:
