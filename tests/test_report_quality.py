@@ -287,6 +287,12 @@ def test_the_tracking_table_says_briefly_how_a_body_was_tracked():
         "tracked the body itself by its silhouette, usable in 93.5 % of the frames when the method was chosen; a "
         "marker disk usable in under 95 % of the frames"
     )
+    assert method_note(method, {"wall_gain": 0.343}) == (  # the grey apple before the band
+        "tracked the body itself by its silhouette, usable in 93.5 % of the frames when the method was chosen; "
+        "measured against the wall behind each part of it (a darker band behind part of the swing: the body's "
+        "contrast there scaled up by as much as 2.9×); a marker disk usable in under 95 % of the frames"
+    )
+    assert "wall behind" not in method_note(method, {"view": "colour", "wall_gain": 0.343})  # its colour's
     outline = {"view": "colour", "centre": {"by": "outline", "outline_radius_px": 18.807}}  # a turning two-tone ball
     assert method_note(method, outline).endswith(
         "; measured by the centre of its round outline (18.8 px in radius): only part of the ball stands out, and "

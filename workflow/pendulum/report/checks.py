@@ -130,6 +130,11 @@ def method_note(method: dict, body: dict) -> str:
         note += "; its brightness silhouette " + (
             "could not be followed" if brightness.startswith("failed") else f"{brightness}, changing with the wall"
         )
+    if not colour and not look and body.get("wall_gain") is not None:  # scaled before a darker band (wall_gain)
+        note += (
+            f"; measured against the wall behind each part of it (a darker band behind part of the swing: the "
+            f"body's contrast there scaled up by as much as {1 / body['wall_gain']:.1f}×)"
+        )
     marker = tried.get("marker", "")
     if marker:
         note += "; a marker disk " + ("could not be found" if marker.startswith("failed") else marker.split(":")[0])
