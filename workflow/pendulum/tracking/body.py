@@ -165,7 +165,8 @@ class BodyScene:
     one_sided: str | None = None  # the side of the scene the first-frame body lies on (body_polarity)
     unseen: np.ndarray | None = field(default=None, repr=False, compare=False)  # pixels no sample shows clear
     reach_px: float | None = None  # its silhouette's farthest pixel from its centre (body_parts.body_reach)
-    # medians of the body and of the wall behind it in the first frame, and of the wall behind its swing (wall_gain)
+    # medians of the body and of the wall behind it as the clip usually shows it (the first frame, or a sample where a
+    # hand holds it there), and of the wall behind its swing (wall_gain)
     first_grey: tuple | None = None
 
     def to_dict(self) -> dict:

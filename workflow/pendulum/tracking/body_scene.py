@@ -483,14 +483,14 @@ MIN_WALL_GAIN = 0.2  # a wall nearer the body's grey than this: its differences 
 
 
 def wall_gain(background: np.ndarray, polarity: str, body_grey: float, *walls: float) -> np.ndarray | None:
-    """Per pixel, g = clip(E / (k E₀), g_min, 1): E = ±(B − b) the contrast the body's grey b (its median in the
-    first frame) has before the wall B, E₀ its contrast before the lightest (for a bright body, darkest) of
-    ``walls`` (the wall behind its first silhouette and the median wall behind its swing: its first place may lie
-    in the band), k = :data:`WALL_GAIN_KNEE`. g is 1 wherever the body keeps at least k of E₀ (an even wall, a
-    mild vignette), under it before a darker band behind a dark body, never under g_min. I − B divided by g is then
-    about the difference the body would make before the light wall: its silhouette keeps its part before the band
-    (its centroid no longer moving away from it). None where g is 1 everywhere, or for a body both lighter and
-    darker than the wall (polarity ``both``)."""
+    """Per pixel, g = clip(E / (k E₀), g_min, 1): E = ±(B − b) the contrast the body's grey b (its median as the
+    clip usually shows it: ``body.BodyScene.first_grey``) has before the wall B, E₀ its contrast before the lightest
+    (for a bright body, darkest) of ``walls`` (the wall behind that silhouette and the median wall behind its
+    swing: its first place may lie in the band), k = :data:`WALL_GAIN_KNEE`. g is 1 wherever the body keeps at
+    least k of E₀ (an even wall, a mild vignette), under it before a darker band behind a dark body, never under
+    g_min. I − B divided by g is then about the difference the body would make before the light wall: its
+    silhouette keeps its part before the band (its centroid no longer moving away from it). None where g is 1
+    everywhere, or for a body both lighter and darker than the wall (polarity ``both``)."""
     sign = {"dark": 1.0, "bright": -1.0}.get(polarity)
     contrasts = [sign * (wall - body_grey) for wall in walls if sign is not None and math.isfinite(wall)]
     if not contrasts or not max(contrasts) > 0:
