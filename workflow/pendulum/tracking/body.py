@@ -81,6 +81,7 @@ from pendulum.tracking.body_parts import (
     CONTRAST_FRACTION,
     MAX_AREA_RATIO,
     MIN_AREA_RATIO,
+    NOISE_SIGMAS,
     Seen,
     body_close_size,
     body_component,
@@ -89,6 +90,7 @@ from pendulum.tracking.body_parts import (
     body_reach,
     open_size,
     own_centre,
+    silhouette_cut,
     touches_border,
 )
 from pendulum.tracking.body_scene import (
@@ -126,7 +128,6 @@ log = logging.getLogger(__name__)
 SCENE_SAMPLES = 60  # frames spread over the clip for the static scene
 EDGE_REACH = 1.2  # in view or not: what lies within this many inner radii of its thickest point (not its rod)
 SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the previous one showed
-NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
 FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
 MOVING_PX = 0.3  # the body moves (px per frame): its area there is its own (MAX_AREA_RATIO, MIN_AREA_RATIO)
@@ -203,7 +204,7 @@ def find_body(
     images = list(stack)  # views of the stack
     first_pass = median_scene(stack)
     sigma = noise_sigma(images, first_pass)
-    threshold = max(NOISE_SIGMAS * sigma, 4.0)
+    threshold = silhouette_cut(sigma)
     # Each sample's moving objects leave the scene; again against the new scene, as a body that overlaps
     # itself over many samples (large, slow near its turning points) is only partly seen moving at first.
     # Found on samples reduced to ≤ ~640 px (the masks then enlarged): the scene itself at full resolution.
@@ -211,7 +212,7 @@ def find_body(
     small = [reduced(im, scale) for im in images] if scale > 1 else images
     small_stack = np.stack(small) if scale > 1 else stack
     small_first = reduced(first_pass, scale) if scale > 1 else first_pass
-    small_threshold = max(NOISE_SIGMAS * noise_sigma(small, small_first), 4.0) if scale > 1 else threshold
+    small_threshold = silhouette_cut(noise_sigma(small, small_first)) if scale > 1 else threshold
     others = scene_states(small, small_stack, small_first, small_threshold)
     if others is not None:  # a body at rest over half the clip, in the median's scene: the samples that show it clear
         small_first = masked_median(small_stack, others, small_first)
@@ -357,7 +358,7 @@ def track_body(
     background = scene.background
     height, width = background.shape
     contrast = scene.contrast_grey
-    threshold = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * contrast)
+    threshold = silhouette_cut(scene.noise_grey, contrast)
     open_px = open_size(scene.inner_radius_px)
     close_px = max(close_size(background.shape), body_close_size(scene.inner_radius_px))
     edge_px = EDGE_REACH * scene.inner_radius_px + 2
@@ -388,7 +389,7 @@ def track_body(
             if component is not None:
                 here = float(np.percentile(diff[component], 90))
                 if here < FAINT_CONTRAST * contrast:  # before a darker (or lighter) patch of wall: its own contrast
-                    low = max(NOISE_SIGMAS * scene.noise_grey, 4.0, CONTRAST_FRACTION * here)
+                    low = silhouette_cut(scene.noise_grey, here)
                     component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
                 _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
@@ -451,7 +452,7 @@ def track_body(
     # fingers alone over its edge add less than MAX_AREA_RATIO: a still run over the body's usual size, at either end
     flags[held_still_runs(mass / own, x, y, TYPICAL_AREA_RATIO, STILL_PX)] = "held"
     elsewhere = getattr(view, "hidden_box", None)  # a place the brightness view found hidden, for a colour view
-    hidden, in_front = hidden_frames(seen, x, y, background, max(NOISE_SIGMAS * scene.noise_grey, 4.0), elsewhere)
+    hidden, in_front = hidden_frames(seen, x, y, background, silhouette_cut(scene.noise_grey), elsewhere)
     flags[hidden & (flags == "ok")] = "occluded"
     usable = flags == "ok"
     # the body with what holds it before the first free frame or after the last (a hand before the release, one

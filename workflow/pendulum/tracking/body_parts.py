@@ -133,6 +133,14 @@ def open_size(inner_radius_px: float) -> int:
 
 
 CONTRAST_FRACTION = 0.25  # a body pixel differs by more than this share of its own contrast (a soft shadow less)
+NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
+MIN_CUT_GREY = 4.0  # ... and at least this many grey levels
+
+
+def silhouette_cut(noise_grey: float, contrast_grey: float = 0.0) -> float:
+    """The |I − B| a body pixel exceeds: max(5 σ of the noise, 4 grey levels, ¼ of the body's contrast); a moving
+    pixel's without a contrast."""
+    return max(NOISE_SIGMAS * noise_grey, MIN_CUT_GREY, CONTRAST_FRACTION * contrast_grey)
 
 
 class Seen(NamedTuple):

@@ -37,6 +37,7 @@ import pandas as pd
 
 from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.arcs import fit_circle
+from pendulum.tracking.body_parts import silhouette_cut
 from pendulum.tracking.checks import flag_jumps
 from pendulum.tracking.settings import TrackerSettings
 
@@ -144,7 +145,7 @@ def _cut(path, image: np.ndarray, scene, place, wanted: int):
     mask, the point followed in it, its warp into the frame and its mask's hull; raises where too little is cut."""
     radius = max(scene.radius_px, 2.0)
     reference = image.astype(np.float32)
-    threshold = max(5.0 * scene.noise_grey, 4.0, 0.25 * scene.contrast_grey)
+    threshold = silhouette_cut(scene.noise_grey, scene.contrast_grey)
     hidden = np.zeros(reference.shape, bool) if scene.unseen is None else scene.unseen
     found = template_of(reference, scene.background, hidden, place, radius, threshold)
     if found is None or found[4] < MIN_TEMPLATE_SHARE * math.pi * radius**2:
