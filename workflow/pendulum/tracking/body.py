@@ -372,7 +372,7 @@ def track_body(
         if view is not None or scene.first_grey is None
         else wall_gain(background, scene.polarity, *scene.first_grey)
     )
-    for index, time_s, image in iter_luma(path, report=report, view=view):
+    for index, time_s, image in iter_luma(path, report=report, view=getattr(view, "windowed", view)):
         half = reach + 2.0 * math.hypot(vx, vy) + 6 * lost_run
         px, py = x_prev + vx, y_prev + vy
         x0, x1 = max(int(px - half), 0), min(int(px + half) + 1, width)

@@ -56,12 +56,13 @@ def spread_frames(path, n: int, max_frames: int | None = None, view=None) -> tup
             wanted = set(spread_indices(decoded, n))
             return [(i, image) for i, image in held["frames"] if i in wanted], decoded
     kept, stride, decoded, report = [], 1, 0, {}
-    for index, _t, image in iter_luma(path, report=report, view=view):
+    deferred = None if view is None else _deferred(view)  # a view made of the frames kept alone
+    for index, _t, image in iter_luma(path, report=report, view=deferred):
         if max_frames is not None and index >= max_frames:
             break
         decoded = index + 1
         if index % stride == 0:
-            image = image.copy()
+            image = (image if view is None else image()).copy()
             image.flags.writeable = False
             kept.append((index, image))
             if len(kept) >= 2 * n:
@@ -74,6 +75,16 @@ def spread_frames(path, n: int, max_frames: int | None = None, view=None) -> tup
     _held["clip"] = {"key": key, "n": n, "frames": kept, "decoded": decoded, "complete": complete, "whole": whole}
     _held["clip"]["max_frames"] = max_frames
     return list(kept), decoded
+
+
+def _deferred(view):
+    """``view`` as a frame → a call that makes its image (a colour view of a 1080p frame costs more than decoding
+    it; of every frame decoded, one in k is kept)."""
+
+    def later(frame):
+        return lambda: view(frame)
+
+    return later
 
 
 def frame_count(path) -> int | None:
