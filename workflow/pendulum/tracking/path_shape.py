@@ -16,7 +16,7 @@ A camera knocked once adds a step of the centre (:func:`_knock`); one whose move
 where the swing's centre in the picture steps (:func:`_centre_step`: moved across the swing, or turned).
 The positions are then brought to the camera of mid-clip, p − (c(t) − c₀), so the angle
 about the pivot is the swing's. What the moving circle does not explain (a swing out of
-the plane, a stretching string, a body that turns off its centre) is reported, in pixels
+the plane, a stretching string, a body that turns off its centre, a camera that moves a little) is reported, in pixels
 and as the angle error it allows, never absorbed silently.
 """
 
@@ -493,8 +493,9 @@ def path_departure(track: pd.DataFrame, noise_px: float | None = None) -> tuple[
     if unexplained > max(UNEXPLAINED_NOISE_RATIO * noise_px, MIN_DEPARTURE_PX):
         parts.append(
             f"{unexplained:.2f} px RMS ({document['unexplained_angle_deg']:.3f}° on the {radius:.0f} px arm) is not a "
-            "circle about a fixed or creeping pivot: a swing out of the image plane, a stretching string or a body "
-            "turning off its centre; the angle record carries it"
+            "circle about a fixed or creeping pivot: a swing out of the image plane, a stretching string, a body "
+            "turning off its centre, or a camera that moves a little (held in the hand: its stabilisation leaves some "
+            "of it; a plain wall does not show it); the angle record carries it"
         )
         document["departs"] = True
         if "out_of_plane" in document:
