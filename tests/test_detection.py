@@ -648,3 +648,28 @@ def test_x264_is_kept_from_its_avx512_code(tmp_path):
     assert cpu("fpu sse4_2 avx avx2 fma bmi1 bmi2 abm") is None
     assert cpu(None) is None
     assert x264_cpu(str(tmp_path / "missing")) is None
+
+
+def test_a_view_of_the_spread_samples_is_made_of_the_frames_kept_alone(tmp_path):
+    """A view's samples (a colour view costs more than decoding a 1080p frame) are the view of the frames every-k-th
+    sampling keeps, the same images as the view made of every frame and all but those dropped; the view is made of
+    about 2n + n log₂(frames / 2n) frames, not of every frame (all 70 until 2026-12-06)."""
+    from pendulum.camera.video import luma
+    from pendulum.tracking import samples
+
+    path = tmp_path / "ramp.mp4"
+    write_video([np.full((64, 96), 10 + 2 * k, np.uint8) for k in range(70)], path, 30.0, 0, "ultrafast")
+    made = []
+
+    def inverted(frame):
+        made.append(frame.pts)
+        return 255 - luma(frame)
+
+    inverted.key = "inverted"
+    viewed, decoded = samples.spread_frames(path, 5, view=inverted)
+    samples.release()
+    plain, _ = samples.spread_frames(path, 5)
+    samples.release()
+    assert decoded == 70 and [i for i, _ in viewed] == [i for i, _ in plain] == list(range(0, 70, 8))
+    assert all(np.array_equal(v, 255 - p) for (_, v), (_, p) in zip(viewed, plain, strict=True))
+    assert len(made) == 10 + 5 + 5 + 4  # frames 0–9 (stride 1), 10–18 even, 20–36 every 4th, 40–64 every 8th

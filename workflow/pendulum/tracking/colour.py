@@ -162,7 +162,9 @@ class ViewWindows:
 
     def __getitem__(self, key) -> np.ndarray:
         rows, columns = key
-        return self.view.window(self.frame, rows.start, rows.stop, columns.start, columns.stop)
+        y0, y1, _ = rows.indices(int(self.frame.height))
+        x0, x1, _ = columns.indices(int(self.frame.width))
+        return self.view.window(self.frame, y0, y1, x0, x1)
 
 
 def colour_view(path, luma_track: pd.DataFrame | None) -> tuple[ColourView | None, dict]:
