@@ -349,34 +349,42 @@ def test_what_hides_the_body_in_its_brightness_hides_it_in_its_colour_only_where
     assert facts["box_px"][0] <= 300 and facts["box_px"][0] + facts["box_px"][2] >= 465, facts
 
 
-@pytest.mark.parametrize("size", [(640, 360), (550, 310)])
+def _yuv_frame(luma: np.ndarray, u: np.ndarray, v: np.ndarray):
+    """A PyAV yuv420p frame holding these planes (uint8; chroma ⌈h/2⌉ × ⌈w/2⌉, any luma size, odd ones too)."""
+    import av
+
+    frame = av.VideoFrame(luma.shape[1], luma.shape[0], "yuv420p")
+    for plane, values in zip(frame.planes, (luma, u, v), strict=True):
+        rows = np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)
+        rows[:, : plane.width] = values
+    return frame
+
+
+@pytest.mark.parametrize("size", [(640, 360), (550, 310), (97, 61)])
 def test_a_window_of_the_colour_view_is_that_window_of_the_whole_view(size):
     """The body tracker asks the colour view for a window about the body (``ColourView.windowed``): each window,
     made from the chroma about it alone, is the same bytes as that window of the whole view made as it was until
     2026-12-06 (the chroma difference over the whole frame, resampled onto the luma grid at once), at the frame's
-    edges, for odd chroma sizes (550 × 310: 275 × 155), and under a white-balance shift."""
-    import av
-
+    edges, for odd chroma sizes (550 × 310: 275 × 155) and odd frames (97 × 61: chroma 49 × 31), and under a
+    white-balance shift; an empty window is empty, a stepped one refused."""
     from pendulum.tracking.colour import ColourView, _distance, _on_luma_grid, chroma_planes
 
     width, height = size
     rng = np.random.default_rng(7)
-    yy, xx = np.mgrid[0 : height // 2, 0 : width // 2]
+    yy, xx = np.mgrid[0 : (height + 1) // 2, 0 : (width + 1) // 2]
     wall = np.dstack([126 + 4 * np.sin(xx / 23.0), 131 + 3 * np.cos(yy / 17.0)])
     for balance in (0, 3):
         uv = wall + balance + rng.normal(0.0, 1.5, wall.shape)
-        uv[(xx - 90) ** 2 + (yy - 70) ** 2 < 15**2] = (112.0, 176.0)  # a red ball
-        luma = rng.integers(60, 200, (height, width))
-        packed = np.concatenate([luma.ravel(), uv[..., 0].ravel(), uv[..., 1].ravel()])
-        frame = av.VideoFrame.from_ndarray(
-            np.clip(np.round(packed), 0, 255).astype(np.uint8).reshape(-1, width), "yuv420p"
-        )
+        uv[(xx - 30) ** 2 + (yy - 20) ** 2 < 12**2] = (112.0, 176.0)  # a red ball
+        u, v = (np.clip(np.round(uv[..., c]), 0, 255).astype(np.uint8) for c in (0, 1))
+        frame = _yuv_frame(rng.integers(60, 200, (height, width)).astype(np.uint8), u, v)
         view = ColourView(np.round(wall).astype(np.uint8), 2.5, 2)
         planes = chroma_planes(frame)
         shown = cv2.bitwise_not(
             cv2.convertScaleAbs(cv2.subtract(_distance(np.dstack(planes), view.wall), 2), alpha=2.5)
         )
         whole = _on_luma_grid(shown, frame)
+        assert whole.shape == (height, width)
         assert np.array_equal(view(frame), whole)
         windows = view.windowed(frame)
         cuts = [(0, height, 0, width), (0, 7, 0, 9), (height - 6, height, width - 5, width), (1, 2, 3, 4)]
@@ -386,3 +394,6 @@ def test_a_window_of_the_colour_view_is_that_window_of_the_whole_view(size):
         for y0, y1, x0, x1 in cuts:
             assert np.array_equal(windows[y0:y1, x0:x1], whole[y0:y1, x0:x1]), (balance, y0, y1, x0, x1)
         assert np.array_equal(windows[:5, width - 40 :], whole[:5, width - 40 :])  # slices as numpy reads them
+        assert windows[5:5, 0:10].shape == (0, 10) and windows[9:4, 0:10].shape == (0, 10)
+        with pytest.raises(ValueError):
+            windows[::2, 0:10]

@@ -372,8 +372,8 @@ def iter_luma(
     in a background thread at most :data:`DECODE_AHEAD_FRAMES` frames ahead of the
     consumer, so memory stays a few frames whatever the video's length. ``Y`` is a view
     of the decoded frame, valid as long as the caller holds it (copy it to keep it).
-    ``view``: a function of the decoded frame whose image is yielded instead of ``Y`` (e.g. its colour,
-    :mod:`pendulum.tracking.colour`).
+    ``view``: a function of the decoded frame whose result is yielded instead of ``Y`` (e.g. its colour,
+    :mod:`pendulum.tracking.colour`; or something that makes it later: a window of it, a call).
     """
     threads = _decoder_threads(threads)
     container = _open(path)

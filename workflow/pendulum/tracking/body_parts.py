@@ -138,8 +138,8 @@ MIN_CUT_GREY = 4.0  # ... and at least this many grey levels
 
 
 def silhouette_cut(noise_grey: float, contrast_grey: float = 0.0) -> float:
-    """The |I − B| a body pixel exceeds: max(5 σ of the noise, 4 grey levels, ¼ of the body's contrast); a moving
-    pixel's without a contrast."""
+    """The |I − B| a body pixel exceeds: max(5 σ of the noise, 4 grey levels, ¼ of the body's contrast); without
+    ``contrast_grey``, the |I − B| a moving pixel exceeds."""
     return max(NOISE_SIGMAS * noise_grey, MIN_CUT_GREY, CONTRAST_FRACTION * contrast_grey)
 
 

@@ -75,9 +75,9 @@ def _balanced(uv: np.ndarray, wall_uv: np.ndarray) -> np.ndarray:
     return _shifted(wall_uv, _balance_shift((uv[..., 0], uv[..., 1]), wall_uv))
 
 
-def _balance_shift(planes, wall_uv: np.ndarray) -> tuple[int, int]:
-    """The most common U − U_w and V − V_w within ±:data:`BALANCE_REACH` levels over every fourth pixel of the
-    frame's chroma ``planes`` (:func:`_balanced`)."""
+def _balance_shift(planes: tuple[np.ndarray, np.ndarray], wall_uv: np.ndarray) -> tuple[int, int]:
+    """The most common U − U_w and V − V_w within ±:data:`BALANCE_REACH` levels over every fourth row and column of
+    the frame's chroma ``planes`` (U, V) (:func:`_balanced`)."""
     shift = []
     for channel, plane in enumerate(planes):
         step = plane[::4, ::4].astype(np.int16) - wall_uv[::4, ::4, channel]
@@ -133,12 +133,17 @@ class ColourView:
     def window(self, frame, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
         """Rows ``y0:y1``, columns ``x0:x1`` of the frame's view, from the chroma about them alone: the same bytes
         as that window of the whole view (each step is per pixel but the resampling, whose 2 × 2 chroma neighbours
-        lie within the cut; its offsets, multiples of ¼ px, are exact in OpenCV's fixed point). Every fourth
-        pixel of the whole frame gives its white balance."""
+        lie within the cut; its offsets, multiples of ¼ px, are exact in OpenCV's arithmetic: float32 in 5.x, 1/32 px
+        fixed point in 4.x). Every fourth row and column of the whole frame gives its white balance. An empty
+        window (``y1 <= y0`` or ``x1 <= x0``) is an empty image."""
         planes = chroma_planes(frame)
         if planes is None or planes[0].shape != self.wall.shape[:2]:
             raise VideoError("a frame without the clip's colour planes: no colour view")
-        h, w = self.wall.shape[:2]  # the chroma grid: luma (x, y) at (x / 2, y / 2 − ¼)
+        if y1 <= y0 or x1 <= x0:  # (warpAffine would take a size of 0 for the source's)
+            return np.empty((max(y1 - y0, 0), max(x1 - x0, 0)), np.uint8)
+        # the chroma grid: luma (x, y) at (x / 2, y / 2 − ¼); the bilinear step reads chroma rows y0 // 2 − 1 to
+        # (y1 − 1) // 2 + 1 and columns x0 // 2 to (x1 − 1) // 2 + 1: one more on each side is cut
+        h, w = self.wall.shape[:2]
         cy0, cy1 = max(y0 // 2 - 2, 0), min((y1 - 1) // 2 + 3, h)
         cx0, cx1 = max(x0 // 2 - 1, 0), min((x1 - 1) // 2 + 3, w)
         wall = _shifted(self.wall[cy0:cy1, cx0:cx1], _balance_shift(planes, self.wall))
@@ -161,9 +166,14 @@ class ViewWindows:
         self.view, self.frame = view, frame
 
     def __getitem__(self, key) -> np.ndarray:
-        rows, columns = key
-        y0, y1, _ = rows.indices(int(self.frame.height))
-        x0, x1, _ = columns.indices(int(self.frame.width))
+        if not (isinstance(key, tuple) and len(key) == 2 and all(isinstance(k, slice) for k in key)):
+            raise TypeError("a colour view's window is [y0:y1, x0:x1]")
+        (y0, y1, y_step), (x0, x1, x_step) = (
+            key[0].indices(int(self.frame.height)),
+            key[1].indices(int(self.frame.width)),
+        )
+        if y_step != 1 or x_step != 1:
+            raise ValueError("a colour view's window is [y0:y1, x0:x1], without a step")
         return self.view.window(self.frame, y0, y1, x0, x1)
 
 

@@ -16,8 +16,8 @@ A camera knocked once adds a step of the centre (:func:`_knock`); one whose move
 where the swing's centre in the picture steps (:func:`_centre_step`: moved across the swing, or turned).
 The positions are then brought to the camera of mid-clip, p − (c(t) − c₀), so the angle
 about the pivot is the swing's. What the moving circle does not explain (a swing out of
-the plane, a stretching string, a body that turns off its centre, a camera that moves a little) is reported, in pixels
-and as the angle error it allows, never absorbed silently.
+the plane, a stretching string, a body that turns off its centre, a camera that moves a
+little) is reported, in pixels and as the angle error it allows, never absorbed silently.
 """
 
 from __future__ import annotations
