@@ -367,7 +367,7 @@ def test_a_window_of_the_colour_view_is_that_window_of_the_whole_view(size):
     2026-12-06 (the chroma difference over the whole frame, resampled onto the luma grid at once), at the frame's
     edges, for odd chroma sizes (550 × 310: 275 × 155) and odd frames (97 × 61: chroma 49 × 31), and under a
     white-balance shift; an empty window is empty, a stepped one refused."""
-    from pendulum.tracking.colour import ColourView, _distance, _on_luma_grid, chroma_planes
+    from pendulum.tracking.colour import _TO_CHROMA, ColourView, _distance, chroma_planes
 
     width, height = size
     rng = np.random.default_rng(7)
@@ -383,7 +383,8 @@ def test_a_window_of_the_colour_view_is_that_window_of_the_whole_view(size):
         shown = cv2.bitwise_not(
             cv2.convertScaleAbs(cv2.subtract(_distance(np.dstack(planes), view.wall), 2), alpha=2.5)
         )
-        whole = _on_luma_grid(shown, frame)
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP  # the whole view resampled at once, as until 2026-12-06
+        whole = cv2.warpAffine(shown, _TO_CHROMA, (width, height), flags=flags, borderMode=cv2.BORDER_REPLICATE)
         assert whole.shape == (height, width)
         assert np.array_equal(view(frame), whole)
         windows = view.windowed(frame)

@@ -297,7 +297,7 @@ def find_body(
         )
     # the side of the scene the body lies on, voted by its own pixels in the first frame (not a rod's or a second
     # pendulum's) above a quarter of its contrast
-    side = body_polarity([images[0]], background, [first.component], max(threshold, CONTRAST_FRACTION * first.contrast))
+    side = body_polarity([images[0]], background, [first.component], silhouette_cut(sigma, first.contrast))
     if polarity == "both" and side in ("dark", "bright"):  # a one-sided body: measured by its own side throughout
         first_side, whole_side = measured(side)
         found = first_side is not None and first_side.component is not None and whole_side.component is not None
@@ -382,8 +382,9 @@ def track_body(
         if x1 - x0 > 4 and y1 - y0 > 4:
             signed = image[y0:y1, x0:x1].astype(np.float32) - background[y0:y1, x0:x1]
             signed -= border_offset(signed)
-            if gain is not None:  # before a darker band of wall: the difference it would make before the light wall
-                signed /= np.where(np.abs(signed) < NOISE_SIGMAS * scene.noise_grey, 1.0, gain[y0:y1, x0:x1])
+            here_gain = None if gain is None else gain[y0:y1, x0:x1]
+            if here_gain is not None and here_gain.min() < 1.0:  # before a darker band: as before the light wall
+                signed /= np.where(np.abs(signed) < NOISE_SIGMAS * scene.noise_grey, 1.0, here_gain)
             diff = one_sided(signed, scene.polarity)
             component, box = body_component(diff, threshold, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:

@@ -101,11 +101,15 @@ def _chroma(frame) -> np.ndarray:
 _chroma.key = "chroma"
 
 
-def _on_luma_grid(shown: np.ndarray, frame) -> np.ndarray:
-    """An image on the frame's chroma grid, resampled (bilinear) onto its luma grid at H.264's chroma sites."""
-    size = (int(frame.width), int(frame.height))
+def _on_luma_grid(shown: np.ndarray, size: tuple[int, int], luma_at=(0, 0), chroma_at=(0, 0)) -> np.ndarray:
+    """An image on the chroma grid, resampled (bilinear) onto the luma grid at H.264's chroma sites: the luma window
+    of ``size`` (width, height) whose corner is luma (x, y) ``luma_at``, from ``shown`` whose first pixel is chroma
+    (x, y) ``chroma_at`` (a cut of the whole chroma plane: the offsets, multiples of ¼ px, are exact in OpenCV's
+    arithmetic, float32 in 5.x, 1/32 px fixed point in 4.x)."""
+    (x0, y0), (cx0, cy0) = luma_at, chroma_at
+    to_cut = _TO_CHROMA - np.array([[0.0, 0.0, cx0 - 0.5 * x0], [0.0, 0.0, cy0 - 0.5 * y0]])
     flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-    return cv2.warpAffine(shown, _TO_CHROMA, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+    return cv2.warpAffine(shown, to_cut, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
 
 
 def _first_chroma(path) -> np.ndarray:
@@ -132,10 +136,9 @@ class ColourView:
 
     def window(self, frame, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
         """Rows ``y0:y1``, columns ``x0:x1`` of the frame's view, from the chroma about them alone: the same bytes
-        as that window of the whole view (each step is per pixel but the resampling, whose 2 × 2 chroma neighbours
-        lie within the cut; its offsets, multiples of ¼ px, are exact in OpenCV's arithmetic: float32 in 5.x, 1/32 px
-        fixed point in 4.x). Every fourth row and column of the whole frame gives its white balance. An empty
-        window (``y1 <= y0`` or ``x1 <= x0``) is an empty image."""
+        as that window of the whole view (each step is per pixel but the resampling, :func:`_on_luma_grid`, whose
+        2 × 2 chroma neighbours lie within the cut). Every fourth row and column of the whole frame gives its white
+        balance. An empty window (``y1 <= y0`` or ``x1 <= x0``) is an empty image."""
         planes = chroma_planes(frame)
         if planes is None or planes[0].shape != self.wall.shape[:2]:
             raise VideoError("a frame without the clip's colour planes: no colour view")
@@ -150,9 +153,7 @@ class ColourView:
         ad = cv2.absdiff(np.dstack([plane[cy0:cy1, cx0:cx1] for plane in planes]), wall)
         difference = cv2.subtract(cv2.add(ad[..., 0], ad[..., 1]), self.dead_zone)
         shown = cv2.bitwise_not(cv2.convertScaleAbs(difference, alpha=self.gain))
-        to_cut = _TO_CHROMA - np.array([[0.0, 0.0, cx0 - 0.5 * x0], [0.0, 0.0, cy0 - 0.5 * y0]])
-        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        return cv2.warpAffine(shown, to_cut, (x1 - x0, y1 - y0), flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        return _on_luma_grid(shown, (x1 - x0, y1 - y0), (x0, y0), (cx0, cy0))
 
 
 class ViewWindows:
@@ -281,7 +282,7 @@ class MarkerColourView:
             raise VideoError("a frame without the clip's colour planes: no colour view")
         # [1 2 1]/4 in each direction on the chroma grid: the chroma noise ×0.375, the dot ~1 luma px softer
         shown = cv2.GaussianBlur(cv2.transform(np.dstack(planes), self.matrix), (3, 3), 0)
-        return _on_luma_grid(shown, frame)
+        return _on_luma_grid(shown, (int(frame.width), int(frame.height)))
 
 
 def marker_colour_view(path, start_px, radius_px: float | None = None) -> tuple[MarkerColourView | None, dict]:
