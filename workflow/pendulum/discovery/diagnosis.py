@@ -248,6 +248,78 @@ def period_drift(fit: GroupFit) -> dict:
     return out
 
 
+# What an unexplained residual looks like: its power by harmonic of the swing (pendulum.discovery.findings names it)
+PATTERN_BANDS = (  # (name, lowest, highest) frequency in cycles per swing of the residual's phase-domain spectrum
+    ("slow", 0.0, 0.5),
+    ("swing", 0.5, 1.5),  # split into steady (within STEADY_BINS of 1) and wobble (side bands)
+    ("even_harmonic", 1.5, 2.5),
+    ("odd_harmonic", 2.5, 3.5),
+)
+STEADY_BINS = 2.5  # a line at the swing frequency, Hann-windowed, spreads over ±2 bins of 1/N cycles per swing
+PATTERN_SHARE = 0.5  # a pattern named alone when it holds at least this share of the residual's power below 3.5 ...
+SECOND_SHARE = 0.15  # ... and the next holds less than this (else the two are named)
+PATTERNS = ("slow", "swing_steady", "swing_wobble", "even_harmonic", "odd_harmonic")
+
+
+def residual_pattern(fit: GroupFit) -> dict:
+    """The residual's power by harmonic of the swing, pooled over trials.
+
+    Each trial's residual r is taken onto its swing's own phase φ (unwrapped; φ = atan2(−θ̇/ω, θ) of the fitted
+    curve, ω its small-amplitude angular frequency), resampled uniformly over its N swings, Hann-windowed, and its
+    periodogram split by ν, cycles per swing (Parseval: shares that add up): ``slow`` (ν < ½: a drifting zero),
+    ``swing_steady`` (|ν − 1| ≤ :data:`STEADY_BINS`/N: a decay or period that departs steadily), ``swing_wobble``
+    (½ ≤ ν < 1½ otherwise: side bands, the swing's amplitude or phase wobbling), ``even_harmonic`` (ν ≈ 2: which an
+    equation symmetric in θ cannot make) and ``odd_harmonic`` (ν ≈ 3: the swing's shape). Shares are of the power
+    below ν = 3½ (``structured``: that power's share of the whole; above is noise). ``dominant``: the pattern
+    holding :data:`PATTERN_SHARE` of it where the next holds under :data:`SECOND_SHARE`, else the two largest.
+    ``wobble_period_s``: 1 / (|ν − 1| f₀) at the strongest side band, where the wobble is among ``dominant`` and
+    at least two such wobbles fit in the records (else None)."""
+    power = dict.fromkeys(PATTERNS, 0.0)
+    total, wobbles = 0.0, []
+    for k, r in enumerate(fit.residuals):
+        record, mask = fit.problem.records[k], fit.problem.masks[k]
+        t = record.time_s[mask]
+        theta = fit.trial_curve(k)[mask] - fit.nuisance(k)[2]
+        inertia = float(fit.problem.models[k].inertia_kg_m2(fit.problem.physical(fit.x, k)))
+        omega = math.sqrt(record.rig.restoring_torque_nm / inertia)
+        phase = np.unwrap(np.arctan2(-np.gradient(theta, t) / omega, theta))
+        swings = (phase[-1] - phase[0]) / (2 * math.pi)
+        if r.size < 16 or swings < 3 or np.any(np.diff(phase) <= 0):
+            continue
+        grid = np.linspace(phase[0], phase[-1], r.size)
+        on_phase = np.interp(grid, phase, r)
+        on_phase = (on_phase - on_phase.mean()) * np.hanning(r.size)
+        spectrum = np.abs(np.fft.rfft(on_phase)) ** 2
+        nu = np.fft.rfftfreq(r.size, (grid[1] - grid[0]) / (2 * math.pi))  # cycles per swing
+        total += float(spectrum.sum())
+        for name, low, high in PATTERN_BANDS:
+            band = (nu >= low) & (nu < high)
+            if name != "swing":
+                power[name] += float(spectrum[band].sum())
+                continue
+            steady = band & (np.abs(nu - 1) <= STEADY_BINS / swings)
+            power["swing_steady"] += float(spectrum[steady].sum())
+            power["swing_wobble"] += float(spectrum[band & ~steady].sum())
+            side = band & ~steady
+            if np.any(side):
+                wobbles.append((abs(float(nu[side][np.argmax(spectrum[side])]) - 1), swings, omega / (2 * math.pi)))
+    structured = sum(power.values())
+    if structured <= 0 or total <= 0:
+        return {"shares": None, "structured": 0.0, "dominant": [], "wobble_period_s": None}
+    shares = {name: value / structured for name, value in power.items()}
+    ranked = sorted(PATTERNS, key=lambda name: -shares[name])
+    dominant = ranked[:1] if shares[ranked[0]] >= PATTERN_SHARE and shares[ranked[1]] < SECOND_SHARE else ranked[:2]
+    offset, swings, frequency = max(wobbles, key=lambda w: w[1]) if wobbles else (0.0, 0.0, 0.0)
+    return {
+        "shares": {name: round(value, 4) for name, value in shares.items()},
+        "structured": round(structured / total, 4),
+        "dominant": dominant,
+        "wobble_period_s": round(1 / (offset * frequency), 2)
+        if "swing_wobble" in dominant and offset * swings >= 2
+        else None,
+    }
+
+
 # ---------------------------------------------------------------------------
 # The statistics of the evidence (pendulum.discovery.selection)
 

@@ -79,7 +79,7 @@ def verdict(document: dict) -> str:
     if document["unexplained"]:
         text.append(
             f"unexplained: the residual ({_deg(document['rms_rad'])} RMS) is {check['rms_over_noise']:.0f}× the noise "
-            "floor and not white, and no candidate removes it"
+            "floor and not white, and no candidate removes it" + pattern_phrase(document.get("residual_pattern"))
         )
     elif not parts and not document["indistinguishable"]:
         white = "" if check["whiteness"]["p_value"] >= 0.01 else ", not white"
@@ -94,6 +94,34 @@ def verdict(document: dict) -> str:
             "length_m and mass_kg (for a swing in air, allow a negative added mass: fitting.added_mass_lower_kg)"
         )
     return "; ".join(text)
+
+
+PATTERN_MEANING = {  # what each part of an unexplained residual (diagnosis.residual_pattern) says of the record
+    "slow": "a slow drift of the zero (below half the swing frequency: a camera or stand creeping, a pivot settling, "
+    "a vertical drifting; not the swing's dynamics)",
+    "swing_steady": "at the swing frequency, changing slowly over the record (the swing's decay or period departs "
+    "from the model's as no candidate does: a damping or stiffness of another form, wrong rig values, or a swing "
+    "whose plane or scale changes as seen)",
+    "swing_wobble": "side bands about the swing frequency (the swing's amplitude or phase wobbling{every}: a swing not "
+    "in one plane seen in projection, a support that sways, or another motion beating with the swing)",
+    "even_harmonic": "at twice the swing frequency (an equation symmetric in θ makes no even harmonic: the angle "
+    "measurement is lopsided, a swing plane turned against the image plane or a pivot or vertical misplaced)",
+    "odd_harmonic": "at three times the swing frequency (the swing's shape departs from the model's: its restoring "
+    "torque's form, a body that is no point mass, a flexible suspension)",
+}
+
+
+def pattern_phrase(pattern: dict | None) -> str:
+    """``; it lies mostly <where> (n % of its power…)``: the dominant parts of an unexplained residual, or ''."""
+    if not pattern or not pattern.get("shares") or not pattern.get("dominant"):
+        return ""
+    wobble = pattern.get("wobble_period_s")
+    every = f", every {wobble:.3g} s" if wobble else ""
+    parts = [
+        f"{PATTERN_MEANING[name].format(every=every)}, {100 * pattern['shares'][name]:.0f} % of its power"
+        for name in pattern["dominant"]
+    ]
+    return "; it lies mostly " + ", and ".join(parts)
 
 
 def _key(terms) -> str:

@@ -399,6 +399,7 @@ class Discovery:
             "held_out_rms_rad": self.held_out_rms(final.problem.terms),
             "residual_check": check,
             "unexplained": check["structured"],
+            "residual_pattern": diagnosis.residual_pattern(final),
             "indistinguishable": groups,
             "warnings": warnings,
         }

@@ -1,0 +1,77 @@
+"""Where an unexplained residual lies (pendulum.discovery.diagnosis.residual_pattern): by harmonic of the swing.
+
+The records: a light ball swung in air (an apple-like rig: 0.18 kg on 1.04 m, 2.05 s period, 22 s at 60 fps,
+tracking-like noise of 0.005°), simulated with quadratic drag alone, then distorted as a measurement can be and no
+candidate effect can mend — a lopsided angle scale, θ + ε (θ/θ₀)² (even harmonic); an amplitude seen to wobble,
+θ (1 + m sin 2πt/6 s) (side bands); a drifting zero, θ + ε sin 2πt/30 s (slow); a shape, θ + ε (θ/θ₀)³ (odd
+harmonic) — each of 0.3° (m = 3 %). The truth is the distortion put in.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from pendulum.discovery import diagnosis
+from pendulum.discovery.selection import Discovery
+from pendulum.fit.records import FitSettings, load_record
+from pendulum.synthetic.records import hidden_effect_table
+
+AIR_BALL = {
+    "mass_kg": 0.18,
+    "length_m": 1.04,
+    "frontal_area_m2": 0.0045,
+    "displaced_volume_m3": 0.0002,
+    "fluid_density_kg_m3": 1.2,
+    "gravity_m_s2": 9.81,
+}
+TRUTH = {"added_mass_kg": 0.0005, "drag_area_m2": 0.0025}
+CANDIDATES = ["linear_damping", "coulomb_friction", "history_force"]
+RELEASE_DEG = 20.0
+DISTORTIONS = {  # name → (θ, t) ↦ the measured record; the part of the residual it must land in
+    "lopsided": (lambda th, t: th + math.radians(0.3) * (th / math.radians(RELEASE_DEG)) ** 2, "even_harmonic"),
+    "wobbling": (lambda th, t: th * (1 + 0.03 * np.sin(2 * np.pi * t / 6.0)), "swing_wobble"),
+    "drifting": (lambda th, t: th + math.radians(0.3) * np.sin(2 * np.pi * t / 30.0), "slow"),
+    "misshapen": (lambda th, t: th + math.radians(0.3) * (th / math.radians(RELEASE_DEG)) ** 3, "odd_harmonic"),
+    "clean": (lambda th, t: th, None),
+}
+
+
+def discovery_of(kind: str, seed: int) -> Discovery:
+    distort, _ = DISTORTIONS[kind]
+    table = hidden_effect_table(AIR_BALL, TRUTH, RELEASE_DEG, seed=seed, fps=60.0)
+    table["theta_rad"] = distort(table.theta_rad.to_numpy(), table.time_s.to_numpy())
+    settings = FitSettings()
+    record = load_record(table, f"{kind}_{seed}", AIR_BALL, settings, tolerances={})
+    return Discovery([record], ["air_ball"], ["quadratic_drag"], CANDIDATES, settings)
+
+
+def test_a_residual_is_placed_by_harmonic_of_the_swing():
+    """Four distortions × 5 seeds: the part named first is the one put in, in at least 19 of 20 (measured: 20 of 20,
+    each with 94–99.8 % of the power below 3½ cycles per swing); the wobble's period, 6 s, within 10 % (6.1 s). A
+    clean record's residual is mostly noise: under half its power lies below 3½ cycles per swing (17–22 %)."""
+    placed, wobbles, rows = 0, [], []
+    for kind in ("lopsided", "wobbling", "drifting", "misshapen"):
+        for seed in range(1, 6):
+            base = discovery_of(kind, seed)
+            pattern = diagnosis.residual_pattern(base.fit(base.baseline_terms))
+            rows.append((kind, seed, pattern))
+            placed += pattern["dominant"][0] == DISTORTIONS[kind][1]
+            if kind == "wobbling":
+                wobbles.append(pattern["wobble_period_s"])
+    summary = "\n".join(str(row) for row in rows)
+    assert placed >= 19, summary
+    assert all(w is not None and abs(w / 6.0 - 1) <= 0.10 for w in wobbles), summary
+    for seed in range(1, 4):
+        base = discovery_of("clean", seed)
+        assert diagnosis.residual_pattern(base.fit(base.baseline_terms))["structured"] < 0.5
+
+
+@pytest.mark.parametrize("kind, words", [("lopsided", "at twice the swing frequency"), ("wobbling", "every 6.")])
+def test_discovery_says_where_the_residual_it_cannot_explain_lies(kind, words):
+    """No candidate mends a measurement's distortion: discovery ends unexplained and its verdict says where the residual
+    lies (the even harmonic of a lopsided scale; the wobble of an amplitude seen to wobble, with its period)."""
+    document = discovery_of(kind, 11).run()
+    assert document["unexplained"] and document["named_effects"] == [], document["verdict"]
+    assert document["residual_pattern"]["dominant"][0] == DISTORTIONS[kind][1], document["residual_pattern"]
+    assert words in document["verdict"], document["verdict"]
