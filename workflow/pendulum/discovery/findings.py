@@ -111,6 +111,15 @@ PATTERN_MEANING = {  # what each part of an unexplained residual (diagnosis.resi
 }
 
 
+PATTERN_PLACE = {  # the same parts in a few words (the report's list of where the residual's power lies)
+    "slow": "a slow drift of the zero",
+    "swing_steady": "at the swing frequency, changing slowly",
+    "swing_wobble": "in side bands about the swing frequency (a wobble)",
+    "even_harmonic": "at twice the swing frequency",
+    "odd_harmonic": "at three times the swing frequency",
+}
+
+
 def pattern_phrase(pattern: dict | None) -> str:
     """``; it lies mostly <where> (n % of its power…)``: the dominant parts of an unexplained residual, or ''."""
     if not pattern or not pattern.get("shares") or not pattern.get("dominant"):

@@ -15,6 +15,7 @@ import math
 import re
 from functools import partial
 
+from pendulum.discovery.findings import PATTERN_PLACE
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.report.data import ReportData, failure_text, is_ok, read_json, read_table
 from pendulum.report.discovery_figures import figures_html, model_key, model_label
@@ -249,11 +250,23 @@ def endings_html(document: dict, harmonics: dict | None = None) -> str:
             if seen
             else ""
         )
+        shares = (document.get("residual_pattern") or {}).get("shares")
+        where = (
+            " Where it lies (its power below 3½ cycles per swing, by harmonic of the swing's own phase): "
+            + "; ".join(
+                f"{100 * shares[name]:.0f} % {PATTERN_PLACE[name]}"
+                for name in sorted(shares, key=lambda n: -shares[n])
+                if shares[name] >= 0.05
+            )
+            + " (the verdict above says what each part means)."
+            if shares
+            else ""
+        )
         out.append(
             '<p class="warn discovery-ending">Unexplained: after the final model the residual is '
             f"{fmt(check['rms_over_noise'], 2)}× the noise floor ({deg(check['noise_floor_rad'])}°) and not white "
             f"(Ljung–Box p = {p_text(check['whiteness']['p_value'])}). No candidate in the library removes this "
-            f"structure, so none is named for it.{found} "
+            f"structure, so none is named for it.{found}{esc(where)} "
             + ("Beyond that, something" if seen else "Something")
             + " outside the library is at work: a disturbance, a drifting zero, frame times the motion could not "
             "check, wrong rig values?</p>"
