@@ -64,7 +64,8 @@ def test_a_residual_is_placed_by_harmonic_of_the_swing():
     assert all(w is not None and abs(w / 6.0 - 1) <= 0.10 for w in wobbles), summary
     for seed in range(1, 4):
         base = discovery_of("clean", seed)
-        assert diagnosis.residual_pattern(base.fit(base.baseline_terms))["structured"] < 0.5
+        pattern = diagnosis.residual_pattern(base.fit(base.baseline_terms))
+        assert pattern["structured"] < 0.5 and pattern["dominant"] == [], pattern
 
 
 @pytest.mark.parametrize("kind, words", [("lopsided", "at twice the swing frequency"), ("wobbling", "every 6.")])

@@ -265,13 +265,15 @@ def residual_pattern(fit: GroupFit) -> dict:
     """The residual's power by harmonic of the swing, pooled over trials.
 
     Each trial's residual r is taken onto its swing's own phase φ (unwrapped; φ = atan2(−θ̇/ω, θ) of the fitted
-    curve, ω its small-amplitude angular frequency), resampled uniformly over its N swings, Hann-windowed, and its
+    curve, ω its small-amplitude angular frequency; up to where the fitted swing comes to rest), resampled evenly
+    over its N swings (at least 3), Hann-windowed, and its
     periodogram split by ν, cycles per swing (Parseval: shares that add up): ``slow`` (ν < ½: a drifting zero),
     ``swing_steady`` (|ν − 1| ≤ :data:`STEADY_BINS`/N: a decay or period that departs steadily), ``swing_wobble``
     (½ ≤ ν < 1½ otherwise: side bands, the swing's amplitude or phase wobbling), ``even_harmonic`` (ν ≈ 2: which an
     equation symmetric in θ cannot make) and ``odd_harmonic`` (ν ≈ 3: the swing's shape). Shares are of the power
     below ν = 3½ (``structured``: that power's share of the whole; above is noise). ``dominant``: the pattern
-    holding :data:`PATTERN_SHARE` of it where the next holds under :data:`SECOND_SHARE`, else the two largest.
+    holding :data:`PATTERN_SHARE` of it where the next holds under :data:`SECOND_SHARE`, else the two largest
+    (none where most of the residual's power lies above: noise).
     ``wobble_period_s``: 1 / (|ν − 1| f₀) at the strongest side band, where the wobble is among ``dominant`` and
     at least two such wobbles fit in the records (else None)."""
     power = dict.fromkeys(PATTERNS, 0.0)
@@ -283,8 +285,11 @@ def residual_pattern(fit: GroupFit) -> dict:
         inertia = float(fit.problem.models[k].inertia_kg_m2(fit.problem.physical(fit.x, k)))
         omega = math.sqrt(record.rig.restoring_torque_nm / inertia)
         phase = np.unwrap(np.arctan2(-np.gradient(theta, t) / omega, theta))
-        swings = (phase[-1] - phase[0]) / (2 * math.pi)
-        if r.size < 16 or swings < 3 or np.any(np.diff(phase) <= 0):
+        stalled = np.flatnonzero(np.diff(phase) <= 0)  # the model's swing at rest (friction): its phase stands still
+        moving = slice(0, stalled[0] + 1 if stalled.size else phase.size)
+        phase, r = phase[moving], r[moving]
+        swings = (phase[-1] - phase[0]) / (2 * math.pi) if phase.size else 0.0
+        if r.size < 16 or swings < 3:
             continue
         grid = np.linspace(phase[0], phase[-1], r.size)
         on_phase = np.interp(grid, phase, r)
@@ -309,6 +314,8 @@ def residual_pattern(fit: GroupFit) -> dict:
     shares = {name: value / structured for name, value in power.items()}
     ranked = sorted(PATTERNS, key=lambda name: -shares[name])
     dominant = ranked[:1] if shares[ranked[0]] >= PATTERN_SHARE and shares[ranked[1]] < SECOND_SHARE else ranked[:2]
+    if structured < 0.5 * total:  # mostly noise: no part of it to name
+        dominant = []
     offset, swings, frequency = max(wobbles, key=lambda w: w[1]) if wobbles else (0.0, 0.0, 0.0)
     return {
         "shares": {name: round(value, 4) for name, value in shares.items()},
