@@ -261,13 +261,32 @@ SECOND_SHARE = 0.15  # ... and the next holds less than this (else the two are n
 PATTERNS = ("slow", "swing_steady", "swing_wobble", "even_harmonic", "odd_harmonic")
 
 
+def swing_phase(time_s: np.ndarray, theta_rad: np.ndarray, omega: float) -> np.ndarray:
+    """The swing's phase φ = atan2(−θ̇/ω, θ) of a smooth (fitted) curve θ(t), unwrapped with the advance ω Δt expected
+    between samples, so that a gap in the record (frames left out) keeps its whole swings; θ̇ by differences within
+    each run of evenly spaced samples (not across a gap)."""
+    t = np.asarray(time_s, float)
+    theta = np.asarray(theta_rad, float)
+    step = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    runs = np.split(np.arange(t.size), np.flatnonzero(np.diff(t) > 1.5 * step) + 1)
+    speed = np.zeros_like(theta)
+    for run in runs:
+        if run.size >= 2:
+            speed[run] = np.gradient(theta[run], t[run])
+    raw = np.arctan2(-speed / omega, theta)
+    expected = omega * np.diff(t)
+    turned = (np.diff(raw) - expected + math.pi) % (2 * math.pi) - math.pi + expected
+    return np.concatenate([raw[:1], raw[0] + np.cumsum(turned)])
+
+
 def residual_pattern(fit: GroupFit) -> dict:
     """The residual's power by harmonic of the swing, pooled over trials.
 
     Each trial's residual r is taken onto its swing's own phase φ (unwrapped; φ = atan2(−θ̇/ω, θ) of the fitted
-    curve, ω its small-amplitude angular frequency; up to where the fitted swing comes to rest), resampled evenly
-    over its N swings (at least 3), Hann-windowed, and its
-    periodogram split by ν, cycles per swing (Parseval: shares that add up): ``slow`` (ν < ½: a drifting zero),
+    curve, ω its small-amplitude angular frequency: :func:`swing_phase`; up to where the fitted swing comes to rest),
+    resampled evenly over its N swings (at least 3), Hann-windowed (the record's two ends weigh less), and its
+    periodogram, scaled to the trial's Σr² (trials weighed as the fit weighs them), split by ν, cycles per swing
+    (Parseval: shares that add up): ``slow`` (ν < ½: a drifting zero),
     ``swing_steady`` (|ν − 1| ≤ :data:`STEADY_BINS`/N: a decay or period that departs steadily), ``swing_wobble``
     (½ ≤ ν < 1½ otherwise: side bands, the swing's amplitude or phase wobbling), ``even_harmonic`` (ν ≈ 2: which an
     equation symmetric in θ cannot make) and ``odd_harmonic`` (ν ≈ 3: the swing's shape). Shares are of the power
@@ -284,17 +303,18 @@ def residual_pattern(fit: GroupFit) -> dict:
         theta = fit.trial_curve(k)[mask] - fit.nuisance(k)[2]
         inertia = float(fit.problem.models[k].inertia_kg_m2(fit.problem.physical(fit.x, k)))
         omega = math.sqrt(record.rig.restoring_torque_nm / inertia)
-        phase = np.unwrap(np.arctan2(-np.gradient(theta, t) / omega, theta))
+        phase = swing_phase(t, theta, omega)
         stalled = np.flatnonzero(np.diff(phase) <= 0)  # the model's swing at rest (friction): its phase stands still
         moving = slice(0, stalled[0] + 1 if stalled.size else phase.size)
         phase, r = phase[moving], r[moving]
         swings = (phase[-1] - phase[0]) / (2 * math.pi) if phase.size else 0.0
-        if r.size < 16 or swings < 3:
+        if r.size < 16 or swings < 3 or not np.all(np.isfinite(r)):
             continue
         grid = np.linspace(phase[0], phase[-1], r.size)
         on_phase = np.interp(grid, phase, r)
         on_phase = (on_phase - on_phase.mean()) * np.hanning(r.size)
         spectrum = np.abs(np.fft.rfft(on_phase)) ** 2
+        spectrum *= float(r @ r) / max(float(spectrum.sum()), 1e-300)  # each trial weighed by its residual's Σr²
         nu = np.fft.rfftfreq(r.size, (grid[1] - grid[0]) / (2 * math.pi))  # cycles per swing
         total += float(spectrum.sum())
         for name, low, high in PATTERN_BANDS:
@@ -303,11 +323,13 @@ def residual_pattern(fit: GroupFit) -> dict:
                 power[name] += float(spectrum[band].sum())
                 continue
             steady = band & (np.abs(nu - 1) <= STEADY_BINS / swings)
-            power["swing_steady"] += float(spectrum[steady].sum())
-            power["swing_wobble"] += float(spectrum[band & ~steady].sum())
             side = band & ~steady
+            power["swing_steady"] += float(spectrum[steady].sum())
+            power["swing_wobble"] += float(spectrum[side].sum())
             if np.any(side):
-                wobbles.append((abs(float(nu[side][np.argmax(spectrum[side])]) - 1), swings, omega / (2 * math.pi)))
+                peak = int(np.argmax(spectrum[side]))
+                offset = abs(float(nu[side][peak]) - 1)
+                wobbles.append((float(spectrum[side][peak]), offset, swings, omega / (2 * math.pi)))
     structured = sum(power.values())
     if structured <= 0 or total <= 0:
         return {"shares": None, "structured": 0.0, "dominant": [], "wobble_period_s": None}
@@ -316,7 +338,7 @@ def residual_pattern(fit: GroupFit) -> dict:
     dominant = ranked[:1] if shares[ranked[0]] >= PATTERN_SHARE and shares[ranked[1]] < SECOND_SHARE else ranked[:2]
     if structured < 0.5 * total:  # mostly noise: no part of it to name
         dominant = []
-    offset, swings, frequency = max(wobbles, key=lambda w: w[1]) if wobbles else (0.0, 0.0, 0.0)
+    _, offset, swings, frequency = max(wobbles) if wobbles else (0.0, 0.0, 0.0, 0.0)  # the strongest side band
     return {
         "shares": {name: round(value, 4) for name, value in shares.items()},
         "structured": round(structured / total, 4),

@@ -104,8 +104,9 @@ PATTERN_MEANING = {  # what each part of an unexplained residual (diagnosis.resi
     "whose plane or scale changes as seen)",
     "swing_wobble": "side bands about the swing frequency (the swing's amplitude or phase wobbling{every}: a swing not "
     "in one plane seen in projection, a support that sways, or another motion beating with the swing)",
-    "even_harmonic": "at twice the swing frequency (an equation symmetric in θ makes no even harmonic: the angle "
-    "measurement is lopsided, a swing plane turned against the image plane or a pivot or vertical misplaced)",
+    "even_harmonic": "at twice the swing frequency (an equation symmetric in θ makes no even harmonic: most likely "
+    "a lopsided angle measurement, a swing plane turned against the image plane or a pivot or vertical misplaced; "
+    "or a torque that differs between the swing's two sides)",
     "odd_harmonic": "at three times the swing frequency (the swing's shape departs from the model's: its restoring "
     "torque's form, a body that is no point mass, a flexible suspension)",
 }
@@ -127,7 +128,8 @@ def pattern_phrase(pattern: dict | None) -> str:
     wobble = pattern.get("wobble_period_s")
     every = f", every {wobble:.3g} s" if wobble else ""
     parts = [
-        f"{PATTERN_MEANING[name].format(every=every)}, {100 * pattern['shares'][name]:.0f} % of its power"
+        f"{PATTERN_MEANING[name].format(every=every)}, {100 * pattern['shares'][name] * pattern['structured']:.0f} % "
+        "of its power"
         for name in pattern["dominant"]
     ]
     return "; it lies mostly " + ", and ".join(parts)

@@ -250,16 +250,17 @@ def endings_html(document: dict, harmonics: dict | None = None) -> str:
             if seen
             else ""
         )
-        shares = (document.get("residual_pattern") or {}).get("shares")
+        pattern = document.get("residual_pattern") or {}
+        shares = {name: share * pattern.get("structured", 0.0) for name, share in (pattern.get("shares") or {}).items()}
         where = (
-            " Where it lies (its power below 3½ cycles per swing, by harmonic of the swing's own phase): "
+            " Where its power lies, by harmonic of the swing's own phase: "
             + "; ".join(
                 f"{100 * shares[name]:.0f} % {PATTERN_PLACE[name]}"
                 for name in sorted(shares, key=lambda n: -shares[n])
                 if shares[name] >= 0.05
             )
             + " (the verdict above says what each part means)."
-            if shares
+            if pattern.get("dominant")
             else ""
         )
         out.append(
