@@ -279,6 +279,22 @@ def swing_phase(time_s: np.ndarray, theta_rad: np.ndarray, omega: float) -> np.n
     return np.concatenate([raw[:1], raw[0] + np.cumsum(turned)])
 
 
+def _timing_part(grid, residual, amplitude, omega: float, swings: float, weight: float) -> tuple[float, float, float]:
+    """The residual's part at the swing frequency, changing slowly, split into amplitude and timing: with θ = A cos φ, a
+    residual a cos φ + b sin φ is an amplitude error a and a timing error δ = −b / (A ω) (θ(t + δ) − θ(t) = θ̇ δ =
+    −A ω sin φ δ). Demodulated, z = r e^(−iφ) averaged over one swing is (a − i b) / 2. Returns (``weight``, the share
+    of the slow part in b, δ's RMS in ms)."""
+    per_swing = max(1, int(round(grid.size / swings)))
+    smooth = np.ones(per_swing) / per_swing
+    z = np.convolve(residual * np.exp(-1j * grid), smooth, mode="valid")
+    a = np.convolve(amplitude, smooth, mode="valid")
+    both = float(np.sum(np.abs(z) ** 2))
+    if both <= 0 or z.size == 0:
+        return 0.0, 0.0, 0.0
+    delay = 2 * z.imag / (np.maximum(a, 1e-12) * omega)
+    return weight, float(np.sum(z.imag**2)) / both, 1e3 * float(np.sqrt(np.mean(delay**2)))
+
+
 def residual_pattern(fit: GroupFit) -> dict:
     """The residual's power by harmonic of the swing, pooled over trials.
 
@@ -294,9 +310,12 @@ def residual_pattern(fit: GroupFit) -> dict:
     holding :data:`PATTERN_SHARE` of it where the next holds under :data:`SECOND_SHARE`, else the two largest
     (none where most of the residual's power lies above: noise).
     ``wobble_period_s``: 1 / (|ν − 1| f₀) at the strongest side band, where the wobble is among ``dominant`` and
-    at least two such wobbles fit in the records (else None)."""
+    at least two such wobbles fit in the records (else None). ``steady_in_timing``: the share of the slow part at the
+    swing frequency that lies in the swing's timing rather than its amplitude (:func:`_timing_part`; 1: the swing
+    runs ahead of and behind the model, 0: its amplitude departs), and ``timing_wander_ms``, that timing error's RMS
+    (trials weighed by their Σr²)."""
     power = dict.fromkeys(PATTERNS, 0.0)
-    total, wobbles = 0.0, []
+    total, wobbles, timing = 0.0, [], []
     for k, r in enumerate(fit.residuals):
         record, mask = fit.problem.records[k], fit.problem.masks[k]
         t = record.time_s[mask]
@@ -312,6 +331,8 @@ def residual_pattern(fit: GroupFit) -> dict:
             continue
         grid = np.linspace(phase[0], phase[-1], r.size)
         on_phase = np.interp(grid, phase, r)
+        amplitude = np.interp(grid, phase, np.hypot(theta[moving], np.gradient(theta[moving], t[moving]) / omega))
+        timing.append(_timing_part(grid, on_phase, amplitude, omega, swings, float(r @ r)))
         on_phase = (on_phase - on_phase.mean()) * np.hanning(r.size)
         spectrum = np.abs(np.fft.rfft(on_phase)) ** 2
         spectrum *= float(r @ r) / max(float(spectrum.sum()), 1e-300)  # each trial weighed by its residual's Σr²
@@ -332,17 +353,31 @@ def residual_pattern(fit: GroupFit) -> dict:
                 wobbles.append((float(spectrum[side][peak]), offset, swings, omega / (2 * math.pi)))
     structured = sum(power.values())
     if structured <= 0 or total <= 0:
-        return {"shares": None, "structured": 0.0, "dominant": [], "wobble_period_s": None}
+        return {
+            "shares": None,
+            "structured": 0.0,
+            "dominant": [],
+            "steady_in_timing": None,
+            "timing_wander_ms": None,
+            "wobble_period_s": None,
+        }
     shares = {name: value / structured for name, value in power.items()}
     ranked = sorted(PATTERNS, key=lambda name: -shares[name])
     dominant = ranked[:1] if shares[ranked[0]] >= PATTERN_SHARE and shares[ranked[1]] < SECOND_SHARE else ranked[:2]
     if structured < 0.5 * total:  # mostly noise: no part of it to name
         dominant = []
     _, offset, swings, frequency = max(wobbles) if wobbles else (0.0, 0.0, 0.0, 0.0)  # the strongest side band
+    weights = np.array([w for w, _, _ in timing])
+    in_timing = float(np.sum(weights * [f for _, f, _ in timing]) / weights.sum()) if weights.sum() > 0 else None
+    wander_ms = (
+        float(np.sqrt(np.sum(weights * [m**2 for _, _, m in timing]) / weights.sum())) if weights.sum() else None
+    )
     return {
         "shares": {name: round(value, 4) for name, value in shares.items()},
         "structured": round(structured / total, 4),
         "dominant": dominant,
+        "steady_in_timing": None if in_timing is None else round(in_timing, 3),
+        "timing_wander_ms": None if wander_ms is None else round(wander_ms, 2),
         "wobble_period_s": round(1 / (offset * frequency), 2)
         if "swing_wobble" in dominant and offset * swings >= 2
         else None,

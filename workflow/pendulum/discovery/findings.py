@@ -102,6 +102,10 @@ PATTERN_MEANING = {  # what each part of an unexplained residual (diagnosis.resi
     "swing_steady": "at the swing frequency, changing slowly over the record (the swing's decay or period departs "
     "from the model's as no candidate does: a damping or stiffness of another form, wrong rig values, or a swing "
     "whose plane or scale changes as seen)",
+    "swing_steady_timing": "at the swing frequency, in its timing (the swing runs ahead of and behind the model by "
+    "{wander} ms RMS: frame times that wander, or a period that changes as the model's does not)",
+    "swing_steady_amplitude": "at the swing frequency, in its amplitude (the swing's decay departs from the model's as "
+    "no candidate's does: a damping of another form, or a scale that changes as seen)",
     "swing_wobble": "side bands about the swing frequency (the swing's amplitude or phase wobbling{every}: a swing not "
     "in one plane seen in projection, a support that sways, or another motion beating with the swing)",
     "even_harmonic": "at twice the swing frequency (an equation symmetric in θ makes no even harmonic: most likely "
@@ -112,9 +116,12 @@ PATTERN_MEANING = {  # what each part of an unexplained residual (diagnosis.resi
 }
 
 
+TIMING_SHARE = 0.7  # a steady departure said to lie in the swing's timing (or, under 1 − this, its amplitude)
 PATTERN_PLACE = {  # the same parts in a few words (the report's list of where the residual's power lies)
     "slow": "a slow drift of the zero",
     "swing_steady": "at the swing frequency, changing slowly",
+    "swing_steady_timing": "at the swing frequency, in its timing",
+    "swing_steady_amplitude": "at the swing frequency, in its amplitude",
     "swing_wobble": "in side bands about the swing frequency (a wobble)",
     "even_harmonic": "at twice the swing frequency",
     "odd_harmonic": "at three times the swing frequency",
@@ -127,12 +134,24 @@ def pattern_phrase(pattern: dict | None) -> str:
         return ""
     wobble = pattern.get("wobble_period_s")
     every = f", every {wobble:.3g} s" if wobble else ""
+    wander = pattern.get("timing_wander_ms")
     parts = [
-        f"{PATTERN_MEANING[name].format(every=every)}, {100 * pattern['shares'][name] * pattern['structured']:.0f} % "
-        "of its power"
+        f"{PATTERN_MEANING[part_name(pattern, name)].format(every=every, wander=f'{wander or 0:.2g}')}, "
+        f"{100 * pattern['shares'][name] * pattern['structured']:.0f} % of its power"
         for name in pattern["dominant"]
     ]
     return "; it lies mostly " + ", and ".join(parts)
+
+
+def part_name(pattern: dict, name: str) -> str:
+    """``name``, or for the steady part at the swing frequency whether it lies in the swing's timing or amplitude
+    (``steady_in_timing`` at least :data:`TIMING_SHARE`, or at most 1 − it)."""
+    timing = pattern.get("steady_in_timing")
+    if name != "swing_steady" or timing is None:
+        return name
+    if timing >= TIMING_SHARE:
+        return "swing_steady_timing"
+    return "swing_steady_amplitude" if timing <= 1 - TIMING_SHARE else name
 
 
 def _key(terms) -> str:

@@ -15,7 +15,7 @@ import math
 import re
 from functools import partial
 
-from pendulum.discovery.findings import PATTERN_PLACE
+from pendulum.discovery.findings import PATTERN_PLACE, part_name
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.report.data import ReportData, failure_text, is_ok, read_json, read_table
 from pendulum.report.discovery_figures import figures_html, model_key, model_label
@@ -255,7 +255,7 @@ def endings_html(document: dict, harmonics: dict | None = None) -> str:
         where = (
             " Where its power lies, by harmonic of the swing's own phase: "
             + "; ".join(
-                f"{100 * shares[name]:.0f} % {PATTERN_PLACE[name]}"
+                f"{100 * shares[name]:.0f} % {PATTERN_PLACE[part_name(pattern, name)]}"
                 for name in sorted(shares, key=lambda n: -shares[n])
                 if shares[name] >= 0.05
             )
