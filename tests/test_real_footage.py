@@ -20,6 +20,7 @@ import pytest
 import yaml
 
 from conftest import ROOT, SHARED, FakeSnakemake
+from paper_rig import APPLE_IN_AIR
 
 pytestmark = pytest.mark.slow
 REAL = SHARED / "data" / "real-video"
@@ -534,18 +535,9 @@ def test_the_apples_unexplained_residual_is_placed_by_harmonic_of_its_swing(appl
     from pendulum.discovery.selection import Discovery
     from pendulum.fit.records import FitSettings, load_record
 
-    rig = {
-        "mass_kg": 0.18,
-        "length_m": 1.04,
-        "frontal_area_m2": 0.0045,
-        "displaced_volume_m3": 0.0002,
-        "fluid_density_kg_m3": 1.2,
-        "gravity_m_s2": 9.81,
-        "kinematic_viscosity_m2_s": 1.5e-5,
-    }
     _, _, table, info = apple
     settings = FitSettings()
-    record = load_record(table, "apple", rig, settings, tolerances={}, angle_info=info.to_dict())
+    record = load_record(table, "apple", APPLE_IN_AIR, settings, tolerances={}, angle_info=info.to_dict())
     candidates = ["linear_damping", "coulomb_friction", "history_force"]
     discovery = Discovery([record], ["apple"], ["quadratic_drag"], candidates, settings, noise_deg=[info.noise_deg])
     document = discovery.run()

@@ -14,19 +14,13 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
 
+from paper_rig import APPLE_IN_AIR
 from pendulum.discovery import diagnosis
 from pendulum.discovery.selection import Discovery
 from pendulum.fit.records import FitSettings, load_record
 from pendulum.synthetic.records import hidden_effect_table
 
-AIR_BALL = {
-    "mass_kg": 0.18,
-    "length_m": 1.04,
-    "frontal_area_m2": 0.0045,
-    "displaced_volume_m3": 0.0002,
-    "fluid_density_kg_m3": 1.2,
-    "gravity_m_s2": 9.81,
-}
+AIR_BALL = APPLE_IN_AIR
 TRUTH = {"added_mass_kg": 0.0005, "drag_area_m2": 0.0025}
 CANDIDATES = ["linear_damping", "coulomb_friction", "history_force"]
 RELEASE_DEG = 20.0
