@@ -527,8 +527,8 @@ def test_the_apples_unexplained_residual_is_placed_by_harmonic_of_its_swing(appl
     """The apple's record with the rig values a user would give it (0.18 kg weighed, the string's 1.04 m from its
     period, a 7.5 cm apple in air): no candidate removes the 0.24° the quadratic-drag fit leaves (80× the record's
     noise). Where that residual lies is said: mostly at the swing frequency, changing slowly over the record (measured
-    65 % of its power below 3½ cycles per swing), and there 99 % in the swing's timing, not its amplitude: the swing
-    runs ahead of and behind the model by 4.4 ms RMS (a quarter of a frame: the phone's frame times, whose slips the
+    65 % of its power below 3½ cycles per swing), and there 94 % in the swing's timing, not its amplitude: the swing
+    runs ahead of and behind the model by 4.0 ms RMS (a quarter of a frame: the phone's frame times, whose slips the
     tracks stage found and put right, or a period that changes); and at twice it (23 %), the second harmonic the
     angles stage measured on its own (the swing plane turned against the image plane); 3 % is a slow drift of the
     zero."""

@@ -279,20 +279,22 @@ def swing_phase(time_s: np.ndarray, theta_rad: np.ndarray, omega: float) -> np.n
     return np.concatenate([raw[:1], raw[0] + np.cumsum(turned)])
 
 
-def _timing_part(grid, residual, amplitude, omega: float, swings: float, weight: float) -> tuple[float, float, float]:
-    """The residual's part at the swing frequency, changing slowly, split into amplitude and timing: with θ = A cos φ, a
-    residual a cos φ + b sin φ is an amplitude error a and a timing error δ = −b / (A ω) (θ(t + δ) − θ(t) = θ̇ δ =
-    −A ω sin φ δ). Demodulated, z = r e^(−iφ) averaged over one swing is (a − i b) / 2. Returns (``weight``, the share
-    of the slow part in b, δ's RMS in ms)."""
+def _timing_part(grid, residual, amplitude, omega: float, swings: float) -> tuple[float, float, float, int]:
+    """The residual's steady part at the swing frequency (its spectrum within :data:`STEADY_BINS`/N of one cycle per
+    swing, the rest of it zeroed) split into the swing's amplitude and its timing: with θ = A cos φ, a residual
+    a cos φ + b sin φ is an amplitude error a and a timing error δ with |δ| = |b| / (A ω) (θ(t + δ) − θ(t) = θ̇ δ =
+    −A ω sin φ δ). Demodulated, z = r e^(−iφ) averaged over one swing is (a − i b) / 2. Returns Σ b², Σ (a² + b²)
+    (in z) and Σ δ² over the samples where the swing is at least a quarter of its largest, and their number."""
+    spectrum = np.fft.rfft(residual - residual.mean())
+    nu = np.fft.rfftfreq(grid.size, (grid[1] - grid[0]) / (2 * math.pi))
+    steady = np.fft.irfft(np.where(np.abs(nu - 1) <= STEADY_BINS / swings, spectrum, 0), grid.size)
     per_swing = max(1, int(round(grid.size / swings)))
     smooth = np.ones(per_swing) / per_swing
-    z = np.convolve(residual * np.exp(-1j * grid), smooth, mode="valid")
+    z = np.convolve(steady * np.exp(-1j * grid), smooth, mode="valid")
     a = np.convolve(amplitude, smooth, mode="valid")
-    both = float(np.sum(np.abs(z) ** 2))
-    if both <= 0 or z.size == 0:
-        return 0.0, 0.0, 0.0
-    delay = 2 * z.imag / (np.maximum(a, 1e-12) * omega)
-    return weight, float(np.sum(z.imag**2)) / both, 1e3 * float(np.sqrt(np.mean(delay**2)))
+    swinging = a >= 0.25 * a.max() if a.size else np.zeros(0, bool)  # δ = b / (A ω) is no measure as A → 0
+    delay = 2 * z.imag[swinging] / (a[swinging] * omega)
+    return float(np.sum(z.imag**2)), float(np.sum(np.abs(z) ** 2)), float(np.sum(delay**2)), int(delay.size)
 
 
 def residual_pattern(fit: GroupFit) -> dict:
@@ -312,8 +314,8 @@ def residual_pattern(fit: GroupFit) -> dict:
     ``wobble_period_s``: 1 / (|ν − 1| f₀) at the strongest side band, where the wobble is among ``dominant`` and
     at least two such wobbles fit in the records (else None). ``steady_in_timing``: the share of the slow part at the
     swing frequency that lies in the swing's timing rather than its amplitude (:func:`_timing_part`; 1: the swing
-    runs ahead of and behind the model, 0: its amplitude departs), and ``timing_wander_ms``, that timing error's RMS
-    (trials weighed by their Σr²)."""
+    runs ahead of and behind the model, 0: its amplitude departs; pooled, each trial by its steady part's power), and
+    ``timing_wander_ms``, that timing error's RMS over the records' samples."""
     power = dict.fromkeys(PATTERNS, 0.0)
     total, wobbles, timing = 0.0, [], []
     for k, r in enumerate(fit.residuals):
@@ -332,7 +334,7 @@ def residual_pattern(fit: GroupFit) -> dict:
         grid = np.linspace(phase[0], phase[-1], r.size)
         on_phase = np.interp(grid, phase, r)
         amplitude = np.interp(grid, phase, np.hypot(theta[moving], np.gradient(theta[moving], t[moving]) / omega))
-        timing.append(_timing_part(grid, on_phase, amplitude, omega, swings, float(r @ r)))
+        timing.append(_timing_part(grid, on_phase, amplitude, omega, swings))
         on_phase = (on_phase - on_phase.mean()) * np.hanning(r.size)
         spectrum = np.abs(np.fft.rfft(on_phase)) ** 2
         spectrum *= float(r @ r) / max(float(spectrum.sum()), 1e-300)  # each trial weighed by its residual's Σr²
@@ -367,11 +369,9 @@ def residual_pattern(fit: GroupFit) -> dict:
     if structured < 0.5 * total:  # mostly noise: no part of it to name
         dominant = []
     _, offset, swings, frequency = max(wobbles) if wobbles else (0.0, 0.0, 0.0, 0.0)  # the strongest side band
-    weights = np.array([w for w, _, _ in timing])
-    in_timing = float(np.sum(weights * [f for _, f, _ in timing]) / weights.sum()) if weights.sum() > 0 else None
-    wander_ms = (
-        float(np.sqrt(np.sum(weights * [m**2 for _, _, m in timing]) / weights.sum())) if weights.sum() else None
-    )
+    in_b, in_z, delay2, samples = (sum(part) for part in zip(*timing, strict=True)) if timing else (0, 0, 0, 0)
+    in_timing = in_b / in_z if in_z > 0 else None  # pooled: each trial by its own steady part
+    wander_ms = 1e3 * math.sqrt(delay2 / samples) if samples else None
     return {
         "shares": {name: round(value, 4) for name, value in shares.items()},
         "structured": round(structured / total, 4),

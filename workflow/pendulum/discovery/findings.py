@@ -103,7 +103,8 @@ PATTERN_MEANING = {  # what each part of an unexplained residual (diagnosis.resi
     "from the model's as no candidate does: a damping or stiffness of another form, wrong rig values, or a swing "
     "whose plane or scale changes as seen)",
     "swing_steady_timing": "at the swing frequency, in its timing (the swing runs ahead of and behind the model by "
-    "{wander} ms RMS: frame times that wander, or a period that changes as the model's does not)",
+    "{wander} ms RMS: frame times that wander, a period that changes as the model's does not, or rig values that "
+    "give the model the wrong period)",
     "swing_steady_amplitude": "at the swing frequency, in its amplitude (the swing's decay departs from the model's as "
     "no candidate's does: a damping of another form, or a scale that changes as seen)",
     "swing_wobble": "side bands about the swing frequency (the swing's amplitude or phase wobbling{every}: a swing not "
@@ -136,7 +137,7 @@ def pattern_phrase(pattern: dict | None) -> str:
     every = f", every {wobble:.3g} s" if wobble else ""
     wander = pattern.get("timing_wander_ms")
     parts = [
-        f"{PATTERN_MEANING[part_name(pattern, name)].format(every=every, wander=f'{wander or 0:.2g}')}, "
+        f"{PATTERN_MEANING[part_name(pattern, name)].format(every=every, wander=f'{wander or 0:.3g}')}, "
         f"{100 * pattern['shares'][name] * pattern['structured']:.0f} % of its power"
         for name in pattern["dominant"]
     ]
