@@ -102,10 +102,11 @@ def repository_url(remote: str | None) -> str | None:
 
 
 def git_state(root: str | Path = ".") -> dict:
-    """Commit, its UTC commit time, whether code or config differ from it, and the repository's address.
+    """Commit, its UTC commit time, whether the code differs from it, and the repository's address.
 
-    Outside a git work tree every field is None. `dirty_files` lists changed or
-    untracked paths outside results/, logs/, .snakemake/, .venv/ and data/raw/. `repository` is the
+    Outside a git work tree every field is None. `dirty_files` lists changed or untracked paths outside
+    :data:`NOT_CODE` (results/, logs/, .snakemake/, .venv/, data/raw/, data/truth/ and config.yaml, which is
+    recorded as used, with its digest, instead). `repository` is the
     ``origin`` remote as a web address (:func:`repository_url`; None without one or for a local path).
     """
     root = Path(root)

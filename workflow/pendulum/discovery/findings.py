@@ -97,23 +97,22 @@ def verdict(document: dict) -> str:
 
 
 PATTERN_MEANING = {  # what each part of an unexplained residual (diagnosis.residual_pattern) says of the record
-    "slow": "a slow drift of the zero (below half the swing frequency: a camera or stand creeping, a pivot settling, "
-    "a vertical drifting; not the swing's dynamics)",
-    "swing_steady": "at the swing frequency, changing slowly over the record (the swing's decay or period departs "
-    "from the model's as no candidate does: a damping or stiffness of another form, wrong rig values, or a swing "
-    "whose plane or scale changes as seen)",
-    "swing_steady_timing": "at the swing frequency, in its timing (the swing runs ahead of and behind the model by "
-    "{wander} ms RMS: frame times that wander, a period that changes as the model's does not, or rig values that "
-    "give the model the wrong period)",
-    "swing_steady_amplitude": "at the swing frequency, in its amplitude (the swing's decay departs from the model's as "
-    "no candidate's does: a damping of another form, or a scale that changes as seen)",
-    "swing_wobble": "side bands about the swing frequency (the swing's amplitude or phase wobbling{every}: a swing not "
-    "in one plane seen in projection, a support that sways, or another motion beating with the swing)",
-    "even_harmonic": "at twice the swing frequency (an equation symmetric in θ makes no even harmonic: most likely "
-    "a lopsided angle measurement, a swing plane turned against the image plane or a pivot or vertical misplaced; "
-    "or a torque that differs between the swing's two sides)",
-    "odd_harmonic": "at three times the swing frequency (the swing's shape departs from the model's: its restoring "
-    "torque's form, a body that is no point mass, a flexible suspension)",
+    "slow": "below half the swing frequency: a camera or stand creeping, a pivot settling, a vertical drifting; not "
+    "the swing's dynamics",
+    "swing_steady": "the swing's decay or period departs from the model's as no candidate's does: a damping or "
+    "stiffness of another form, wrong rig values, or a swing whose plane or scale changes as seen",
+    "swing_steady_timing": "the swing runs ahead of and behind the model by {wander} ms RMS: frame times that wander, "
+    "a period that changes over the record as the model's does not, or rig values that leave the model's period "
+    "wrong, its added mass held at a bound",
+    "swing_steady_amplitude": "the swing's decay departs from the model's as no candidate's does: a damping of another "
+    "form, or a scale that changes as seen",
+    "swing_wobble": "the swing's amplitude or phase wobbling{every}: a swing not in one plane seen in projection, a "
+    "support that sways, or another motion beating with the swing",
+    "even_harmonic": "an equation symmetric in θ makes no such harmonic: most likely a lopsided angle measurement, a "
+    "swing plane turned against the image plane or a pivot or vertical misplaced; or a torque that differs between "
+    "the swing's two sides",
+    "odd_harmonic": "the swing's shape departs from the model's: its restoring torque's form, a body that is no point "
+    "mass, a flexible suspension",
 }
 
 
@@ -130,18 +129,20 @@ PATTERN_PLACE = {  # the same parts in a few words (the report's list of where t
 
 
 def pattern_phrase(pattern: dict | None) -> str:
-    """``; it lies mostly <where> (n % of its power…)``: the dominant parts of an unexplained residual, or ''."""
+    """``; it lies mostly <where>, n % of its power (<what that means>)``: the dominant parts of an unexplained
+    residual (:data:`PATTERN_PLACE`, :data:`PATTERN_MEANING`), or ''."""
     if not pattern or not pattern.get("shares") or not pattern.get("dominant"):
         return ""
     wobble = pattern.get("wobble_period_s")
     every = f", every {wobble:.3g} s" if wobble else ""
     wander = pattern.get("timing_wander_ms")
-    parts = [
-        f"{PATTERN_MEANING[part_name(pattern, name)].format(every=every, wander=f'{wander or 0:.3g}')}, "
-        f"{100 * pattern['shares'][name] * pattern['structured']:.0f} % of its power"
-        for name in pattern["dominant"]
-    ]
-    return "; it lies mostly " + ", and ".join(parts)
+    parts = []
+    for name in pattern["dominant"]:
+        part = part_name(pattern, name)
+        meaning = PATTERN_MEANING[part].format(every=every, wander=f"{wander or 0:.3g}")
+        share = 100 * pattern["shares"][name] * pattern["structured"]
+        parts.append(f"{PATTERN_PLACE[part]}, {share:.0f} % of its power ({meaning})")
+    return "; it lies mostly " + "; and ".join(parts)
 
 
 def part_name(pattern: dict, name: str) -> str:

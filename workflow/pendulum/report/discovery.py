@@ -253,24 +253,29 @@ def endings_html(document: dict, harmonics: dict | None = None) -> str:
         pattern = document.get("residual_pattern") or {}
         shares = {name: share * pattern.get("structured", 0.0) for name, share in (pattern.get("shares") or {}).items()}
         where = (
-            " Where its power lies, by harmonic of the swing's own phase: "
+            " Where its power lies, against the swing's own frequency: "
             + "; ".join(
                 f"{100 * shares[name]:.0f} % {PATTERN_PLACE[part_name(pattern, name)]}"
                 for name in sorted(shares, key=lambda n: -shares[n])
                 if shares[name] >= 0.05
             )
-            + " (the verdict above says what each part means)."
+            + " (the verdict above says what the largest parts mean)."
             if pattern.get("dominant")
             else ""
+        )
+        guesses = (  # without a residual pattern (an older document, or mostly noise): what may be at work
+            ""
+            if where
+            else " "
+            + ("Beyond that, something" if seen else "Something")
+            + " outside the library is at work: a disturbance, a drifting zero, frame times the motion could not "
+            "check, wrong rig values?"
         )
         out.append(
             '<p class="warn discovery-ending">Unexplained: after the final model the residual is '
             f"{fmt(check['rms_over_noise'], 2)}× the noise floor ({deg(check['noise_floor_rad'])}°) and not white "
             f"(Ljung–Box p = {p_text(check['whiteness']['p_value'])}). No candidate in the library removes this "
-            f"structure, so none is named for it.{found}{esc(where)} "
-            + ("Beyond that, something" if seen else "Something")
-            + " outside the library is at work: a disturbance, a drifting zero, frame times the motion could not "
-            "check, wrong rig values?</p>"
+            f"structure, so none is named for it.{found}{esc(where)}{guesses}</p>"
         )
     for group in document["indistinguishable"]:
         names = " or ".join(TERMS[e].label if e in TERMS else e for e in group["effects"])
