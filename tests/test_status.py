@@ -588,3 +588,24 @@ def test_the_same_recording_under_two_names_is_said_in_the_status_table():
     )
     assert table.loc["a", "n_warnings"] == 0 and table.loc["c", "n_warnings"] == 0
     assert list(table.status) == ["ok", "ok", "ok"]
+
+
+def test_the_last_line_of_a_run_counts_the_trials_no_variant_fits_among_those_ok(tmp_path, monkeypatch):
+    """A run whose trials all built but one misses every variant (the real apple in air) ended "1 trial(s) ok whose
+    every model variant misses …" and then "all 1 trial(s) ok" (a new user: contradictory at first). The last line
+    now counts it among the ok ones, as it counts those with the rig values in doubt."""
+    import runpy
+
+    from conftest import ROOT, FakeSnakemake
+    from pendulum.outcomes import EVERY_VARIANT, MISFIT_MARK, STATUS_COLUMNS
+
+    table = tmp_path / "trials.csv"
+    row = dict.fromkeys(STATUS_COLUMNS, "")
+    row.update(trial="apple", status="ok", warnings=f"{EVERY_VARIANT}residual RMS 0.236° … {MISFIT_MARK}; …")
+    pd.DataFrame([row, {**row, "trial": "ball", "warnings": ""}], columns=STATUS_COLUMNS).to_csv(table, index=False)
+    done = tmp_path / "all_trials_ok.txt"
+    sm = FakeSnakemake({"table": str(table)}, {"done": str(done)}, str(tmp_path / "check.log"), {})
+    monkeypatch.syspath_prepend(str(ROOT / "workflow" / "scripts"))
+    runpy.run_path(str(ROOT / "workflow" / "scripts" / "check_trials.py"), init_globals={"snakemake": sm})
+    assert done.read_text() == "all 2 trial(s) ok (1 missed by every model variant, above)\n"
+    assert "where the residual lies in the discovery verdict): apple" in (tmp_path / "check.log").read_text()

@@ -22,7 +22,8 @@ if wrong:  # built and ok, but no variant fits: said at the end of a run that su
     note = (
         f"{len(wrong)} trial(s) ok whose every model variant misses the record far beyond its noise (what it "
         "misses may bias the coefficients, and their intervals do not cover it; the warnings in "
-        f"results/status/trials.csv): {', '.join(wrong)}"
+        "results/status/trials.csv, and where the residual lies in the discovery verdict): "
+        f"{', '.join(wrong)}"
     )
     log.warning("%s", note)
 mismatched = rig_mismatch_trials(table)
@@ -39,9 +40,11 @@ if problem:
     log.error("%s", problem)
     raise SystemExit(1)
 skipped = table[table.status == "skipped"]
+doubts = [f"{len(wrong)} missed by every model variant"] if wrong else []
+doubts += [f"{len(mismatched)} with the rig values in doubt"] if mismatched else []
 done = (
     f"all {len(table) - len(skipped)} trial(s) ok"
-    + (f" ({len(mismatched)} with the rig values in doubt, above)" if mismatched else "")
+    + (f" ({', '.join(doubts)}, above)" if doubts else "")
     + (f", {len(skipped)} skipped by their sidecars" if len(skipped) else "")
 )
 log.info("%s", done)
