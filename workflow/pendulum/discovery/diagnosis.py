@@ -96,14 +96,7 @@ def residual_diagnostics(fit: GroupFit) -> dict:
         angle_bins.append(_terciles(np.abs(theta)))
         speed_bins.append(_terciles(np.abs(omega)))
         dt = float(np.median(np.diff(t)))
-        period = (
-            2
-            * math.pi
-            / math.sqrt(
-                record.rig.restoring_torque_nm
-                / float(fit.problem.models[k].inertia_kg_m2(fit.problem.physical(fit.x, k)))
-            )
-        )
+        period = 2 * math.pi / swing_omega(fit, k)
         spectrum = np.abs(np.fft.rfft(r - r.mean())) ** 2
         freq = np.fft.rfftfreq(r.size, dt)
         peaks.append(float(freq[1:][np.argmax(spectrum[1:])] * period) if r.size > 4 else math.nan)
@@ -137,6 +130,12 @@ def _terciles(values: np.ndarray) -> np.ndarray:
 
 def _model_and_params(fit: GroupFit, k: int):
     return fit.problem.models[k], fit.problem.physical(fit.x, k)
+
+
+def swing_omega(fit: GroupFit, k: int) -> float:
+    """Trial ``k``'s small-amplitude angular frequency in the fit, ω = √(restoring torque / inertia) (rad/s)."""
+    model, params = _model_and_params(fit, k)
+    return math.sqrt(fit.problem.records[k].rig.restoring_torque_nm / float(model.inertia_kg_m2(params)))
 
 
 def measured_half_cycles(fit: GroupFit) -> pd.DataFrame:
@@ -211,7 +210,7 @@ def extinction_screen(fit: GroupFit, candidates) -> list[dict]:
     model, params = _model_and_params(fit, k0)
     rig = fit.problem.records[k0].rig
     inertia = float(model.inertia_kg_m2(params))
-    omega0 = math.sqrt(rig.restoring_torque_nm / inertia)
+    omega0 = swing_omega(fit, k0)
     out = []
     for name in candidates:
         term = TERMS[name]
@@ -261,10 +260,10 @@ SECOND_SHARE = 0.15  # ... and the next holds less than this (else the two are n
 PATTERNS = ("slow", "swing_steady", "swing_wobble", "even_harmonic", "odd_harmonic")
 
 
-def swing_phase(time_s: np.ndarray, theta_rad: np.ndarray, omega: float) -> np.ndarray:
-    """The swing's phase φ = atan2(−θ̇/ω, θ) of a smooth (fitted) curve θ(t), unwrapped with the advance ω Δt expected
-    between samples, so that a gap in the record (frames left out) keeps its whole swings; θ̇ by differences within
-    each run of evenly spaced samples (not across a gap)."""
+def swing_phase(time_s: np.ndarray, theta_rad: np.ndarray, omega: float) -> tuple[np.ndarray, np.ndarray]:
+    """The swing's phase φ = atan2(−θ̇/ω, θ) and amplitude A = √(θ² + (θ̇/ω)²) of a smooth (fitted) curve θ(t), φ
+    unwrapped with the advance ω Δt expected between samples, so that a gap in the record (frames left out) keeps
+    its whole swings; θ̇ by differences within each run of evenly spaced samples (not across a gap)."""
     t = np.asarray(time_s, float)
     theta = np.asarray(theta_rad, float)
     step = float(np.median(np.diff(t))) if t.size > 1 else 1.0
@@ -276,7 +275,7 @@ def swing_phase(time_s: np.ndarray, theta_rad: np.ndarray, omega: float) -> np.n
     raw = np.arctan2(-speed / omega, theta)
     expected = omega * np.diff(t)
     turned = (np.diff(raw) - expected + math.pi) % (2 * math.pi) - math.pi + expected
-    return np.concatenate([raw[:1], raw[0] + np.cumsum(turned)])
+    return np.concatenate([raw[:1], raw[0] + np.cumsum(turned)]), np.hypot(theta, speed / omega)
 
 
 def _timing_part(grid, residual, amplitude, omega: float, swings: float) -> tuple[float, float, float, int]:
@@ -322,19 +321,17 @@ def residual_pattern(fit: GroupFit) -> dict:
         record, mask = fit.problem.records[k], fit.problem.masks[k]
         t = record.time_s[mask]
         theta = fit.trial_curve(k)[mask] - fit.nuisance(k)[2]
-        inertia = float(fit.problem.models[k].inertia_kg_m2(fit.problem.physical(fit.x, k)))
-        omega = math.sqrt(record.rig.restoring_torque_nm / inertia)
-        phase = swing_phase(t, theta, omega)
+        omega = swing_omega(fit, k)
+        phase, amplitude = swing_phase(t, theta, omega)
         stalled = np.flatnonzero(np.diff(phase) <= 0)  # the model's swing at rest (friction): its phase stands still
         moving = slice(0, stalled[0] + 1 if stalled.size else phase.size)
-        phase, r = phase[moving], r[moving]
+        phase, amplitude, r = phase[moving], amplitude[moving], r[moving]
         swings = (phase[-1] - phase[0]) / (2 * math.pi) if phase.size else 0.0
         if r.size < 16 or swings < 3 or not np.all(np.isfinite(r)):
             continue
         grid = np.linspace(phase[0], phase[-1], r.size)
         on_phase = np.interp(grid, phase, r)
-        amplitude = np.interp(grid, phase, np.hypot(theta[moving], np.gradient(theta[moving], t[moving]) / omega))
-        timing.append(_timing_part(grid, on_phase, amplitude, omega, swings))
+        timing.append(_timing_part(grid, on_phase, np.interp(grid, phase, amplitude), omega, swings))
         on_phase = (on_phase - on_phase.mean()) * np.hanning(r.size)
         spectrum = np.abs(np.fft.rfft(on_phase)) ** 2
         spectrum *= float(r @ r) / max(float(spectrum.sum()), 1e-300)  # each trial weighed by its residual's Σr²

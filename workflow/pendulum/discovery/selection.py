@@ -154,13 +154,7 @@ class Discovery:
 
     def _frequency_spread(self) -> float:
         base = self._fits[self.baseline_terms]
-        omega = [
-            math.sqrt(
-                r.rig.restoring_torque_nm
-                / float(base.problem.models[k].inertia_kg_m2(base.problem.physical(base.x, k)))
-            )
-            for k, r in enumerate(self.records)
-        ]
+        omega = [diagnosis.swing_omega(base, k) for k in range(len(self.records))]
         return max(omega) / min(omega) - 1
 
     def floor_rad(self, fit: GroupFit) -> float:
