@@ -965,6 +965,91 @@ def test_a_light_beside_the_body_is_not_joined_to_it_but_the_body_s_own_parts_ar
     assert np.array_equal(whole, both) and np.count_nonzero(whole) >= 0.99 * np.count_nonzero(halves)
 
 
+def _print_and_shadow(ball_blur_px: float, ball: bool = True) -> np.ndarray:
+    """|I − B| of a printed ball (radius 21 px at (150, 70), squares of 7 px ±55 grey levels, blurred by the lens)
+    and its soft shadow on the wall behind (a disk of 30 px radius 30 levels deep at (97, 122), blurred by σ 9 px and
+    the lens): the shadow is the heavier, the ball's light and dark squares averaging to the wall's grey."""
+    import cv2
+
+    yy, xx = np.mgrid[:200, :260].astype(np.float32)
+    signed = np.zeros((200, 260), np.float32)
+    if ball:
+        inside = (xx - 150) ** 2 + (yy - 70) ** 2 <= 21**2
+        checker = np.where((np.floor((xx - 150) / 7) + np.floor((yy - 70) / 7)) % 2 == 0, 55.0, -55.0)
+        signed[inside] = checker[inside]
+        signed = cv2.GaussianBlur(signed, (0, 0), ball_blur_px)
+    shadow = np.zeros_like(signed)
+    cv2.circle(shadow, (97, 122), 30, 30.0, -1)
+    shadow = cv2.GaussianBlur(shadow, (0, 0), math.hypot(9.0, ball_blur_px))
+    return np.abs(signed - shadow * (np.abs(signed) < 1))  # the shadow seen only beside the ball
+
+
+@pytest.mark.parametrize("ball_blur_px", [1.0, 1.5, 2.0])
+def test_a_print_beside_its_heavier_soft_shadow_is_found_without_it(ball_blur_px):
+    """A body study scene (7102: a printed ball of 21 px radius, two soft shadows of it on the wall below) was tracked
+    27 px off the ball: its shadows, 30 grey levels deep where they overlap, outweighed it (the print's light and dark
+    squares average to the wall's grey), and the ball's squares, within two closing widths, were joined to them;
+    the path was still a circle (0.7 px RMS), θ 0.36° RMS off the truth and the camera's 3.7 px creep missed. A
+    component beside a heavy one whose edge is over three times as sharp is its shadow: the ball found here at its
+    drawn centre (within 0.3 px) where the shadow's component is up to three times its mass, for a lens blur up to
+    σ 2 px; the shadow alone is still a body (nothing sharper beside it)."""
+    from pendulum.tracking.body_parts import body_component, body_measure
+
+    diff = _print_and_shadow(ball_blur_px)
+    merged, _ = body_component(diff, 4.0, 3, 5)  # the heaviest with what lies within two closing widths
+    assert merged[122, 97] and merged[70, 150], "the shadow and the print are one body without shadows_apart"
+    seen = body_measure(diff, 4.0, 5, None)
+    assert math.hypot(seen.x - 150.0, seen.y - 70.0) <= 0.3, (seen.x, seen.y)
+    assert not seen.component[122, 97]
+    alone = body_measure(_print_and_shadow(ball_blur_px, ball=False), 4.0, 5, None)
+    assert math.hypot(alone.x - 97.0, alone.y - 122.0) <= 0.3, (alone.x, alone.y)
+
+
+def test_a_defocused_or_shaded_body_is_not_set_apart_for_a_sharper_object_elsewhere():
+    """A reviewer's counter-examples to a first version, which compared every component with the sharpest heavy one
+    anywhere in the frame and measured the edge over the whole component: a body defocused by σ 6 px beside a sharp
+    hand 200 px away (0.6 of its mass) was taken for its shadow and the hand followed (224 px off), even with
+    start_px on the body; a large sphere shaded across its face (its difference ramping 12 → 60 grey levels, radius
+    160 px) beside a sharp square (0.3 of its mass) likewise (867 px off). Only a component beside a sharper heavy
+    one (within the two closing widths that would join them) is set apart, its edge measured on its outline, and
+    never the one start_px points at: each body here is found at its drawn centre (within 1.5 px)."""
+    import cv2
+
+    from pendulum.tracking.body_parts import body_measure
+
+    yy, xx = np.mgrid[:540, :960].astype(np.float32)
+    disk = ((xx - 400) ** 2 + (yy - 270) ** 2 <= 30**2).astype(np.float32)
+    hand = np.zeros_like(disk)
+    hand[250:290, 600:650] = 50.0
+    defocused = np.abs(cv2.GaussianBlur(60.0 * disk, (0, 0), 6.0) + cv2.GaussianBlur(hand, (0, 0), 0.7))
+    for near in (None, (400.0, 270.0)):
+        seen = body_measure(defocused, 4.0, 17, near)
+        assert math.hypot(seen.x - 400.0, seen.y - 270.0) <= 1.5, (near, seen.x, seen.y)
+    square = np.zeros((1080, 1920), np.float32)
+    square[60:200, 1500:1640] = 60.0
+    yy, xx = np.mgrid[:1080, :1920].astype(np.float32)
+    sphere = ((xx - 700) ** 2 + (yy - 540) ** 2 <= 160**2) * (12.0 + 48.0 * np.clip((xx - 540) / 320, 0, 1))
+    shaded = np.abs(cv2.GaussianBlur(sphere.astype(np.float32), (0, 0), 1.0) + cv2.GaussianBlur(square, (0, 0), 0.7))
+    seen = body_measure(shaded, 4.0, 17, None)
+    assert math.hypot(seen.x - 700.0, seen.y - 540.0) <= 1.5, (seen.x, seen.y)
+
+
+@pytest.mark.slow
+def test_the_study_scene_whose_print_was_outweighed_by_its_shadows_is_tracked_by_the_print(tmp_path):
+    """Body study scene 7102 (5 s of it): a printed ball of 21 px radius and its two soft shadows, heavier than it,
+    on the wall below, the camera creeping. Measured before the shadows were set apart: the track 27 px off the
+    ball, no creep found, θ 0.35° RMS off the truth (0.32° with the pivot fitted to the track); after: 0.007°, the
+    creep (−3.3, −1.7) px found as (−3.5, −1.6)."""
+    sys_path = str(Path(__file__).resolve().parent / "benchmarks")
+    if sys_path not in sys.path:
+        sys.path.insert(0, sys_path)
+    from body_study import judge
+
+    row = judge(7102, tmp_path, duration_s=5.0)
+    assert row["ok%"] >= 99 and row["rms"] <= 0.02 and row["rms_fp"] <= 0.03, row
+    assert math.dist(row["creep_found"], row["creep_true"]) <= 0.7, row
+
+
 def _flags_track(n_ok: int, n: int = 100):
     import pandas as pd
 

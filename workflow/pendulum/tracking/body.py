@@ -255,7 +255,7 @@ def find_body(
         """The body in the first frame, and as most of the clip shows it: of samples spread over the clip, the
         body in full view of median area, where the first frame's is out of view in part or not of its size
         (within :data:`TYPICAL_AREA_RATIO`: a hand holding it before the release)."""
-        first = body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near)
+        first = body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near, view is None)
         if first is None or first.component is None or near is not None:
             return first, first
         seen = []
@@ -267,7 +267,7 @@ def find_body(
             y0, y1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, background.shape[0])
             x0, x1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, background.shape[1])
             diff = one_sided(images[k][y0:y1, x0:x1] - background[y0:y1, x0:x1], polarity)
-            body = body_measure(diff, threshold, close_px, None)
+            body = body_measure(diff, threshold, close_px, None, view is None)
             if body is None or body.component is None:
                 continue
             if not touches_border(body.component, (y0, y1, x0, x1), background.shape):  # in full view

@@ -23,6 +23,61 @@ REACH_SLACK, REACH_MARGIN_PX = 1.3, 4.0  # a part joined to the body lies within
 MAX_AREA_RATIO, MIN_AREA_RATIO = 1.5, 0.5  # the body with something else, or a part of it: its area's range
 
 
+SOFT_EDGE_RATIO = 1 / 3  # a component whose edge is this much softer than a heavy one's beside it: its shadow
+HEAVY_SHARE = 0.25  # ... where that one holds at least this share of the heaviest component's mass
+
+
+def edge_sharpness(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
+    """How sharply component ``i`` of ``diff`` ends (1/px, about 1/w for an edge w px wide): the 90th percentile of
+    |∇D| (D smoothed by σ = 1 px) on its outline (from 3 px inside to 2 px outside it: a large body's inside does not
+    count) over the 90th percentile of D in it. A body's limb is one or two pixels wide, defocused a few; the
+    penumbra of its shadow on a wall behind it many."""
+    x0, y0, w, h = (int(v) for v in stats[i, :4])
+    pad = 6  # beyond the outline's 2 px, the smoothing's and the Sobel kernel's reach
+    ya, yb = max(y0 - pad, 0), min(y0 + h + pad, diff.shape[0])
+    xa, xb = max(x0 - pad, 0), min(x0 + w + pad, diff.shape[1])
+    mask = (labels[ya:yb, xa:xb] == i).astype(np.uint8)
+    crop = diff[ya:yb, xa:xb].astype(np.float32)
+    smooth = cv2.GaussianBlur(crop, (0, 0), 1.0)
+    gradient = np.hypot(cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)) / 8
+    outside = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))) > 0
+    inside = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7)), borderType=cv2.BORDER_REPLICATE)
+    outline = outside & ~(inside > 0)
+    level = float(np.percentile(crop[mask > 0], 90))
+    return float(np.percentile(gradient[outline], 90)) / level if level > 0 and outline.any() else 0.0
+
+
+def _boxes_within(a: np.ndarray, b: np.ndarray, gap: int) -> bool:
+    """Whether two components' boxes ``(x, y, w, h)`` lie within ``gap`` px of each other."""
+    return not (
+        a[0] > b[0] + b[2] + gap or a[0] + a[2] < b[0] - gap or a[1] > b[1] + b[3] + gap or a[1] + a[3] < b[1] - gap
+    )
+
+
+def soft_components(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, masses: np.ndarray, ids, gap: int) -> set:
+    """Of the components ``ids``, those lying within ``gap`` px (boxes) of a heavy one (:data:`HEAVY_SHARE` of the
+    heaviest's mass or more) whose edge is over 1 / :data:`SOFT_EDGE_RATIO` times as sharp (:func:`edge_sharpness`):
+    a soft shadow beside the body, which the body's parts within that gap would otherwise be joined to. Measured on
+    a printed ball of 21 px radius and its two shadows, heavier than the ball (its light and dark squares ±50–60
+    grey levels off the wall, the shadows −30): 0.21 and 0.03 per px. Components far apart are left as they are
+    (the heaviest taken): a defocused body is not set apart from a sharp hand or its hard shadow elsewhere."""
+    top = max((masses[i] for i in ids), default=0.0)
+    heavy = [i for i in ids if masses[i] >= HEAVY_SHARE * top]
+    if len(heavy) < 2:
+        return set()
+    sharpness = {}
+
+    def sharp(i):
+        if i not in sharpness:
+            sharpness[i] = edge_sharpness(diff, labels, stats, i)
+        return sharpness[i]
+
+    def beside_sharper(i, j):
+        return j != i and _boxes_within(stats[i], stats[j], gap) and sharp(i) < SOFT_EDGE_RATIO * sharp(j)
+
+    return {i for i in ids if any(beside_sharper(i, j) for j in heavy)}
+
+
 def body_reach(component: np.ndarray) -> float:
     """The distance (px) of a silhouette's farthest pixel from its centroid."""
     ys, xs = np.nonzero(component)
@@ -30,7 +85,14 @@ def body_reach(component: np.ndarray) -> float:
 
 
 def body_component(
-    diff: np.ndarray, threshold: float, open_px: int, close_px: int, near=None, area_px=None, reach_px=None
+    diff: np.ndarray,
+    threshold: float,
+    open_px: int,
+    close_px: int,
+    near=None,
+    area_px=None,
+    reach_px=None,
+    shadows_apart: bool = False,
 ):
     """The moving pixels to take for the body: the component nearest ``near`` (else the heaviest) with every
     component whose box lies within 2 closing widths of it (a print's patches, a body cut by a wall-coloured
@@ -38,13 +100,18 @@ def body_component(
     :data:`MAX_AREA_RATIO` of it (the body with what held it) and another is the body's size, that one (the body
     let go, the hand drawn back). With its ``reach_px`` (:func:`body_reach`) and ``near``, a component is joined only
     where all of it lies within :data:`REACH_SLACK` × that (+ :data:`REACH_MARGIN_PX`) of ``near``: a part of the body,
-    not a light blinking beside it or a second pendulum's bob passing near."""
+    not a light blinking beside it or a second pendulum's bob passing near. With ``shadows_apart``, a component whose
+    edge is much softer than that of a heavy one beside it (:func:`soft_components`: the body's soft shadow on the
+    wall, heavier than a print whose light and dark squares average to the wall's grey) is neither taken (unless at
+    ``near``) nor joined."""
     labels, stats, masses = components(diff, threshold, open_px, close_px)
     ids = [i for i in range(1, len(masses)) if stats[i, cv2.CC_STAT_AREA] >= MIN_BODY_AREA_PX]
     if not ids:
         return None, None
+    gap = 2 * close_px
+    soft = soft_components(diff, labels, stats, masses, ids, gap) if shadows_apart else set()
     if near is None:
-        first = max(ids, key=lambda i: masses[i])
+        first = max((i for i in ids if i not in soft), key=lambda i: masses[i])
     else:
         nx, ny = near
 
@@ -59,16 +126,15 @@ def body_component(
             sized = [i for i in ids if MIN_AREA_RATIO <= stats[i, cv2.CC_STAT_AREA] / area_px <= MAX_AREA_RATIO]
             first = min(sized, key=distance, default=first)
     box = [int(v) for v in stats[first, :4]]
-    group, gap = {first}, 2 * close_px
+    group = {first}
+    apart = set() if first in soft else soft  # where start_px points at a soft one, nothing is set apart
     grown = True
     while grown:
         grown = False
         for i in ids:
+            if i in group or i in apart or not _boxes_within(stats[i], box, gap):
+                continue
             x0, y0, w, h = stats[i, :4]
-            if i in group or x0 > box[0] + box[2] + gap or x0 + w < box[0] - gap:
-                continue
-            if y0 > box[1] + box[3] + gap or y0 + h < box[1] - gap:
-                continue
             if reach_px and near is not None:
                 ys, xs = np.nonzero(labels[y0 : y0 + h, x0 : x0 + w] == i)
                 if np.hypot(xs + x0 - near[0], ys + y0 - near[1]).max() > REACH_SLACK * reach_px + REACH_MARGIN_PX:
@@ -156,23 +222,28 @@ class Seen(NamedTuple):
     window: tuple | None = None
 
 
-def body_measure(diff: np.ndarray, threshold: float, close_px: int, near) -> Seen | None:
+def body_measure(diff: np.ndarray, threshold: float, close_px: int, near, shadows_apart: bool = True) -> Seen | None:
     """The body in one frame's difference from the scene (:class:`Seen`); None when nothing moves.
 
-    The heaviest moving object (or the one at ``near``), again above a quarter of its own contrast (a soft
-    shadow beside it falls away), then opened to cut its thread (the part at its thickest point kept)."""
-    component, _ = body_component(diff, threshold, 3, close_px, near=near)
+    The heaviest moving object (or the one at ``near``) of those not much softer-edged than another heavy one (its
+    soft shadow on the wall, :func:`soft_components`), again above a quarter of its own contrast (a fainter shadow
+    beside it falls away), then opened to cut its thread (the part at its thickest point kept). Without
+    ``shadows_apart`` (the colour view: white light casts no shadow in it, and its chroma's edges are soft) the
+    heaviest, as before."""
+    component, _ = body_component(diff, threshold, 3, close_px, near=near, shadows_apart=shadows_apart)
     if component is None:
         return None
     contrast = float(np.percentile(diff[component], 90))
     threshold = max(threshold, CONTRAST_FRACTION * contrast)
-    strong, _ = body_component(diff, threshold, 3, close_px, near=near)
+    strong, _ = body_component(diff, threshold, 3, close_px, near=near, shadows_apart=shadows_apart)
     component = component if strong is None else strong
     depth = cv2.distanceTransform(component.astype(np.uint8), cv2.DIST_L2, 5)
     inner, (ty, tx) = float(depth.max()), np.unravel_index(int(np.argmax(depth)), depth.shape)
     close_px = max(close_px, body_close_size(inner))
     # of its parts after the opening, the one at ``near``, else at its thickest point (its centre may be on a rod)
-    opened, _ = body_component(diff, threshold, open_size(inner), close_px, near=near or (float(tx), float(ty)))
+    opened, _ = body_component(
+        diff, threshold, open_size(inner), close_px, near=near or (float(tx), float(ty)), shadows_apart=shadows_apart
+    )
     if opened is None:
         return Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
