@@ -167,7 +167,8 @@ def noise_differences(time_s: np.ndarray, values: np.ndarray, order: int = 3) ->
     ∝ the binomial coefficients with alternating signs, so z = Δᵏx/√C(2k, k); uneven (variable-frame-rate)
     grids are handled exactly). Smooth motion adds ≈ x⁽ᵏ⁾ hᵏ/√C(2k, k), negligible at video rates.
     Consecutive: no interval longer than 1.5× the median interval; a gap (flagged or dropped frames) breaks a
-    run and no difference spans it.
+    run and no difference spans it. Only finite values are returned (a garbled file's intervals can be too
+    unequal for floats).
     """
     t, x = np.asarray(time_s, float), np.asarray(values, float)
     n = order + 1
@@ -183,12 +184,14 @@ def noise_differences(time_s: np.ndarray, values: np.ndarray, order: int = 3) ->
         return np.empty(0)
     points = t[ok[:, None] + np.arange(n)[None, :]]
     weights = np.ones_like(points)
-    for j in range(n):
-        for k in range(n):
-            if k != j:
-                weights[:, j] /= points[:, j] - points[:, k]
     samples = x[ok[:, None] + np.arange(n)[None, :]]
-    return (weights * samples).sum(axis=1) / np.sqrt((weights**2).sum(axis=1))
+    with np.errstate(over="ignore", invalid="ignore"):  # intervals too unequal for floats (a garbled file): left out
+        for j in range(n):
+            for k in range(n):
+                if k != j:
+                    weights[:, j] /= points[:, j] - points[:, k]
+        z = (weights * samples).sum(axis=1) / np.sqrt((weights**2).sum(axis=1))
+    return z[np.isfinite(z)]
 
 
 def sample_noise_rad(theta: np.ndarray, time_s: np.ndarray | None = None) -> float:
