@@ -209,9 +209,8 @@ def sample_noise_rad(theta: np.ndarray, time_s: np.ndarray | None = None) -> flo
 
 
 def differences_sigma(time_s: np.ndarray, values: np.ndarray, order: int, least: int) -> float:
-    """Robust (MAD) σ of :func:`noise_differences` of ``order`` (their finite ones); 0 with fewer than ``least``."""
+    """Robust (MAD) σ of :func:`noise_differences` of ``order`` (finite); 0 with fewer than ``least``."""
     z = noise_differences(time_s, values, order)
-    z = z[np.isfinite(z)]
     if z.size < least:
         return 0.0
     return float(1.4826 * np.median(np.abs(z - np.median(z))))
