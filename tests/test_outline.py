@@ -17,6 +17,7 @@ import pytest
 
 from pendulum.tracking.body_scene import soft_centroid
 from pendulum.tracking.outline import LIMB_RAYS, centre_by_outline, edge_points, outline_centres, sharper_outline
+from pendulum.tracking.settings import TrackerSettings
 
 RADIUS_PX = 20.0
 TILT_DEG = 25.0
@@ -208,6 +209,26 @@ def test_the_outline_is_kept_only_where_its_path_is_the_better_pendulum(
             assert facts["unexplained_rms_px"]["outline"] < 0.5 * facts["unexplained_rms_px"]["silhouette"]
     else:
         assert out.x_px.equals(track.x_px) and (out.flag == "ok").all()
+
+
+def test_frames_the_silhouette_flagged_are_usable_by_an_outline_seen_whole_and_no_others():
+    """A two-tone ball measured by its outline: where its light half stands out (a darker wall behind it) its
+    silhouette grows and those frames were flagged ``occluded`` (seed 7149 of the body study: 79.6 % usable, all of
+    it 100 % by the outline). Usable again where the limb is seen as whole as in the usable frames; not where part of
+    it is hidden (a hand in front: fewer rays on the circle), nor where the outline's own centre jumps."""
+    track = _track(3.0, 0.1, 0.08)
+    track.loc[100:119, ["flag", "outline_rays"]] = ["occluded", 80.0]  # the light half standing out: a whole limb
+    track.loc[140:149, ["flag", "outline_rays"]] = ["occluded", 30.0]  # a hand over part of it
+    track.loc[160, ["flag", "outline_rays"]] = ["jump", 80.0]
+    track.loc[160, "outline_x_px"] += 6.0  # the outline's own centre jumps there
+    track.loc[170:175, ["flag", "outline_rays"]] = ["held", 80.0]  # held in a hand: not the silhouette's doubt
+    out = centre_by_outline(track, TrackerSettings())
+    facts = out.attrs["body"]["centre"]
+    assert facts["by"] == "outline" and facts["whole_limb_frames"] == 20, facts
+    assert "20 frames its silhouette flagged" in facts["why"], facts
+    assert (out.flag[100:120] == "ok").all() and np.allclose(out.x_px[100:120], track.outline_x_px[100:120])
+    assert (out.flag[140:150] == "occluded").all() and out.flag[160] == "jump" and (out.flag[170:176] == "held").all()
+    assert (out.flag == "ok").sum() == len(track) - 10 - 1 - 6
 
 
 def test_a_track_too_short_for_a_path_fit_keeps_its_centroid():

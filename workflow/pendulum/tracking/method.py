@@ -52,7 +52,7 @@ def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
     what each one said. The clip's sampled frames, shared by the searches, are let go at the end.
     """
     try:
-        track = centre_by_outline(_track_trial(path, settings, progress))  # a sphere seen in part: its outline
+        track = centre_by_outline(_track_trial(path, settings, progress), settings)  # a sphere seen in part
         return at_capture_rate(correct_slips(track), settings.capture_fps)
     finally:
         samples.release()

@@ -44,7 +44,9 @@ import cv2
 import numpy as np
 import pandas as pd
 
+from pendulum.tracking.checks import flag_jumps
 from pendulum.tracking.path_shape import MIN_MOTION_PX, MOTION_SIGMAS, path_departure
+from pendulum.tracking.settings import TrackerSettings
 
 LIMB_RAYS = 96
 RAY_STEP_PX = 0.25
@@ -65,6 +67,7 @@ MAX_UNSEEN_SHARE = 0.025  # of a colour track's usable frames, the brightness vi
 OUTLINE_REACH = 0.6  # radii: a brightness circle farther from the colour silhouette's centroid is another thing's
 OUTLINE_GAIN = 0.5
 WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
+WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
 _RAYS = (
     np.cos(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
     np.sin(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
@@ -381,9 +384,29 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
     return out
 
 
-def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
+def _whole_limb(track: pd.DataFrame, outline: pd.DataFrame, seen: np.ndarray, settings: TrackerSettings) -> np.ndarray:
+    """Frames the silhouette flagged ``occluded`` or ``jump`` whose outline is seen as whole as in the usable frames
+    (at least half the rays, and the :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count, on its circle) and whose
+    outline centre is no jump (:func:`~pendulum.tracking.checks.flag_jumps` on the outline's path).
+
+    Such a flag is the silhouette's: its area or centroid changed (a two-tone ball's light half standing out where
+    the wall behind it darkens, seed 7149 of the body study: 1.35 times the area mid-swing), which does not move a
+    sphere's limb; a thing in front of the body or merged with it (a hand, a post, a passer-by) hides part of the
+    limb or bends it off the circle, and the frame stays flagged."""
+    rays = track.outline_rays.to_numpy(float)
+    whole = max(LIMB_RAYS / 2, float(np.quantile(rays[seen], WHOLE_LIMB_QUANTILE)))
+    candidates = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= whole)
+    if not candidates.any():
+        return candidates
+    jumps = flag_jumps(outline.x_px.to_numpy(float), outline.y_px.to_numpy(float), seen | candidates, settings)
+    return candidates & ~jumps
+
+
+def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = None) -> pd.DataFrame:
     """The track with its outline's centres where they make the better pendulum (module docstring), without the
-    outline columns; ``attrs["body"]["centre"]``: what each gave and which was kept."""
+    outline columns; ``attrs["body"]["centre"]``: what each gave and which was kept. Measured by its outline, the
+    frames the silhouette flagged for its area or centroid but whose limb is seen whole are usable again
+    (:func:`_whole_limb`, with ``settings``' jump test)."""
     if OUTLINE_COLUMNS[0] not in track.columns:
         return track
     centroid = track.drop(columns=OUTLINE_COLUMNS)
@@ -438,6 +461,8 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         )
         return centroid
     unseen = int((ok & ~seen).sum())
+    restored = _whole_limb(track, outline, seen, settings or TrackerSettings())
+    outline.loc[restored, "flag"] = "ok"
     facts["by"] = "outline"
     turns = ": a ball seen in part (one half of a two-tone ball, a print's dark patches) that turns on its string"
     if wanders or better:
@@ -456,9 +481,17 @@ def centre_by_outline(track: pd.DataFrame) -> pd.DataFrame:
         )
     if (track.attrs.get("body") or {}).get("outline_view", {}).get("used") == "brightness":
         turns += " (its outline in the brightness view)"
-    facts["why"] = f"{evidence}{turns}, measured by its outline's centre" + (
-        f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else ""
+    facts["why"] = (
+        f"{evidence}{turns}, measured by its outline's centre"
+        + (f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else "")
+        + (
+            f"; {int(restored.sum())} frames its silhouette flagged (its area or centroid changed) are usable by "
+            "their outline, seen whole"
+            if restored.any()
+            else ""
+        )
     )
+    facts["whole_limb_frames"] = int(restored.sum())
     outline.attrs = {**centroid.attrs, "body": {**centroid.attrs["body"], "centre": facts}}
     if "method" in outline.attrs:  # said where the method is
         method = outline.attrs["method"]
