@@ -215,20 +215,30 @@ def test_frames_the_silhouette_flagged_are_usable_by_an_outline_seen_whole_and_n
     """A two-tone ball measured by its outline: where its light half stands out (a darker wall behind it) its
     silhouette grows and those frames were flagged ``occluded`` (seed 7149 of the body study: 79.6 % usable, all of
     it 100 % by the outline). Usable again where the limb is seen as whole as in the usable frames; not where part of
-    it is hidden (a hand in front: fewer rays on the circle), nor where the outline's own centre jumps."""
+    it is hidden (a hand in front: fewer rays on the circle), nor where the outline's own centre jumps (alone, or a run
+    of frames on another ball: a reviewer's case, whose usable neighbours the jump test flagged), nor off the path's
+    circle by a pixel, nor before the first usable frame."""
     track = _track(3.0, 0.1, 0.08)
     track.loc[100:119, ["flag", "outline_rays"]] = ["occluded", 80.0]  # the light half standing out: a whole limb
     track.loc[140:149, ["flag", "outline_rays"]] = ["occluded", 30.0]  # a hand over part of it
     track.loc[160, ["flag", "outline_rays"]] = ["jump", 80.0]
     track.loc[160, "outline_x_px"] += 6.0  # the outline's own centre jumps there
     track.loc[170:175, ["flag", "outline_rays"]] = ["held", 80.0]  # held in a hand: not the silhouette's doubt
+    track.loc[0:4, ["flag", "outline_rays"]] = ["occluded", 80.0]  # before its first usable frame: a hand may hold it
+    track.loc[300:319, ["flag", "outline_rays"]] = ["occluded", 80.0]  # a limb shifted 1 px off the path's circle
+    outward = np.arctan2(track.outline_x_px[300:320] - 320.0, track.outline_y_px[300:320] + 150.0)
+    track.loc[300:319, "outline_x_px"] += np.sin(outward)
+    track.loc[300:319, "outline_y_px"] += np.cos(outward)
+    track.loc[900:914, ["flag", "outline_rays"]] = ["occluded", 60.0]  # another ball's limb: a run 24 px away
+    track.loc[900:914, "outline_x_px"] += 24.0
     out = centre_by_outline(track, TrackerSettings())
     facts = out.attrs["body"]["centre"]
     assert facts["by"] == "outline" and facts["whole_limb_frames"] == 20, facts
     assert "20 frames its silhouette flagged" in facts["why"], facts
     assert (out.flag[100:120] == "ok").all() and np.allclose(out.x_px[100:120], track.outline_x_px[100:120])
     assert (out.flag[140:150] == "occluded").all() and out.flag[160] == "jump" and (out.flag[170:176] == "held").all()
-    assert (out.flag == "ok").sum() == len(track) - 10 - 1 - 6
+    assert (out.flag[300:320] == "occluded").all() and (out.flag[900:915] == "occluded").all()
+    assert (out.flag[:5] == "occluded").all() and (out.flag == "ok").sum() == len(track) - 10 - 1 - 6 - 5 - 20 - 15
 
 
 def test_a_track_too_short_for_a_path_fit_keeps_its_centroid():

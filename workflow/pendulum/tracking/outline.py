@@ -43,7 +43,9 @@ import math
 import cv2
 import numpy as np
 import pandas as pd
+from scipy.ndimage import label, maximum_filter1d
 
+from pendulum.tracking.arcs import fit_circle
 from pendulum.tracking.checks import flag_jumps
 from pendulum.tracking.path_shape import MIN_MOTION_PX, MOTION_SIGMAS, path_departure
 from pendulum.tracking.settings import TrackerSettings
@@ -68,6 +70,8 @@ OUTLINE_REACH = 0.6  # radii: a brightness circle farther from the colour silhou
 OUTLINE_GAIN = 0.5
 WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
 WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
+ON_PATH_NOISE, ON_PATH_PX = 4.0, 0.3  # … its centre this near the usable frames' circle (× their noise, and px)
+JUMP_STENCIL = 4  # frames on either side of a frame in the jump test's stencil
 _RAYS = (
     np.cos(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
     np.sin(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
@@ -384,22 +388,40 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
     return out
 
 
-def _whole_limb(track: pd.DataFrame, outline: pd.DataFrame, seen: np.ndarray, settings: TrackerSettings) -> np.ndarray:
-    """Frames the silhouette flagged ``occluded`` or ``jump`` whose outline is seen as whole as in the usable frames
-    (at least half the rays, and the :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count, on its circle) and whose
-    outline centre is no jump (:func:`~pendulum.tracking.checks.flag_jumps` on the outline's path).
+def _whole_limb(
+    track: pd.DataFrame, corrected: pd.DataFrame, seen: np.ndarray, noise_px: float, settings: TrackerSettings
+) -> np.ndarray:
+    """Frames the silhouette flagged ``occluded`` or ``jump`` between its first and last usable frames (before the
+    first, a hand may still hold it) whose outline is seen as whole as in the usable frames (at least half the rays,
+    and the :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count, on its circle) and whose outline centre keeps to
+    the usable frames' path: within :data:`ON_PATH_NOISE` times its noise (and :data:`ON_PATH_PX`) of the circle
+    through them (``corrected``: the outline's path with the camera's creep taken out), and no jump
+    (:func:`~pendulum.tracking.checks.flag_jumps` on the path with them) in a run of them or within its stencil of
+    one (a run of shifted frames makes its usable neighbours the jumps).
 
     Such a flag is the silhouette's: its area or centroid changed (a two-tone ball's light half standing out where
-    the wall behind it darkens, seed 7149 of the body study: 1.35 times the area mid-swing), which does not move a
-    sphere's limb; a thing in front of the body or merged with it (a hand, a post, a passer-by) hides part of the
-    limb or bends it off the circle, and the frame stays flagged."""
+    the wall behind it darkens, seed 7149 of the body study: 1.35 times the area at one end of the swing), which does
+    not move a sphere's limb. A thing in front of the body or merged with it at half its contrast or more hides part
+    of the limb or bends it off the circle; one fainter (a soft shadow merged with it) can shift the limb by under the
+    circle's tolerance and the centre by up to 1.6 px (a reviewer's renders): only a shift across the path is seen
+    here, not one along it."""
+    if not seen.any():
+        return np.zeros(len(track), bool)
     rays = track.outline_rays.to_numpy(float)
     whole = max(LIMB_RAYS / 2, float(np.quantile(rays[seen], WHOLE_LIMB_QUANTILE)))
+    order, free = np.arange(len(track)), np.flatnonzero(seen)  # within the free swing: a hand may hold it before
     candidates = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= whole)
-    if not candidates.any():
-        return candidates
-    jumps = flag_jumps(outline.x_px.to_numpy(float), outline.y_px.to_numpy(float), seen | candidates, settings)
-    return candidates & ~jumps
+    candidates &= (order > free[0]) & (order < free[-1])
+    x, y = corrected.x_px.to_numpy(float), corrected.y_px.to_numpy(float)
+    if not candidates.any() or seen.sum() < MIN_POINTS or not math.isfinite(noise_px):
+        return np.zeros(len(track), bool)
+    jumps = flag_jumps(x, y, seen | candidates, settings)
+    near_jump = maximum_filter1d(jumps.astype(np.uint8), 2 * JUMP_STENCIL + 1) > 0
+    runs, _ = label(candidates)
+    candidates &= ~np.isin(runs, np.unique(runs[near_jump & (runs > 0)]))  # a run with a jump in or beside it
+    cx, cy, radius = fit_circle(x[seen], y[seen])
+    with np.errstate(invalid="ignore"):
+        return candidates & (np.abs(np.hypot(x - cx, y - cy) - radius) <= max(ON_PATH_NOISE * noise_px, ON_PATH_PX))
 
 
 def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = None) -> pd.DataFrame:
@@ -423,7 +445,7 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
         return centroid
     radius = float(np.nanmedian(track.outline_r_px.to_numpy(float)[seen]))
     _, by_centroid = path_departure(centroid)
-    _, by_outline = path_departure(outline)
+    on_path, by_outline = path_departure(outline)
     left_centroid = by_centroid.get("unexplained_rms_px", math.inf)
     left_outline = by_outline.get("unexplained_rms_px", math.inf)
     noise_centroid, noise_outline = by_centroid.get("noise_px", math.inf), by_outline.get("noise_px", math.inf)
@@ -461,7 +483,7 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
         )
         return centroid
     unseen = int((ok & ~seen).sum())
-    restored = _whole_limb(track, outline, seen, settings or TrackerSettings())
+    restored = _whole_limb(track, on_path, seen, noise_outline, settings or TrackerSettings())
     outline.loc[restored, "flag"] = "ok"
     facts["by"] = "outline"
     turns = ": a ball seen in part (one half of a two-tone ball, a print's dark patches) that turns on its string"
