@@ -217,14 +217,14 @@ def test_frames_the_silhouette_flagged_are_usable_by_an_outline_seen_whole_and_n
     it 100 % by the outline). Usable again where the limb is seen as whole as in the usable frames; not where part of
     it is hidden (a hand in front: fewer rays on the circle), nor where the outline's own centre jumps (alone, or a run
     of frames on another ball: a reviewer's case, whose usable neighbours the jump test flagged), nor off the path's
-    circle by a pixel, nor before the first usable frame."""
+    circle by a pixel, nor still before the first usable frame (a hand may hold it)."""
     track = _track(3.0, 0.1, 0.08)
     track.loc[100:119, ["flag", "outline_rays"]] = ["occluded", 80.0]  # the light half standing out: a whole limb
     track.loc[140:149, ["flag", "outline_rays"]] = ["occluded", 30.0]  # a hand over part of it
     track.loc[160, ["flag", "outline_rays"]] = ["jump", 80.0]
     track.loc[160, "outline_x_px"] += 6.0  # the outline's own centre jumps there
     track.loc[170:175, ["flag", "outline_rays"]] = ["held", 80.0]  # held in a hand: not the silhouette's doubt
-    track.loc[0:4, ["flag", "outline_rays"]] = ["occluded", 80.0]  # before its first usable frame: a hand may hold it
+    track.loc[0:4, ["flag", "outline_rays"]] = ["occluded", 80.0]  # still before its first usable frame: held?
     track.loc[300:319, ["flag", "outline_rays"]] = ["occluded", 80.0]  # a limb shifted 1 px off the path's circle
     outward = np.arctan2(track.outline_x_px[300:320] - 320.0, track.outline_y_px[300:320] + 150.0)
     track.loc[300:319, "outline_x_px"] += np.sin(outward)

@@ -47,7 +47,8 @@ Flags from the measurement's own evidence (never thresholds fitted to renders): 
 1.2 inner radii of its thickest point, not a rod or thread leaving the frame, touches the frame's border),
 ``occluded`` (its covered area departs from its running median by 6 robust σ and 10 %, or lies beyond 1.5× or ½ of
 its median where it moves, or the soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its
-radius (≥ 0.3 px), or it reaches a place something in front of the swing hides:
+radius (≥ 0.3 px), and the frames beside those in a run off 1.2× its size either way, a merge coming and going:
+:func:`pendulum.tracking.checks.grown_runs`; or it reaches a place something in front of the swing hides:
 :mod:`pendulum.tracking.occluders`), ``jump`` (leave-one-out cubic, as for the marker), ``held`` (over 1.5× that
 median before the body's first free frame or after its last: a hand before the release, or one that catches it;
 or, still, over 1.2× it from the record's first frame or to its last: fingers alone over its edge) and ``lost``
@@ -108,7 +109,7 @@ from pendulum.tracking.body_scene import (
     unseen_behind,
     wall_gain,
 )
-from pendulum.tracking.checks import flag_jumps, held_still_runs, robust_outliers
+from pendulum.tracking.checks import flag_jumps, grown_runs, held_still_runs, robust_outliers
 from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
 from pendulum.tracking.outline import LIMB_RAYS, OUTLINE_COLUMNS, edge_points, outline_centres
 from pendulum.tracking.path_shape import rest_place_area_ratio
@@ -439,17 +440,12 @@ def track_body(
     area_fault = robust_outliers(mass / reference, usable, window, AREA_SIGMAS, MIN_AREA_CHANGE)
     bxy = np.asarray(binary, float)
     disagreement = np.hypot(x - bxy[:, 0], y - bxy[:, 1])
-    centroid_fault = robust_outliers(
-        disagreement,
-        usable & np.isfinite(disagreement),
-        window,
-        CENTROID_SIGMAS,
-        max(0.3, MIN_CENTROID_DISAGREEMENT * scene.radius_px),
-    )
+    least = max(0.3, MIN_CENTROID_DISAGREEMENT * scene.radius_px)
+    centroid_fault = robust_outliers(disagreement, usable & np.isfinite(disagreement), window, CENTROID_SIGMAS, least)
     moving = usable & (np.hypot(np.diff(x, prepend=np.nan), np.diff(y, prepend=np.nan)) > MOVING_PX)
     own = np.median(mass[moving]) if moving.sum() >= 0.2 * usable.sum() else reference  # a hold: no outlier
     merged = usable & ((mass > MAX_AREA_RATIO * own) | (mass < MIN_AREA_RATIO * own))
-    flags[area_fault | centroid_fault | merged] = "occluded"
+    flags[grown_runs(area_fault | centroid_fault | merged, mass / own, usable, TYPICAL_AREA_RATIO)] = "occluded"
     # fingers alone over its edge add less than MAX_AREA_RATIO: a still run over the body's usual size, at either end
     flags[held_still_runs(mass / own, x, y, TYPICAL_AREA_RATIO, STILL_PX)] = "held"
     elsewhere = getattr(view, "hidden_box", None)  # a place the brightness view found hidden, for a colour view

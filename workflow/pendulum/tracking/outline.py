@@ -72,6 +72,7 @@ WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise
 WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
 ON_PATH_NOISE, ON_PATH_PX = 4.0, 0.3  # … its centre this near the usable frames' circle (× their noise, and px)
 JUMP_STENCIL = 4  # frames on either side of a frame in the jump test's stencil
+STILL_PX = 1.5  # median step (px per frame) of a body held still, as the body tracker's
 _RAYS = (
     np.cos(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
     np.sin(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
@@ -391,13 +392,13 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
 def _whole_limb(
     track: pd.DataFrame, corrected: pd.DataFrame, seen: np.ndarray, noise_px: float, settings: TrackerSettings
 ) -> np.ndarray:
-    """Frames the silhouette flagged ``occluded`` or ``jump`` between its first and last usable frames (before the
-    first, a hand may still hold it) whose outline is seen as whole as in the usable frames (at least half the rays,
-    and the :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count, on its circle) and whose outline centre keeps to
-    the usable frames' path: within :data:`ON_PATH_NOISE` times its noise (and :data:`ON_PATH_PX`) of the circle
-    through them (``corrected``: the outline's path with the camera's creep taken out), and no jump
-    (:func:`~pendulum.tracking.checks.flag_jumps` on the path with them) in a run of them or within its stencil of
-    one (a run of shifted frames makes its usable neighbours the jumps).
+    """Frames the silhouette flagged ``occluded`` or ``jump`` (before its first usable frame or after its last, only
+    where they move by over :data:`STILL_PX` a frame: a hand may hold it still there) whose outline is seen as whole
+    as in the usable frames (at least half the rays, and the :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count,
+    on its circle) and whose outline centre keeps to the usable frames' path: within :data:`ON_PATH_NOISE` times its
+    noise (and :data:`ON_PATH_PX`) of the circle through them (``corrected``: the outline's path with the camera's
+    creep taken out), and no jump (:func:`~pendulum.tracking.checks.flag_jumps` on the path with them) in a run of
+    them or within its stencil of one (a run of shifted frames makes its usable neighbours the jumps).
 
     Such a flag is the silhouette's: its area or centroid changed (a two-tone ball's light half standing out where
     the wall behind it darkens, seed 7149 of the body study: 1.35 times the area at one end of the swing), which does
@@ -409,10 +410,13 @@ def _whole_limb(
         return np.zeros(len(track), bool)
     rays = track.outline_rays.to_numpy(float)
     whole = max(LIMB_RAYS / 2, float(np.quantile(rays[seen], WHOLE_LIMB_QUANTILE)))
-    order, free = np.arange(len(track)), np.flatnonzero(seen)  # within the free swing: a hand may hold it before
     candidates = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= whole)
-    candidates &= (order > free[0]) & (order < free[-1])
     x, y = corrected.x_px.to_numpy(float), corrected.y_px.to_numpy(float)
+    order, free = np.arange(len(track)), np.flatnonzero(seen)
+    for end in (order < free[0], order > free[-1]):  # before the first usable frame or after the last: swinging
+        steps = np.hypot(np.diff(x[end & candidates]), np.diff(y[end & candidates]))
+        if not (steps.size and np.median(steps) > STILL_PX):  # held still there (a hand), or too short to tell
+            candidates &= ~end
     if not candidates.any() or seen.sum() < MIN_POINTS or not math.isfinite(noise_px):
         return np.zeros(len(track), bool)
     jumps = flag_jumps(x, y, seen | candidates, settings)
