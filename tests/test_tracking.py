@@ -316,9 +316,10 @@ def test_a_still_body_with_more_of_something_at_either_end_of_the_record_is_held
 def test_the_frames_a_merge_comes_and_goes_over_are_flagged_with_it():
     """``grown_runs``: a merge with a shadow comes and goes over a few frames; the frames beside those over the
     limit (1.5 times the body's area), 1.2–1.5 times it, are off by nearly as much (seed 7170 of the body study:
-    9–17 px, left usable, θ 1.43° RMS off). Flagged through the run of frames off size (either way) that holds a
-    flagged one; not a frame that is not usable, nor the frames at size. Where the body is off size by itself (runs
-    with nothing flagged in over 2 % of its frames: a two-tone ball turning), nothing is grown."""
+    9–17 px, left usable, θ 1.43° RMS off). Flagged within ``reach`` frames of a flagged one in its run of frames
+    off size (either way); not a frame that is not usable, nor the frames at size, nor farther along a long run off
+    size (a slow drift: a reviewer's). Where the body is off size by itself (runs with nothing flagged in over 2 % of
+    its frames: a two-tone ball turning), nothing is grown."""
     from pendulum.tracking.checks import grown_runs
 
     ratio = np.ones(200)
@@ -330,12 +331,15 @@ def test_the_frames_a_merge_comes_and_goes_over_are_flagged_with_it():
     ratio[40] = 1.6
     doubted = (ratio > 1.5) | (ratio < 0.5)
     doubted[40] = False
-    grown = grown_runs(doubted, ratio, usable, 1.2)
+    grown = grown_runs(doubted, ratio, usable, 1.2, 4)
     assert np.array_equal(np.flatnonzero(grown), np.r_[21:29, 50:55])
-    assert not grown_runs(np.zeros(200, bool), ratio, usable, 1.2).any()
+    assert not grown_runs(np.zeros(200, bool), ratio, usable, 1.2, 4).any()
     turning = ratio.copy()
     turning[100:160] = 1.3  # 60 frames off size with nothing flagged: its size varies by itself
-    assert np.array_equal(grown_runs(doubted, turning, usable, 1.2), doubted)
+    assert np.array_equal(grown_runs(doubted, turning, usable, 1.2, 4), doubted)
+    drifting = ratio.copy()  # a size flag in a long stretch off size (a slow drift): only `reach` frames each side
+    drifting[120:150], doubted[135] = 1.3, True
+    assert np.array_equal(np.flatnonzero(grown_runs(doubted, drifting, usable, 1.2, 4)), np.r_[21:29, 50:55, 131:140])
 
 
 def _disk(shape, cx, cy, r):

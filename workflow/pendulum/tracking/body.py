@@ -47,12 +47,12 @@ Flags from the measurement's own evidence (never thresholds fitted to renders): 
 1.2 inner radii of its thickest point, not a rod or thread leaving the frame, touches the frame's border),
 ``occluded`` (its covered area departs from its running median by 6 robust σ and 10 %, or lies beyond 1.5× or ½ of
 its median where it moves, or the soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its
-radius (≥ 0.3 px), and the frames beside those in a run off 1.2× its size either way, a merge coming and going:
-:func:`pendulum.tracking.checks.grown_runs`; or it reaches a place something in front of the swing hides:
-:mod:`pendulum.tracking.occluders`), ``jump`` (leave-one-out cubic, as for the marker), ``held`` (over 1.5× that
-median before the body's first free frame or after its last: a hand before the release, or one that catches it;
-or, still, over 1.2× it from the record's first frame or to its last: fingers alone over its edge) and ``lost``
-(no body near the prediction).
+radius (≥ 0.3 px), and the frames within 0.2 s of a size flag in its run off 1.2× its size either way, a merge
+coming and going: :func:`pendulum.tracking.checks.grown_runs`; or it reaches a place something in front of the
+swing hides: :mod:`pendulum.tracking.occluders`), ``jump`` (leave-one-out cubic, as for the marker), ``held``
+(over 1.5× that median before the body's first free frame or after its last: a hand before the release, or one that
+catches it; or, still, over 1.2× it from the record's first frame or to its last: fingers alone over its edge) and
+``lost`` (no body near the prediction).
 
 A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most samples) shows
 as a silhouette smaller or larger mid-swing than at the ends
@@ -132,6 +132,7 @@ SCENE_PASSES = 4  # scene estimates, each leaving out the moving pixels the prev
 FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found again above ¼ of its own
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
 MOVING_PX = 0.3  # the body moves (px per frame): its area there is its own (MAX_AREA_RATIO, MIN_AREA_RATIO)
+MERGE_S = 0.2  # a merge with a shadow or a hand comes and goes over this long (s): ``checks.grown_runs``
 STILL_PX = 1.5  # median step (px per frame) of a body held still: a hand trembles (±0.6 px in the hand variants)
 TYPICAL_SAMPLES, TYPICAL_AREA_RATIO = 9, 1.2  # samples spread over the clip for the body's usual size; its range
 CENTROID_SIGMAS = 6.0
@@ -445,7 +446,8 @@ def track_body(
     moving = usable & (np.hypot(np.diff(x, prepend=np.nan), np.diff(y, prepend=np.nan)) > MOVING_PX)
     own = np.median(mass[moving]) if moving.sum() >= 0.2 * usable.sum() else reference  # a hold: no outlier
     merged = usable & ((mass > MAX_AREA_RATIO * own) | (mass < MIN_AREA_RATIO * own))
-    flags[grown_runs(area_fault | centroid_fault | merged, mass / own, usable, TYPICAL_AREA_RATIO)] = "occluded"
+    grown = grown_runs(area_fault | merged, mass / own, usable, TYPICAL_AREA_RATIO, round(MERGE_S * window))
+    flags[grown | centroid_fault] = "occluded"
     # fingers alone over its edge add less than MAX_AREA_RATIO: a still run over the body's usual size, at either end
     flags[held_still_runs(mass / own, x, y, TYPICAL_AREA_RATIO, STILL_PX)] = "held"
     elsewhere = getattr(view, "hidden_box", None)  # a place the brightness view found hidden, for a colour view

@@ -161,19 +161,21 @@ def held_still_runs(area_ratio: np.ndarray, x: np.ndarray, y: np.ndarray, above:
     return held
 
 
-def grown_runs(doubted: np.ndarray, area_ratio: np.ndarray, usable: np.ndarray, typical: float) -> np.ndarray:
-    """``doubted`` grown through each run of consecutive ``usable`` samples whose area is off the body's own by more
-    than ``typical`` times (either way) that holds one of them (hysteresis): a merge with a shadow or a hand comes
-    and goes over a few frames, and the samples beside those over the limit are off by nearly as much (an apple
-    whose shadows met a dark band at one end of its swing, seed 7170 of the body study: 1.24–1.49 times its area
-    beside runs over 1.5, 9–17 px off, were left usable). Not where the body is off that size by itself in over
-    :data:`OFF_SIZE_ALONE` of its usable samples (runs that hold none of them: a two-tone ball turning on its
-    string, whose visible part changes for seconds at a time; grown, the real clip's turning ball lost 13–16 % of
-    its frames)."""
+def grown_runs(
+    doubted: np.ndarray, area_ratio: np.ndarray, usable: np.ndarray, typical: float, reach: int
+) -> np.ndarray:
+    """``doubted`` (flags for the body's size) grown to the ``usable`` samples within ``reach`` samples of one of them,
+    in a run of consecutive samples whose area is off the body's own by more than ``typical`` times (either way)
+    that holds one of them (hysteresis): a merge with a shadow or a hand comes and goes over a few frames, and the
+    samples beside those over the limit are off by nearly as much (an apple whose shadows met a dark band at one end
+    of its swing, seed 7170 of the body study: up to 4 frames from the flagged ones, 1.24–1.49 times its area,
+    9–17 px off, were left usable). Not where the body is off that size by itself in over :data:`OFF_SIZE_ALONE` of
+    its usable samples (runs that hold none of them: a two-tone ball turning on its string, whose visible part
+    changes for seconds at a time; grown, the real clip's turning ball lost 13–16 % of its frames)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         off_size = usable & ((area_ratio > typical) | (area_ratio < 1 / typical))
     runs, _ = label(doubted | off_size)
     with_doubt = np.isin(runs, np.unique(runs[doubted & (runs > 0)]))
     if (off_size & ~with_doubt).sum() > OFF_SIZE_ALONE * max(usable.sum(), 1):
         return doubted
-    return doubted | with_doubt
+    return doubted | (with_doubt & (maximum_filter1d(doubted.astype(np.uint8), 2 * reach + 1) > 0))
