@@ -109,7 +109,7 @@ from pendulum.tracking.body_scene import (
     unseen_behind,
     wall_gain,
 )
-from pendulum.tracking.checks import flag_jumps, grown_runs, held_still_runs, robust_outliers
+from pendulum.tracking.checks import STILL_PX, flag_jumps, grown_runs, held_still_runs, robust_outliers
 from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
 from pendulum.tracking.outline import LIMB_RAYS, OUTLINE_COLUMNS, edge_points, outline_centres
 from pendulum.tracking.path_shape import rest_place_area_ratio
@@ -133,7 +133,6 @@ FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found a
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
 MOVING_PX = 0.3  # the body moves (px per frame): its area there is its own (MAX_AREA_RATIO, MIN_AREA_RATIO)
 MERGE_S = 0.2  # a merge with a shadow or a hand comes and goes over this long (s): ``checks.grown_runs``
-STILL_PX = 1.5  # median step (px per frame) of a body held still: a hand trembles (±0.6 px in the hand variants)
 TYPICAL_SAMPLES, TYPICAL_AREA_RATIO = 9, 1.2  # samples spread over the clip for the body's usual size; its range
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px

@@ -17,6 +17,8 @@ from scipy.ndimage import label, maximum_filter1d, median_filter
 if TYPE_CHECKING:
     from pendulum.tracking.settings import TrackerSettings
 
+JUMP_HALF_WINDOW = 4  # neighbours on either side in the jump test's leave-one-out cubic (:func:`flag_jumps`)
+STILL_PX = 1.5  # median step (px per frame) of a body held still: a hand trembles (±0.6 px in the hand variants)
 OFF_SIZE_ALONE = 0.02  # of a body's usable samples off its usual size with no flag beside: its size varies by itself
 
 
@@ -57,7 +59,7 @@ def exposure_centre_correction(x, usable, exposure_fraction: float) -> np.ndarra
     return corr
 
 
-def _leave_one_out_weights(half_window: int = 4, degree: int = 3) -> np.ndarray:
+def _leave_one_out_weights(half_window: int = JUMP_HALF_WINDOW, degree: int = 3) -> np.ndarray:
     """Weights c_j predicting x_i = Σ c_j x_{i+j} from a cubic through the neighbours (j ≠ 0)."""
     offsets = np.array([j for j in range(-half_window, half_window + 1) if j != 0], float)
     design = np.vander(offsets, degree + 1, increasing=True)

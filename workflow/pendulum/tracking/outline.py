@@ -46,7 +46,7 @@ import pandas as pd
 from scipy.ndimage import label, maximum_filter1d
 
 from pendulum.tracking.arcs import fit_circle
-from pendulum.tracking.checks import flag_jumps
+from pendulum.tracking.checks import JUMP_HALF_WINDOW, STILL_PX, flag_jumps
 from pendulum.tracking.path_shape import MIN_MOTION_PX, MOTION_SIGMAS, path_departure
 from pendulum.tracking.settings import TrackerSettings
 
@@ -71,8 +71,6 @@ OUTLINE_GAIN = 0.5
 WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
 WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
 ON_PATH_NOISE, ON_PATH_PX = 4.0, 0.3  # … its centre this near the usable frames' circle (× their noise, and px)
-JUMP_STENCIL = 4  # frames on either side of a frame in the jump test's stencil
-STILL_PX = 1.5  # median step (px per frame) of a body held still, as the body tracker's
 _RAYS = (
     np.cos(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
     np.sin(np.arange(LIMB_RAYS) * 2 * np.pi / LIMB_RAYS)[:, None],
@@ -420,7 +418,7 @@ def _whole_limb(
     if not candidates.any() or seen.sum() < MIN_POINTS or not math.isfinite(noise_px):
         return np.zeros(len(track), bool)
     jumps = flag_jumps(x, y, seen | candidates, settings)
-    near_jump = maximum_filter1d(jumps.astype(np.uint8), 2 * JUMP_STENCIL + 1) > 0
+    near_jump = maximum_filter1d(jumps.astype(np.uint8), 2 * JUMP_HALF_WINDOW + 1) > 0
     runs, _ = label(candidates)
     candidates &= ~np.isin(runs, np.unique(runs[near_jump & (runs > 0)]))  # a run with a jump in or beside it
     cx, cy, radius = fit_circle(x[seen], y[seen])
