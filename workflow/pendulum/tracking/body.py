@@ -110,8 +110,9 @@ from pendulum.tracking.body_scene import (
     wall_gain,
 )
 from pendulum.tracking.checks import STILL_PX, flag_jumps, grown_runs, held_still_runs, robust_outliers
+from pendulum.tracking.limb import LIMB_RAYS, edge_points
 from pendulum.tracking.occluders import SilhouetteCounts, hidden_frames
-from pendulum.tracking.outline import LIMB_RAYS, OUTLINE_COLUMNS, edge_points, outline_centres
+from pendulum.tracking.outline import OUTLINE_COLUMNS, outline_centres
 from pendulum.tracking.path_shape import rest_place_area_ratio
 from pendulum.tracking.scene_stack import (
     EnlargedMasks,

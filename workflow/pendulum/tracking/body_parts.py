@@ -24,6 +24,8 @@ MAX_AREA_RATIO, MIN_AREA_RATIO = 1.5, 0.5  # the body with something else, or a 
 
 
 SOFT_EDGE_RATIO = 1 / 3  # a component whose edge is this much softer than a heavy one's beside it: its shadow
+# ... or this much softer and fainter: a shadow (its penumbra blurred beyond the body's edge) a few grey levels deep
+FAINT_EDGE_RATIO, FAINT_CONTRAST_RATIO = 2 / 3, 0.4
 HEAVY_SHARE = 0.25  # ... where that one holds at least this share of the heaviest component's mass
 
 
@@ -59,21 +61,36 @@ def soft_components(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, mas
     heaviest's mass or more) whose edge is over 1 / :data:`SOFT_EDGE_RATIO` times as sharp (:func:`edge_sharpness`):
     a soft shadow beside the body, which the body's parts within that gap would otherwise be joined to. Measured on
     a printed ball of 21 px radius and its two shadows, heavier than the ball (its light and dark squares ±50–60
-    grey levels off the wall, the shadows −30): 0.21 and 0.03 per px. Components far apart are left as they are
-    (the heaviest taken): a defocused body is not set apart from a sharp hand or its hard shadow elsewhere."""
+    grey levels off the wall, the shadows −30): 0.21 and 0.03 per px. Also one whose edge is softer than
+    :data:`FAINT_EDGE_RATIO` of that one's and whose contrast (90th percentile of D) is under
+    :data:`FAINT_CONTRAST_RATIO` of its: a two-tone ball of 22 px beside its shadow 19 grey levels deep and σ 6 px
+    (0.19 and 0.105 per px; contrast 72 and 19). Components far apart are left as they are (the heaviest taken): a
+    defocused body is not set apart from a sharp hand or its hard shadow elsewhere."""
     top = max((masses[i] for i in ids), default=0.0)
     heavy = [i for i in ids if masses[i] >= HEAVY_SHARE * top]
     if len(heavy) < 2:
         return set()
-    sharpness = {}
+    sharpness, contrasts = {}, {}
 
     def sharp(i):
         if i not in sharpness:
             sharpness[i] = edge_sharpness(diff, labels, stats, i)
         return sharpness[i]
 
+    def contrast(i):
+        if i not in contrasts:
+            x0, y0, w, h = (int(v) for v in stats[i, :4])
+            crop = diff[y0 : y0 + h, x0 : x0 + w]
+            contrasts[i] = float(np.percentile(crop[labels[y0 : y0 + h, x0 : x0 + w] == i], 90))
+        return contrasts[i]
+
     def beside_sharper(i, j):
-        return j != i and _boxes_within(stats[i], stats[j], gap) and sharp(i) < SOFT_EDGE_RATIO * sharp(j)
+        if j == i or not _boxes_within(stats[i], stats[j], gap) or sharp(j) <= 0:
+            return False
+        softer = sharp(i) / sharp(j)
+        return softer < SOFT_EDGE_RATIO or (
+            softer < FAINT_EDGE_RATIO and contrast(i) < FAINT_CONTRAST_RATIO * contrast(j)
+        )
 
     return {i for i in ids if any(beside_sharper(i, j) for j in heavy)}
 
