@@ -27,10 +27,11 @@ outline; a ball whose outline is half as noisy as its centroid); or the two path
 camera (by more than path_shape's own least creep, and five of their standard errors: a wander slow enough to pass
 for a creep), the outline's path no farther off its circle than the centroid's plus its noise; or the two centres
 move apart as the body swings (:func:`centres_apart`: by over :data:`APART_NOISE_RATIO` times their difference's
-noise; a two-tone ball blurred by its motion, body study scene 7227), the outline's path no farther off its circle
-and its noise at most :data:`APART_NOISE_SLACK` times the centroid's. The camera moves both centres alike; only a
-centre that moves on the body makes them differ, and a sphere's outline cannot. An apple (its outline no circle, its
-centre 2–4 times noisier) and a uniform ball (both centres on one path, equally noisy) keep the centroid."""
+noise and :data:`APART_MIN_DEG` of θ on the arm; a two-tone ball blurred by its motion, body study scene 7227), the
+outline's path no farther off its circle and its noise at most :data:`APART_NOISE_SLACK` times the centroid's. The
+camera moves both centres alike; only a centre that moves on the body makes them differ, and a sphere's outline
+cannot. An apple (its outline no circle, its centre 2–4 times noisier) and a uniform ball (both centres on one path,
+equally noisy) keep the centroid."""
 
 from __future__ import annotations
 
@@ -60,6 +61,7 @@ OUTLINE_GAIN = 0.5
 WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise, that the outline is tried against
 APART_NOISE_RATIO = 2.0  # the two centres' difference wandering by this × its noise: one of them moves on the body
 APART_NOISE_SLACK = 1.25  # ... the outline then kept if no more than this × as noisy (an apple's: 2–4 ×)
+APART_MIN_DEG = 0.01  # ... and by this much of θ on the path's arm at least: a smaller wander is not worth a change
 WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
 ON_PATH_NOISE, ON_PATH_PX = 4.0, 0.3  # … its centre this near the usable frames' circle (× their noise, and px)
 OUTLINE_COLUMNS = ["outline_x_px", "outline_y_px", "outline_r_px", "outline_rays"]
@@ -350,11 +352,12 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
         and left_outline <= OUTLINE_GAIN * left_centroid
         and noise_outline <= noise_centroid
     )
-    # the two centres moving apart as the body swings, the outline's path no worse on either count
+    # the two centres moving apart as the body swings (by enough to move θ), the outline's path no worse
     apart, apart_noise = centres_apart(centroid, outline, seen)
     facts["apart_px"] = {"wander": _rounded(apart), "noise": _rounded(apart_noise)}
+    least_apart = math.radians(APART_MIN_DEG) * by_outline.get("radius_px", math.inf)
     moves_apart = (
-        apart > APART_NOISE_RATIO * apart_noise
+        apart > max(APART_NOISE_RATIO * apart_noise, least_apart)
         and left_outline <= left_centroid
         and noise_outline <= APART_NOISE_SLACK * noise_centroid
     )
@@ -395,8 +398,10 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
             f"no farther off a circle about the pivot ({left_outline:.2f} px against {left_centroid:.2f} px), its "
             f"noise {noise_outline:.2f} px against {noise_centroid:.2f} px"
         )
-        turns = ": the centroid moves on the body (a part of it fainter than the rest, cut by the silhouette's "
-        "threshold where the motion blurs it)"
+        turns = (
+            ": the centroid moves on the body (a part of it not always in the silhouette: a two-tone ball's faint half "
+            "turned away, or blurred by its motion under the threshold)"
+        )
     if (track.attrs.get("body") or {}).get("outline_view", {}).get("used") == "brightness":
         turns += " (its outline in the brightness view)"
     facts["why"] = (
