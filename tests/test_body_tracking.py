@@ -1117,9 +1117,9 @@ def test_the_study_scene_whose_apple_met_its_shadows_keeps_no_frame_of_the_merge
 def test_the_study_scene_whose_blurred_two_tone_ball_pulled_its_centroid_aside_is_measured_by_its_outline(tmp_path):
     """Body study scene 7227 (5 s of it): a two-tone ball of 34 px filmed at 30 fps with exposures of half a frame;
     where it moves fastest its faint half's blurred edge falls under the silhouette's threshold first and the
-    centroid sits up to 1 px toward its dark half, along the swing (both centres' paths circles within their noise). Measured
-    before: θ 0.035° RMS off the truth, 0.148° with the pivot fitted; by its outline's centre (the two centres
-    moving apart by 0.38 px RMS, their difference's noise 0.07 px): 0.0076° (0.013°)."""
+    centroid sits up to 1 px toward its dark half, along the swing (both centres' paths circles within their
+    noise). Measured before: θ 0.035° RMS off the truth, 0.148° with the pivot fitted; by its outline's centre (the
+    two centres moving apart by 0.38 px RMS, their difference's noise 0.07 px): 0.0076° (0.013°)."""
     sys_path = str(Path(__file__).resolve().parent / "benchmarks")
     if sys_path not in sys.path:
         sys.path.insert(0, sys_path)
