@@ -262,6 +262,24 @@ def test_the_outline_is_kept_where_the_two_centres_move_apart_as_the_body_swings
         assert 2 * noise < wander < 0.08, facts
 
 
+def test_centres_apart_needs_both_paths_fitted_and_finite_frames():
+    """A reviewer's edge cases: with too few usable frames for either path to be fitted (both off their circle by
+    ``inf``) the two centres' wander does not choose the outline; a lost frame (NaN) or frames flagged every other
+    one leave the wander measured on the rest, or not at all."""
+    from pendulum.tracking.outline import centres_apart
+
+    short = _track(0.0, 0.01, 0.01, blurred_px=1.0).iloc[:25]
+    facts = centre_by_outline(short).attrs["body"]["centre"]
+    assert facts["by"] == "silhouette" and "could not both be fitted" in facts["why"], facts
+    track = _track(0.0, 0.05, 0.06, blurred_px=1.0)
+    outline = track.assign(x_px=track.outline_x_px, y_px=track.outline_y_px)
+    every = np.ones(len(track), bool)
+    wander, noise = centres_apart(track, outline, every)
+    track.loc[100, "x_px"] = np.nan
+    assert centres_apart(track, outline, every) == pytest.approx((wander, noise), rel=0.02)
+    assert centres_apart(track, outline, np.arange(len(track)) % 2 == 0) == (0.0, math.inf)
+
+
 def test_frames_the_silhouette_flagged_are_usable_by_an_outline_seen_whole_and_no_others():
     """A two-tone ball measured by its outline: where its light half stands out (a darker wall behind it) its
     silhouette grows and those frames were flagged ``occluded`` (seed 7149 of the body study: 79.6 % usable, all of

@@ -281,20 +281,18 @@ def _whole_limb(
 
 def centres_apart(centroid: pd.DataFrame, outline: pd.DataFrame, both: np.ndarray) -> tuple[float, float]:
     """How far the silhouette's centroid and the outline's centre move apart over the frames ``both`` measured
-    well: the RMS of their difference about its mean beyond its noise, √(RMS² − noise²), and that noise (px), the
-    noise from the difference's second divided differences over consecutive frames (σ² = mean(Δ²) / 1.5, as of
-    white noise). A constant offset is no bias of θ's swing (the pivot takes it); a difference that comes and
-    goes with the swing (a two-tone ball blurred by its motion, its faint half's trailing edge cut by the
-    silhouette's threshold) is one centre moving on the body."""
-    index = np.flatnonzero(both)
+    well (and finite): the RMS of their 2-D difference about its mean beyond its noise, √(RMS² − noise²), and that
+    noise (px, 2-D: √2 × each axis's), from the difference's second differences Δ = d(k) − (d(k−1) + d(k+1)) / 2
+    over consecutive frames (σ² = mean(|Δ|²) / 1.5, as of white noise); ``(0, inf)`` with too few of them. A
+    constant offset is no bias of θ's swing (the pivot takes it); a difference that comes and goes as the body
+    swings or turns (a two-tone ball blurred by its motion, its faint half's edge cut by the silhouette's threshold;
+    its coloured half turned away) is one centre moving on the body."""
+    x = centroid.x_px.to_numpy(float) - outline.x_px.to_numpy(float)
+    y = centroid.y_px.to_numpy(float) - outline.y_px.to_numpy(float)
+    index = np.flatnonzero(both & np.isfinite(x) & np.isfinite(y))
     if index.size < 8:
         return 0.0, math.inf
-    apart = np.column_stack(
-        [
-            centroid.x_px.to_numpy(float)[index] - outline.x_px.to_numpy(float)[index],
-            centroid.y_px.to_numpy(float)[index] - outline.y_px.to_numpy(float)[index],
-        ]
-    )
+    apart = np.column_stack([x[index], y[index]])
     runs = (index[1:-1] - index[:-2] == 1) & (index[2:] - index[1:-1] == 1)
     if runs.sum() < 4:
         return 0.0, math.inf
@@ -337,10 +335,12 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
         noise_px={"silhouette": _rounded(noise_centroid), "outline": _rounded(noise_outline)},
     )
     (creep_centroid, sigma_centroid), (creep_outline, sigma_outline) = _creep(by_centroid), _creep(by_outline)
-    apart = float(np.hypot(*(creep_centroid - creep_outline)))
+    creeps_apart = float(np.hypot(*(creep_centroid - creep_outline)))
     # a centre that moves on the body moves by less than its radius: a larger difference is a creep fitted to a
     # short or odd path, not evidence
-    creeps_differ = max(MIN_MOTION_PX, MOTION_SIGMAS * math.hypot(sigma_centroid, sigma_outline)) < apart < radius
+    creeps_differ = (
+        max(MIN_MOTION_PX, MOTION_SIGMAS * math.hypot(sigma_centroid, sigma_outline)) < creeps_apart < radius
+    )
     facts["creep_px"] = {"silhouette": creep_centroid.round(3).tolist(), "outline": creep_outline.round(3).tolist()}
     wanders = (
         wander_centroid > WANDER_NOISE_RATIO * noise_centroid
@@ -352,12 +352,13 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
         and left_outline <= OUTLINE_GAIN * left_centroid
         and noise_outline <= noise_centroid
     )
-    # the two centres moving apart as the body swings (by enough to move θ), the outline's path no worse
+    # the two centres moving apart as the body swings or turns (by enough to move θ), the outline's path no worse
     apart, apart_noise = centres_apart(centroid, outline, seen)
     facts["apart_px"] = {"wander": _rounded(apart), "noise": _rounded(apart_noise)}
     least_apart = math.radians(APART_MIN_DEG) * by_outline.get("radius_px", math.inf)
     moves_apart = (
-        apart > max(APART_NOISE_RATIO * apart_noise, least_apart)
+        math.isfinite(left_outline + noise_outline + left_centroid + noise_centroid)  # both paths fitted
+        and apart > max(APART_NOISE_RATIO * apart_noise, least_apart)
         and left_outline <= left_centroid
         and noise_outline <= APART_NOISE_SLACK * noise_centroid
     )
@@ -394,9 +395,9 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
     else:
         evidence = (
             f"the silhouette's centroid and the centre of its round outline ({radius:.1f} px in radius) move apart "
-            f"by {apart:.2f} px RMS as it swings (their difference's noise {apart_noise:.2f} px), the outline's path "
-            f"no farther off a circle about the pivot ({left_outline:.2f} px against {left_centroid:.2f} px), its "
-            f"noise {noise_outline:.2f} px against {noise_centroid:.2f} px"
+            f"by {apart:.2f} px RMS as it swings or turns (their difference's noise {apart_noise:.2f} px), the "
+            f"outline's path no farther off a circle about the pivot ({left_outline:.2f} px against "
+            f"{left_centroid:.2f} px), its noise {noise_outline:.2f} px against {noise_centroid:.2f} px"
         )
         turns = (
             ": the centroid moves on the body (a part of it not always in the silhouette: a two-tone ball's faint half "
