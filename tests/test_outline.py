@@ -225,13 +225,13 @@ def test_the_outline_is_kept_only_where_its_path_is_the_better_pendulum(
 @pytest.mark.parametrize(
     "blurred_px, offset_px, centroid_noise_px, outline_noise_px, by",
     [
-        (1.0, 0.0, 0.05, 0.06, "outline"),  # body study scene 7227: 1 px mid-swing, the outline 1.05 × as noisy
-        (1.0, 0.0, 0.05, 0.15, "silhouette"),  # an apple's outline: no circle, its centre three times as noisy
-        (0.0, 1.0, 0.05, 0.05, "silhouette"),  # the two centres a constant 1 px apart: no bias of the swing
-        (0.1, 0.0, 0.05, 0.05, "silhouette"),  # apart by less than twice their difference's noise
-        (0.2, 0.0, 0.01, 0.01, "silhouette"),  # over twice it, but under 0.01° on the 450 px arm (0.08 px): scene
-        # 7132, an apple of 49 px whose two centres wander apart by 0.07 px (noise 0.024 px), which the outline's
-        # centre made 0.0028 → 0.0036° off the truth and 0.006 → 0.043° with the pivot fitted
+        (1.0, 0.0, 0.03, 0.035, "outline"),  # body study scene 7227: 1 px mid-swing, the outline 1.05-1.2 × as noisy
+        (1.0, 0.0, 0.03, 0.1, "silhouette"),  # an apple's outline: no circle, its centre three times as noisy
+        (0.0, 1.0, 0.03, 0.03, "silhouette"),  # the two centres a constant 1 px apart: no bias of the swing
+        (0.1, 0.0, 0.03, 0.03, "silhouette"),  # apart by less than three times their difference's noise
+        (0.25, 0.0, 0.01, 0.01, "silhouette"),  # over three times it, but under 0.01° on the 450 px arm (0.08 px):
+        # scene 7132, an apple of 49 px whose two centres wander apart by 0.07 px (noise 0.024 px), which the
+        # outline's centre made 0.0028 → 0.0036° off the truth and 0.006 → 0.043° with the pivot fitted
     ],
 )
 def test_the_outline_is_kept_where_the_two_centres_move_apart_as_the_body_swings(
@@ -242,9 +242,10 @@ def test_the_outline_is_kept_where_the_two_centres_move_apart_as_the_body_swings
     falls under the silhouette's threshold before the dark half's does, and the centroid sits up to 1 px toward
     its dark half (whichever way it moves); along the swing, so both centres' paths are circles within their noise
     (0.044 and 0.039 px RMS off, noise 0.056 and 0.059 px) and the centroid was kept: θ 0.035° RMS off the truth,
-    0.0076° by the outline. Their difference wandering by over twice its noise (0.38 px, noise 0.07 px) says one of
-    them moves on the body; a sphere's outline cannot, so it is kept where its path is no worse, it is no more
-    than 1.25 times as noisy, and the wander moves θ by 0.01° or more."""
+    0.0076° by the outline. Their difference wandering by over three times its noise (0.47 px, noise 0.085 px)
+    says one of them moves on the body; a sphere's outline cannot, so it is kept where its path is no worse, it is
+    no more than 1.25 times as noisy, and the wander moves θ by 0.01° or more. (At twice its noise, two colour
+    variants of the real clip took their colour outline, 0.07 → 0.23° and 0.12 → 0.35° off the clip's record.)"""
     track = _track(0.0, centroid_noise_px, outline_noise_px, blurred_px=blurred_px, offset_px=offset_px)
     out = centre_by_outline(track)
     facts = out.attrs["body"]["centre"]
@@ -253,13 +254,13 @@ def test_the_outline_is_kept_where_the_two_centres_move_apart_as_the_body_swings
     if by == "outline":
         assert "move apart" in facts["why"] and np.allclose(out.x_px, track.outline_x_px), facts
         # (v/v_max)² of a decaying swing wanders by about 0.3 px RMS; the difference's noise (2-D) is √2 × √(σ₁² + σ₂²)
-        assert 0.2 <= wander <= 0.4 and 0.09 <= noise <= 0.13, facts
+        assert 0.2 <= wander <= 0.4 and 0.05 <= noise <= 0.08, facts
     else:
         assert out.x_px.equals(track.x_px), facts
     if offset_px:
         assert wander <= 0.05, facts  # a constant difference does not wander
     if centroid_noise_px < 0.02:
-        assert 2 * noise < wander < 0.08, facts
+        assert 3 * noise < wander < 0.08, facts
 
 
 def test_centres_apart_needs_both_paths_fitted_and_finite_frames():
