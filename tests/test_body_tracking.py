@@ -1052,6 +1052,28 @@ def test_a_faint_part_of_a_body_as_sharp_as_the_rest_is_still_joined_to_it():
         assert seen.component[78, 100] and seen.component[100, 100] and not seen.component[149, 159]
 
 
+@pytest.mark.parametrize("object_radius_px, object_level", [(10, -80.0), (12, -70.0)])
+def test_a_faint_defocused_ball_is_not_set_apart_for_a_smaller_sharp_object_beside_it(object_radius_px, object_level):
+    """A reviewer's counter-example to the faint shadow's rule: a ball 25 grey levels off the wall, defocused by
+    σ 3 px (radius 22 px), with a sharp dark object (a hand, another bob) 8 px from its rim: the ball's edge softer
+    than two thirds of the object's and its contrast under 0.4 of it, so the ball was set apart and the object taken
+    for the body, 40 px off. A shadow that faint is also lighter than its body: the ball, the heavier, is kept."""
+    import cv2
+
+    from pendulum.tracking.body_parts import body_measure
+
+    yy, xx = np.meshgrid((np.arange(800) + 0.5) / 4, (np.arange(960) + 0.5) / 4, indexing="ij")
+
+    def disk(cx, radius, level, blur):
+        share = ((xx - cx) ** 2 + (yy - 90) ** 2 <= radius**2).reshape(200, 4, 240, 4).mean(axis=(1, 3))
+        return cv2.GaussianBlur((level * share).astype(np.float32), (0, 0), blur)
+
+    signed = disk(100, 22, 25.0, 3.0) + disk(100 + 22 + 8 + object_radius_px, object_radius_px, object_level, 1.4)
+    noisy = np.abs(signed + np.random.default_rng(0).normal(0, 1.0, signed.shape).astype(np.float32))
+    seen = body_measure(noisy, 5.0, 5, None)
+    assert seen.component[90, 100] and seen.component[90, 100 - 15], (seen.x, seen.y)
+
+
 def test_a_defocused_or_shaded_body_is_not_set_apart_for_a_sharper_object_elsewhere():
     """A reviewer's counter-examples to a first version, which compared every component with the sharpest heavy one
     anywhere in the frame and measured the edge over the whole component: a body defocused by σ 6 px beside a sharp

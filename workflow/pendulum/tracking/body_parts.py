@@ -24,7 +24,8 @@ MAX_AREA_RATIO, MIN_AREA_RATIO = 1.5, 0.5  # the body with something else, or a 
 
 
 SOFT_EDGE_RATIO = 1 / 3  # a component whose edge is this much softer than a heavy one's beside it: its shadow
-# ... or this much softer and fainter: a shadow (its penumbra blurred beyond the body's edge) a few grey levels deep
+# ... or this much softer and fainter, and lighter: a shadow (its penumbra blurred beyond the body's edge) a few grey
+# levels deep, its mass (its depth × its disk's area: the blur keeps the sum) under the body's
 FAINT_EDGE_RATIO, FAINT_CONTRAST_RATIO = 2 / 3, 0.4
 HEAVY_SHARE = 0.25  # ... where that one holds at least this share of the heaviest component's mass
 
@@ -63,8 +64,11 @@ def soft_components(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, mas
     a printed ball of 21 px radius and its two shadows, heavier than the ball (its light and dark squares ±50–60
     grey levels off the wall, the shadows −30): 0.21 and 0.03 per px. Also one whose edge is softer than
     :data:`FAINT_EDGE_RATIO` of that one's and whose contrast (90th percentile of D) is under
-    :data:`FAINT_CONTRAST_RATIO` of its: a two-tone ball of 22 px beside its shadow 19 grey levels deep and σ 6 px
-    (0.19 and 0.105 per px; contrast 72 and 19). Components far apart are left as they are (the heaviest taken): a
+    :data:`FAINT_CONTRAST_RATIO` of its and whose mass is under its (a shadow that faint is lighter than its body
+    unless cast over 1.5 times its size): a two-tone ball of 22 px beside its shadow 19 grey levels deep and σ 6 px
+    (0.19 and 0.105 per px; contrast 72 and 19; mass 72,000 and 22,000). Not a faint body beside a sharp, darker
+    but smaller thing (a reviewer's: a ball 25 levels off the wall defocused by σ 3 px, a dark object of 12 px 8 px
+    from it, which was followed 40 px off). Components far apart are left as they are (the heaviest taken): a
     defocused body is not set apart from a sharp hand or its hard shadow elsewhere."""
     top = max((masses[i] for i in ids), default=0.0)
     heavy = [i for i in ids if masses[i] >= HEAVY_SHARE * top]
@@ -89,7 +93,7 @@ def soft_components(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, mas
             return False
         softer = sharp(i) / sharp(j)
         return softer < SOFT_EDGE_RATIO or (
-            softer < FAINT_EDGE_RATIO and contrast(i) < FAINT_CONTRAST_RATIO * contrast(j)
+            softer < FAINT_EDGE_RATIO and contrast(i) < FAINT_CONTRAST_RATIO * contrast(j) and masses[i] < masses[j]
         )
 
     return {i for i in ids if any(beside_sharper(i, j) for j in heavy)}
