@@ -30,6 +30,13 @@ FAINT_EDGE_RATIO, FAINT_CONTRAST_RATIO = 2 / 3, 0.4
 HEAVY_SHARE = 0.25  # ... where that one holds at least this share of the heaviest component's mass
 
 
+def component_contrast(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
+    """The 90th percentile of D over component ``i`` of ``diff`` (its contrast)."""
+    x0, y0, w, h = (int(v) for v in stats[i, :4])
+    crop = diff[y0 : y0 + h, x0 : x0 + w].astype(np.float32)
+    return float(np.percentile(crop[labels[y0 : y0 + h, x0 : x0 + w] == i], 90))
+
+
 def edge_sharpness(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
     """How sharply component ``i`` of ``diff`` ends (1/px, about 1/w for an edge w px wide): the 90th percentile of
     |∇D| (D smoothed by σ = 1 px) on its outline (from 3 px inside to 2 px outside it: a large body's inside does not
@@ -46,7 +53,7 @@ def edge_sharpness(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: i
     outside = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))) > 0
     inside = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7)), borderType=cv2.BORDER_REPLICATE)
     outline = outside & ~(inside > 0)
-    level = float(np.percentile(crop[mask > 0], 90))
+    level = component_contrast(diff, labels, stats, i)
     return float(np.percentile(gradient[outline], 90)) / level if level > 0 and outline.any() else 0.0
 
 
@@ -83,9 +90,7 @@ def soft_components(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, mas
 
     def contrast(i):
         if i not in contrasts:
-            x0, y0, w, h = (int(v) for v in stats[i, :4])
-            crop = diff[y0 : y0 + h, x0 : x0 + w]
-            contrasts[i] = float(np.percentile(crop[labels[y0 : y0 + h, x0 : x0 + w] == i], 90))
+            contrasts[i] = component_contrast(diff, labels, stats, i)
         return contrasts[i]
 
     def beside_sharper(i, j):
