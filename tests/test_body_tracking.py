@@ -372,17 +372,17 @@ STUDY_SEEDS = tuple(range(7000, 7008))
 @pytest.mark.slow
 def test_body_study_on_unseen_renders(tmp_path):
     """Bodies (apple, two-tone ball, printed pattern; radius 15–40 px at 640 px width) before walls with
-    gradients, bands, soft shadows, exposure drift, defocus, camera creep, mid-swing starts.
+    gradients, bands, soft shadows, exposure drift, defocus, camera creep, mid-swing starts: issue 23's figures.
 
     Binomial rules over n = 8: ≥ 95 % of the frames ``ok`` in at least 6, and angle RMS against the truth
-    (true pivot) ≤ 0.05° in at least 6. The 16-scene held-out study (seeds 7000–7015, 8 s) found ok ≥ 95 %
-    in 16 and RMS ≤ 0.05° in 16 (median 0.013°; apples 0.005–0.014°, printed balls 0.009–0.043°; 14, and 0.010–0.056°,
-    before a print's limb was found on both sides of the scene, 2026-12-05): at those
-    rates (~88 %) this passes with a chance of ~93 %; a tracker failing half the scenes passes with 14 %.
-    Measured on these 6 s clips: ok ≥ 95 % in 8, RMS ≤ 0.05° in 8 (worst 7004's print, 0.025°); before a
-    one-sided body was measured by its own side from the start (2026-11-27), 7 and 6, with the prints 7003
-    at 0.11° and 7007 at 0.050° failing. And never a record that is silently wrong: every scene ends in a
-    record or a clear refusal, none off by more than 0.5°.
+    (true pivot) ≤ 0.02° (issue 23's acceptance) in at least 6. The held-out draws of 2026-12-06 and 2026-12-07
+    (seeds 7116–7355, 240 scenes, 8 s) found ok ≥ 95 % in 229 and RMS ≤ 0.02° in 204 (85 %: apples and two-tone
+    balls nearly all, prints about 55 %): at that rate this passes with a chance of ~89 %; a tracker within 0.02°
+    in half the scenes passes with 14 %. Measured on these 6 s clips (2026-12-07): ok 100 % in 8, RMS ≤ 0.02° in
+    8 (0.0023–0.0195°; the prints 7000 0.011°, 7003 0.016°, 7004 0.006°, 7007 0.0195°). Until 2026-12-07 the
+    rule asked ≤ 0.05° (before 2026-11-27 7 and 6 passed, the prints 7003 at 0.11° and 7007 at 0.050° failing).
+    And never a record that is silently wrong: every scene ends in a record or a clear refusal, none off by more
+    than 0.5°.
     """
     sys_path = str(Path(__file__).resolve().parent / "benchmarks")
     if sys_path not in sys.path:
@@ -392,7 +392,7 @@ def test_body_study_on_unseen_renders(tmp_path):
     rows = [judge(seed, tmp_path, duration_s=6.0) for seed in STUDY_SEEDS]
     summary = "\n".join(str({k: v for k, v in r.items() if k != "error"}) + f" {r.get('error', '')}" for r in rows)
     usable = sum(r["ok%"] >= 95 for r in rows)
-    accurate = sum(r["rms"] <= 0.05 for r in rows if math.isfinite(r["rms"]))
+    accurate = sum(r["rms"] <= 0.02 for r in rows if math.isfinite(r["rms"]))
     wrong = [r["seed"] for r in rows if math.isfinite(r["rms"]) and r["rms"] > 0.5]
     assert usable >= 6, summary
     assert accurate >= 6, summary
