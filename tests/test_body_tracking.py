@@ -5,6 +5,7 @@ smaller draw of it runs here with a binomial pass rule (``test_body_study_*``).
 """
 
 import math
+import re
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -346,11 +347,25 @@ def test_two_swinging_objects_need_start_px(render_dir):
     frames2 = [np.minimum(a, b) if darker else np.maximum(a, b) for a, b in zip(frames, shifted, strict=True)]
     video = render_dir / "two.mp4"
     write_video(frames2, video, cam.fps, cam.crf, cam.preset)
-    with pytest.raises(BodyError, match="start_px"):
-        find_body(video)
     x0, y0 = truth.marker_x_px[0], truth.marker_y_px[0]
+    x1, r = (x0 - int(cam.width_px * 0.3)) % cam.width_px, left.body.radius_px
+    with pytest.raises(BodyError, match="start_px") as refusal:
+        find_body(video)
+    # where the two are is said as the first frame shows them (start_px's frame), not as a later sample does
+    said = [tuple(map(float, xy)) for xy in re.findall(r"\((\d+), (\d+)\)", str(refusal.value).split("near")[-1])]
+    assert "in the first frame" in str(refusal.value) and len(said) == 2, refusal.value
+    assert sorted(math.hypot(x - x0, y - y0) < r / 2 or math.hypot(x - x1, y - y0) < r / 2 for x, y in said) == [
+        True,
+        True,
+    ], (said, (x0, y0), (x1, y0))
     scene = find_body(video, start_px=(x0, y0))
-    assert math.hypot(scene.start_px[0] - x0, scene.start_px[1] - y0) < left.body.radius_px  # this body, not the other
+    assert math.hypot(scene.start_px[0] - x0, scene.start_px[1] - y0) < r  # this body, not the other
+    scene = find_body(video, start_px=(x1, y0 + 1.2 * r))  # the other, pointed at just below its edge
+    assert math.hypot(scene.start_px[0] - x1, scene.start_px[1] - y0) < r
+    # a start_px on neither (a point on the wall, or another frame's place): refused, never the nearest followed
+    # (a reviewer's two apples: start_px on the wall between them was taken for the left one, silently)
+    with pytest.raises(BodyError, match="is on no moving body in the first frame"):
+        find_body(video, start_px=((x0 + x1) / 2, y0))
 
 
 def test_nothing_moving_is_refused(render_dir):

@@ -92,6 +92,7 @@ from pendulum.tracking.body_parts import (
     open_size,
     own_centre,
     silhouette_cut,
+    start_missed,
     touches_border,
 )
 from pendulum.tracking.body_scene import (
@@ -106,6 +107,7 @@ from pendulum.tracking.body_scene import (
     sample_clip,
     scene_states,
     soft_centroid,
+    two_objects_where,
     unseen_behind,
     wall_gain,
 )
@@ -195,11 +197,10 @@ def find_body(
     """The static scene and the swinging body in the first frame (see the module docstring), the body measured by
     the difference ``polarity`` names (:func:`pendulum.tracking.body_scene.one_sided`).
 
-    With ``track`` (a first track of the body, whose silhouette shrank mid-swing) and the body's
-    ``radius_px``, the scene at the body's rest place is taken from the two ends of its swing
-    (:func:`pendulum.tracking.body_scene.rest_place_scene`). Raises :class:`BodyError` when nothing
-    moves, or when two objects of similar weight move in most samples and ``start_px`` does not say
-    which one is the pendulum.
+    With ``track`` (a first track of the body, whose silhouette shrank mid-swing) and the body's ``radius_px``, the
+    scene at its rest place is taken from the two ends of its swing (:func:`~.body_scene.rest_place_scene`). Raises
+    :class:`BodyError` when nothing moves, when two objects of similar weight move in most samples and ``start_px``
+    does not say which one is the pendulum, or when ``start_px`` is on no moving body (:func:`~.start_missed`).
     """
     samples = sample_clip(path, n_samples, view)
     stack = same_exposure([s for _, s in samples])
@@ -242,11 +243,10 @@ def find_body(
             f"frames (noise {sigma:.1f} grey levels): no swinging body to track"
         )
     if start_px is None and two_objects > moving // 2:
-        (ax, ay), (bx, by) = seen[0]
+        where = two_objects_where(images[0], background, threshold, seen[0])
         raise BodyError(
-            f"{path}: two moving objects of similar size in {two_objects} of {moving} sampled frames (e.g. near "
-            f"({ax:.0f}, {ay:.0f}) and ({bx:.0f}, {by:.0f}) px): give start_px of the pendulum to follow in the "
-            "trial's sidecar"
+            f"{path}: two moving objects of similar size in {two_objects} of {moving} sampled frames ({where}): give "
+            "start_px of the pendulum to follow in the trial's sidecar (its centre in the first frame)"
         )
     # The body in the first frame; its size and contrast from the nearest sample that shows all of it (a record
     # that starts with the body partly out of view would otherwise learn a smaller, fainter body).
@@ -290,6 +290,8 @@ def find_body(
         )
     if first.component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
+    if near is not None and (missed := start_missed(first.component, near)):
+        raise BodyError(f"{path}: {missed}")
     hull = cv2.convexHull(cv2.findNonZero(first.component.astype(np.uint8)))  # its area over its hull's: solidity
     if (solid := first.component.sum() / max(cv2.contourArea(hull), 1.0)) < MIN_SOLIDITY:  # not a body: its colour?
         raise VideoError(

@@ -224,6 +224,28 @@ def open_size(inner_radius_px: float) -> int:
     return max(3, 2 * int(round(inner_radius_px / 3)) + 1)
 
 
+START_SLACK_RADII = 0.5  # the user's start_px may miss the body's first-frame silhouette by this × its radius ...
+START_SLACK_PX = 5.0  # ... and by this many px at least
+
+
+def start_missed(component: np.ndarray, near: tuple[float, float]) -> str | None:
+    """Why ``near`` (the user's ``start_px``) points at no part of ``component``, the moving body nearest it in the
+    first frame: farther from its silhouette than :data:`START_SLACK_RADII` of its radius (and
+    :data:`START_SLACK_PX`), so that the nearest moving thing is not followed in its place; None where it is on it or
+    that near."""
+    ys, xs = np.nonzero(component)
+    radius = math.sqrt(xs.size / math.pi)
+    gap = float(np.hypot(xs - near[0], ys - near[1]).min())
+    if gap <= max(START_SLACK_PX, START_SLACK_RADII * radius):
+        return None
+    return (
+        f"start_px ({near[0]:.0f}, {near[1]:.0f}) is on no moving body in the first frame: the nearest, centred at "
+        f"({xs.mean():.0f}, {ys.mean():.0f}) px and {radius:.0f} px in radius, lies {gap:.0f} px from it; give "
+        "start_px at the centre of the body to follow as the first frame shows it (x from the left edge, y down from "
+        "the top, in the video's pixels)"
+    )
+
+
 CONTRAST_FRACTION = 0.25  # a body pixel differs by more than this share of its own contrast (a soft shadow less)
 NOISE_SIGMAS = 5.0  # a pixel moves when |I − B| exceeds this many σ of the frame-to-scene noise
 MIN_CUT_GREY = 4.0  # ... and at least this many grey levels

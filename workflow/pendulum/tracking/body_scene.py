@@ -127,6 +127,33 @@ def _heavy(stats: np.ndarray, masses: np.ndarray, share: float = 0.1) -> list[in
     return [i for i in order if masses[i] >= share * masses[order[0]]]
 
 
+def _far_pair(stats: np.ndarray, masses: np.ndarray, order: list[int]):
+    """The box centres (x, y) of the two heaviest moving objects (``order``: :func:`_heavy`'s) where the second is at
+    least :data:`TWO_OBJECTS_MASS_RATIO` as heavy and they lie apart by more than twice their radii; else None."""
+    if len(order) < 2 or masses[order[1]] < TWO_OBJECTS_MASS_RATIO * masses[order[0]]:
+        return None
+    a, b = order[:2]
+    (ax, ay), (bx, by) = (stats[a, :2] + stats[a, 2:4] / 2), (stats[b, :2] + stats[b, 2:4] / 2)
+    ra, rb = (math.sqrt(stats[i, cv2.CC_STAT_AREA] / math.pi) for i in (a, b))
+    return ((float(ax), float(ay)), (float(bx), float(by))) if math.hypot(ax - bx, ay - by) > 2 * (ra + rb) else None
+
+
+def two_objects_where(image: np.ndarray, background: np.ndarray, threshold: float, sampled) -> str:
+    """Where two swinging objects are, for a refusal that asks for ``start_px``: their centres in ``image`` (the
+    first frame, as start_px is given) where it shows both, else ``sampled`` (their centres in a later sample)."""
+    diff = np.abs(image.astype(np.float32) - background)
+    labels, stats, masses = components(diff, threshold, 3, close_size(diff.shape))
+    order = _heavy(stats, masses, 0.0)
+    pair = _far_pair(stats, masses, order)
+    if pair:  # each by its centroid weighted by D (a box's centre is pulled along a thread)
+        ys, xs = np.mgrid[0 : diff.shape[0], 0 : diff.shape[1]]
+        weights = [np.where(labels == i, diff, 0.0) for i in order[:2]]
+        pair = [((w * xs).sum() / w.sum(), (w * ys).sum() / w.sum()) for w in weights]
+    (ax, ay), (bx, by) = pair or sampled
+    where = "in the first frame" if pair else "in a sampled frame"
+    return f"{where} near ({ax:.0f}, {ay:.0f}) and ({bx:.0f}, {by:.0f}) px"
+
+
 def moving_objects(images: list, background: np.ndarray, threshold: float):
     """Per sample, the pixels of its heavier moving objects (each by its convex hull where that is compact:
     :func:`_hulls`; grown by 4 px); how many samples show one; how many show two far-apart objects of similar
@@ -143,14 +170,9 @@ def moving_objects(images: list, background: np.ndarray, threshold: float):
         moving += 1
         heavy = [i for i in order if masses[i] >= 0.1 * masses[order[0]]]
         excluded[k] = cv2.dilate(_hulls(labels, heavy), grow) > 0
-        a = order[0]
-        areas.append(stats[a, cv2.CC_STAT_AREA])
-        if len(order) > 1 and masses[order[1]] >= TWO_OBJECTS_MASS_RATIO * masses[a]:
-            b = order[1]
-            (ax, ay), (bx, by) = (stats[a, :2] + stats[a, 2:4] / 2), (stats[b, :2] + stats[b, 2:4] / 2)
-            ra, rb = (math.sqrt(stats[i, cv2.CC_STAT_AREA] / math.pi) for i in (a, b))
-            if math.hypot(ax - bx, ay - by) > 2 * (ra + rb):
-                pairs.append((stats[b, cv2.CC_STAT_AREA], (ax, ay), (bx, by)))
+        areas.append(stats[order[0], cv2.CC_STAT_AREA])
+        if (pair := _far_pair(stats, masses, order)) is not None:
+            pairs.append((stats[order[1], cv2.CC_STAT_AREA], *pair))
     # two objects: the second as heavy as 0.4× the first and at least a third the body's usual size, far apart
     typical = float(np.median(areas)) if areas else 0.0
     seen = [(p, q) for area, p, q in pairs if area >= typical / 3]
