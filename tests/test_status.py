@@ -247,6 +247,14 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
     unreadable = trial_status("e", "data/raw/e.mp4", "rig", [("tracks", "logs/t/e.log", failed("tracks", "no body"))])
     lines = failure_summary(status_table([*rows, unreadable])).splitlines()
     assert "`skip: <why>` in its sidecar (data/raw/e.yaml for e, or the sidecar it already has)" in lines[-2]
+    # two pendulums in view: the reason asks for start_px, which mends it; skipping it is not the advice (a reviewer)
+    reason = "x.mp4: two moving objects of similar size in 47 of 63 sampled frames (…): give start_px of the pendulum"
+    two = trial_status("f", "data/raw/f.mp4", "rig", [("tracks", "logs/t/f.log", failed("tracks", reason))])
+    lines = failure_summary(status_table([*rows, two])).splitlines()
+    assert "is tracked once its sidecar gives it (data/raw/f.yaml for f)" in lines[-2], lines
+    assert not any("skip:" in line for line in lines), lines
+    lines = failure_summary(status_table([*rows, unreadable, two])).splitlines()  # both: both pieces of advice
+    assert "data/raw/f.yaml for f" in lines[-3] and "`skip: <why>` in its sidecar (data/raw/e.yaml" in lines[-2]
     refused = {
         "status": "failed",
         "failed_stage": "fit",

@@ -228,20 +228,33 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     lines = [f"{len(bad)} of {len(run)} trial(s) failed; {built}:"]
     lines += [f"  - {r.trial}, at {r.stage}{_recorded(r)}: {r.reason}" for r in bad.itertuples()]
     unreadable = bad[bad.stage.isin(VIDEO_STAGES)]  # no angle record from the video: a fit's failure is mended
-    if len(unreadable):
-        first = unreadable.iloc[0]
-        sidecar = (
-            Path(first.source).with_suffix(".yaml").as_posix()
-            if isinstance(first.source, str) and first.source
-            else f"<raw_dir>/{first.trial}.yaml"
+    asks = unreadable.reason.astype(str).str.contains(ASKS_FOR_A_VALUE, regex=True)
+    if asks.any():  # a hint mends it (two pendulums in view: start_px), not a skip
+        first = unreadable[asks].iloc[0]
+        lines.append(
+            f"A video whose reason asks for a value (start_px, polarity, …) is tracked once its sidecar gives it "
+            f"({_sidecar(first)} for {first.trial}); two pendulums in one video: one sidecar (or copy of the video) "
+            "per pendulum, each with the start_px of its own (docs/your-data.md)."
         )
+    if (~asks).any():
+        first = unreadable[~asks].iloc[0]
         lines.append(
             "A video that cannot give an angle record (a clip that is no pendulum, a file that cannot be read) is left "
-            f"out by `skip: <why>` in its sidecar ({sidecar} for {first.trial}, or the sidecar it already has); it "
-            "then fails nothing (docs/your-data.md)."
+            f"out by `skip: <why>` in its sidecar ({_sidecar(first)} for {first.trial}, or the sidecar it already "
+            "has); it then fails nothing (docs/your-data.md)."
         )
     lines.append("See results/status/trials.csv (stage, reason and log of each) and results/report/report.html.")
     return "\n".join(lines)
+
+
+ASKS_FOR_A_VALUE = r"give (?:the \S+ )?start_px|in the trial's sidecar"  # a tracks refusal a sidecar value mends
+
+
+def _sidecar(row) -> str:
+    """The sidecar of a status row's trial: its video's path with .yaml."""
+    if isinstance(row.source, str) and row.source:
+        return Path(row.source).with_suffix(".yaml").as_posix()
+    return f"<raw_dir>/{row.trial}.yaml"
 
 
 def _recorded(row) -> str:
