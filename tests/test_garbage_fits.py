@@ -280,6 +280,35 @@ def test_a_drag_coefficient_no_body_has_names_the_fluid_density():
             assert fit["parameters"]["drag_coefficient"]["value"] == pytest.approx(1.45, rel=0.05)
 
 
+def test_an_added_mass_no_body_of_its_frontal_area_has_names_the_length():
+    """The apple's record (drawn at 1.053 m, no added mass) fitted with the string's 1.04 m (a fresh-eyes user,
+    2026-12-07: the pivot-to-centre distance is longer): the added mass takes up the 1.2 % of length, about
+    0.18 × (1.053 / 1.04 − 1) = 0.0023 kg, 8 × ρA^1.5 where no body of that frontal area has more than about 1 ×
+    (a sphere 0.38, a disk broadside 0.48), and was reported as a coefficient, nothing said. Now said where its
+    whole 95 % interval (the default tolerances) lies over 3 ×, naming length_m, on the terminal, and not as a
+    period the rig values cannot give; with the right length, or the length stated ±2 cm, nothing."""
+    from pendulum.outcomes import for_the_terminal
+    from pendulum.status import says_rig_mismatch
+
+    air = {"mass_kg": 0.18, "length_m": 1.053, "frontal_area_m2": 0.0038, "fluid_density_kg_m3": 1.2}
+    model = PendulumModel(Rig.from_mapping(air), ("quadratic_drag",))
+    table = synthetic_angle_table(
+        model, {"added_mass_kg": 0.0, "drag_area_m2": 1.45 * 0.0038}, 22.0, rng=np.random.default_rng(6), fps=60.0
+    )
+    for length, stated, warned in ((1.04, {}, True), (1.053, {}, False), (1.04, {"length_m": 0.02}, False)):
+        rig = {**air, "length_m": length}
+        record = load_record(table.copy(), "apple", rig, FitSettings(), tolerances=stated)  # {}: the defaults
+        fit = fit_trials([record], ["quadratic_drag"])
+        said = [w for w in fit["warnings"] if "ρA^1.5" in w]
+        value = fit["parameters"]["added_mass_kg"]["value"]
+        assert bool(said) == warned, (length, value, fit["warnings"])
+        if warned:
+            assert value == pytest.approx(0.18 * (1.053 / 1.04 - 1), rel=0.15)
+            assert f"{value / (1.2 * 0.0038**1.5):.0f}× ρA^1.5" in said[0], said
+            assert "check length_m, the distance from the pivot to the body's centre" in said[0], said
+            assert for_the_terminal(said[0]) and not says_rig_mismatch(said)
+
+
 def test_a_mass_in_grams_gives_a_drag_coefficient_no_body_has_and_the_warning_names_the_mass():
     """The apple's 0.18 kg written as 180 (a lab's scale reads grams; a fresh-eyes user, 2026-12-03): an air
     pendulum's period does not show it (the rig checks pass), its C_d comes out ~1000× (1456): the warning names

@@ -101,9 +101,12 @@ def record_checks(record: AngleRecord, mask: np.ndarray, residual: np.ndarray, r
 
 
 def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
-    """Warnings when the measured period and the rig values cannot both be right."""
+    """Warnings when the measured period and the rig values cannot both be right, or the added mass that reconciles
+    them is more than any body of the rig's frontal area takes (:data:`ADDED_MASS_SCALE_LIMIT`)."""
     bare = 2 * math.pi * math.sqrt(rig.pivot_inertia_kg_m2 / rig.restoring_torque_nm)
     measured = float(np.median([s["period_s"] for s in starts]))
+    scale = rig.fluid_density_kg_m3 * rig.frontal_area_m2**1.5  # a body's added mass is ~0.4–0.8 of this
+    least = float((added_mass.get("ci95") or [0.0])[0] or 0.0)  # the 95 % interval's lower end
     out = []
     if added_mass["at_bound"]:
         lower = float(added_mass.get("lower_bound") or 0.0)
@@ -124,7 +127,22 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
             "slow-motion clip plays slower than it was filmed: give the rate the camera filmed at in the trial's "
             "sidecar, data/raw/<trial>.yaml, e.g. capture_fps: 240)"
         )
+    elif scale > 0 and least > ADDED_MASS_SCALE_LIMIT * scale:
+        value = added_mass["value"]
+        out.append(
+            f"fitted added mass {value:.3g} kg (its 95 % interval from {least:.2g} kg) is "
+            f"{value / scale:.0f}× ρA^1.5 ({scale:.2g} kg), far above any body of this frontal area (a sphere's is "
+            "0.38×, a flat plate's 0.48×): check length_m, the distance from the "
+            f"pivot to the body's centre (1 % off moves the added mass by 1 % of mass and added mass together, "
+            f"{0.01 * (rig.mass_kg + value):.2g} kg here), mass_kg, frontal_area_m2 and fluid_density_kg_m3"
+        )
     return out
+
+
+# the added mass of a body of frontal area A, in units of ρ A^1.5: a sphere ½ ρ V = 0.38, a disk broadside
+# (8/3) ρ r³ = 0.48, a cylinder broadside (π/4) √(d/ℓ) ≤ 0.79; a fitted one whose whole 95 % interval lies above
+# this many (history forces at most double a body's) is a rig value's error
+ADDED_MASS_SCALE_LIMIT = 3.0
 
 
 DRAG_COEFFICIENT_RANGE = (0.05, 10.0)  # any body's C_d, streamlined to a flat plate and its rod: outside, a rig value
