@@ -368,6 +368,25 @@ def test_two_swinging_objects_need_start_px(render_dir):
         find_body(video, start_px=((x0 + x1) / 2, y0))
 
 
+def test_a_start_px_is_taken_on_or_near_the_body_and_its_hull_and_refused_beyond():
+    """start_px is checked against the first frame's body by its silhouette's convex hull (a ring's hole and a
+    two-tone ball's half left out are the body's: a reviewer's ring of radius 30 px with a hole of 20, its centre
+    refused when measured to the nearest silhouette pixel), within half the body's radius or 5 px."""
+    from pendulum.tracking.body_parts import start_missed
+
+    yy, xx = np.mgrid[0:200, 0:300]
+    r = np.hypot(xx - 100, yy - 100)
+    ring, disk, half = (r <= 30) & (r > 20), r <= 30, (r <= 30) & (yy >= 100)  # radii 30 px (disk: √area/π)
+    assert start_missed(ring, (100, 100)) is None  # its hole
+    # a two-tone ball whose light half the silhouette leaves out (its radius from the area then 21 px): its centre,
+    # on the hull, and 8 px into the other half, within the slack, are it
+    assert start_missed(half, (100, 100)) is None and start_missed(half, (100, 92)) is None
+    assert start_missed(disk, (100 + 30 + 14, 100)) is None  # 14 px off its edge: under half its radius
+    missed = start_missed(disk, (100 + 30 + 17, 100))
+    assert missed is not None and "lies 17 px from it" in missed and "centred at (100, 100) px" in missed, missed
+    assert "30 px in radius" in missed
+
+
 def test_nothing_moving_is_refused(render_dir):
     from pendulum.synthetic.experiment import write_video
     from pendulum.tracking.body import BodyError, find_body

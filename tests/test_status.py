@@ -248,13 +248,29 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
     lines = failure_summary(status_table([*rows, unreadable])).splitlines()
     assert "`skip: <why>` in its sidecar (data/raw/e.yaml for e, or the sidecar it already has)" in lines[-2]
     # two pendulums in view: the reason asks for start_px, which mends it; skipping it is not the advice (a reviewer)
-    reason = "x.mp4: two moving objects of similar size in 47 of 63 sampled frames (…): give start_px of the pendulum"
+    # (the tracks stage's own words in auto mode, marker and body tried)
+    reason = (
+        "x.mp4: neither a marker disk nor the body could be followed. Marker: two objects swing: a dark spot … Body: "
+        "x.mp4: two moving objects of similar size in 47 of 63 sampled frames (in the first frame near (824, 195) and "
+        "(78, 164) px): give start_px of the pendulum to follow in the trial's sidecar (its centre in the first frame)"
+    )
     two = trial_status("f", "data/raw/f.mp4", "rig", [("tracks", "logs/t/f.log", failed("tracks", reason))])
     lines = failure_summary(status_table([*rows, two])).splitlines()
-    assert "is tracked once its sidecar gives it (data/raw/f.yaml for f)" in lines[-2], lines
+    assert "is tracked once its sidecar gives its start_px (data/raw/f.yaml for f)" in lines[-2], lines
     assert not any("skip:" in line for line in lines), lines
     lines = failure_summary(status_table([*rows, unreadable, two])).splitlines()  # both: both pieces of advice
     assert "data/raw/f.yaml for f" in lines[-3] and "`skip: <why>` in its sidecar (data/raw/e.yaml" in lines[-2]
+    # a clip with nothing swinging offers hints too (polarity, radius, start_px), but no value makes it a pendulum
+    still = (
+        "x.mp4: neither a marker disk nor the body could be followed. Marker: no object swings back and forth about a "
+        "fixed point in 60 sampled frames; give tracking polarity, marker_radius_px and start_px (the marker's centre "
+        "in the first frame) in the trial's sidecar. Body: x.mp4: nothing moves against the static scene in 60 of 60 "
+        "sampled frames (noise 0.5 grey levels): no swinging body to track"
+    )
+    static = trial_status("g", "data/raw/g.mp4", "rig", [("tracks", "logs/t/g.log", failed("tracks", still))])
+    lines = failure_summary(status_table([*rows, static])).splitlines()
+    assert "`skip: <why>` in its sidecar (data/raw/g.yaml for g" in lines[-2], lines
+    assert not any("once its sidecar gives" in line for line in lines), lines
     refused = {
         "status": "failed",
         "failed_stage": "fit",

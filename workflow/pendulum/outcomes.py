@@ -232,9 +232,9 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     if asks.any():  # a hint mends it (two pendulums in view: start_px), not a skip
         first = unreadable[asks].iloc[0]
         lines.append(
-            f"A video whose reason asks for a value (start_px, polarity, …) is tracked once its sidecar gives it "
-            f"({_sidecar(first)} for {first.trial}); two pendulums in one video: one sidecar (or copy of the video) "
-            "per pendulum, each with the start_px of its own (docs/your-data.md)."
+            f"A video whose reason asks which object to follow is tracked once its sidecar gives its start_px "
+            f"({_sidecar(first)} for {first.trial}); two pendulums in one video: one copy (or link) of the video per "
+            "pendulum, each with its own sidecar and the start_px of its own (docs/your-data.md)."
         )
     if (~asks).any():
         first = unreadable[~asks].iloc[0]
@@ -247,7 +247,12 @@ def failure_summary(table: pd.DataFrame) -> str | None:
     return "\n".join(lines)
 
 
-ASKS_FOR_A_VALUE = r"give (?:the \S+ )?start_px|in the trial's sidecar"  # a tracks refusal a sidecar value mends
+# a tracks refusal that asks which object to follow (a sidecar's start_px mends it), not one of a clip that cannot
+# give a record (whose messages may offer hints too: "give tracking polarity, marker_radius_px and start_px")
+ASKS_FOR_A_VALUE = (
+    r"two moving objects of similar size|two objects swing|two marker-like spots|not sure which object is the marker"
+    r"|is on no moving body in the first frame|no spot swings at start_px"
+)
 
 
 def _sidecar(row) -> str:

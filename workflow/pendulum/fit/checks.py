@@ -130,11 +130,13 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
     elif scale > 0 and least > ADDED_MASS_SCALE_LIMIT * scale:
         value = added_mass["value"]
         out.append(
-            f"fitted added mass {value:.3g} kg (its 95 % interval from {least:.2g} kg) is "
-            f"{value / scale:.0f}× ρA^1.5 ({scale:.2g} kg), far above any body of this frontal area (a sphere's is "
-            "0.38×, a flat plate's 0.48×): check length_m, the distance from the "
-            f"pivot to the body's centre (1 % off moves the added mass by 1 % of mass and added mass together, "
-            f"{0.01 * (rig.mass_kg + value):.2g} kg here), mass_kg, frontal_area_m2 and fluid_density_kg_m3"
+            f"fitted added mass {value:.3g} kg is {value / scale:.0f}× ρA^1.5 ({scale:.2g} kg), its whole 95 % "
+            f"interval over {ADDED_MASS_SCALE_LIMIT:g}×: more than a solid body of this frontal area takes (a sphere's "
+            "is 0.38×, a flat plate's broadside 0.48×): check length_m, the distance from the pivot to the body's "
+            "centre (for a point mass, 1 % off moves the added mass by 1 % of mass and added mass together, "
+            f"{0.01 * (rig.mass_kg + value):.2g} kg here), body_inertia_kg_m2 (not given, the body's own inertia "
+            "about its centre, I_c / L², is counted as added mass), mass_kg, frontal_area_m2 and "
+            "fluid_density_kg_m3; water inside a free-flooding body counts as added mass too"
         )
     return out
 

@@ -145,10 +145,13 @@ def two_objects_where(image: np.ndarray, background: np.ndarray, threshold: floa
     labels, stats, masses = components(diff, threshold, 3, close_size(diff.shape))
     order = _heavy(stats, masses, 0.0)
     pair = _far_pair(stats, masses, order)
-    if pair:  # each by its centroid weighted by D (a box's centre is pulled along a thread)
-        ys, xs = np.mgrid[0 : diff.shape[0], 0 : diff.shape[1]]
-        weights = [np.where(labels == i, diff, 0.0) for i in order[:2]]
-        pair = [((w * xs).sum() / w.sum(), (w * ys).sum() / w.sum()) for w in weights]
+    if pair:  # each by its centroid weighted by D (a box's centre is pulled along a thread), within its box
+        pair = []
+        for i in order[:2]:
+            x0, y0, w, h = (int(v) for v in stats[i, :4])
+            weight = np.where(labels[y0 : y0 + h, x0 : x0 + w] == i, diff[y0 : y0 + h, x0 : x0 + w], 0.0)
+            ys, xs = np.mgrid[y0 : y0 + h, x0 : x0 + w]
+            pair.append(((weight * xs).sum() / weight.sum(), (weight * ys).sum() / weight.sum()))
     (ax, ay), (bx, by) = pair or sampled
     where = "in the first frame" if pair else "in a sampled frame"
     return f"{where} near ({ax:.0f}, {ay:.0f}) and ({bx:.0f}, {by:.0f}) px"
