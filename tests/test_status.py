@@ -254,11 +254,20 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
         "x.mp4: two moving objects of similar size in 47 of 63 sampled frames (in the first frame near (824, 195) and "
         "(78, 164) px): give start_px of the pendulum to follow in the trial's sidecar (its centre in the first frame)"
     )
-    two = trial_status("f", "data/raw/f.mp4", "rig", [("tracks", "logs/t/f.log", failed("tracks", reason))])
-    lines = failure_summary(status_table([*rows, two])).splitlines()
+
+    def at_tracks(trial, why):  # a trial the tracks stage refused, ``why``
+        return trial_status(
+            trial, f"data/raw/{trial}.mp4", "rig", [("tracks", f"logs/t/{trial}.log", failed("tracks", why))]
+        )
+
+    def summary_lines(*trials):
+        return failure_summary(status_table([*rows, *trials])).splitlines()
+
+    two = at_tracks("f", reason)
+    lines = summary_lines(two)
     assert "is tracked once its sidecar gives its start_px (data/raw/f.yaml for f)" in lines[-2], lines
     assert not any("skip:" in line for line in lines), lines
-    lines = failure_summary(status_table([*rows, unreadable, two])).splitlines()  # both: both pieces of advice
+    lines = summary_lines(unreadable, two)  # both: both pieces of advice
     assert "data/raw/f.yaml for f" in lines[-3] and "`skip: <why>` in its sidecar (data/raw/e.yaml" in lines[-2]
     # a clip with nothing swinging offers hints too (polarity, radius, start_px), but no value makes it a pendulum
     still = (
@@ -267,8 +276,7 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
         "in the first frame) in the trial's sidecar. Body: x.mp4: nothing moves against the static scene in 60 of 60 "
         "sampled frames (noise 0.5 grey levels): no swinging body to track"
     )
-    static = trial_status("g", "data/raw/g.mp4", "rig", [("tracks", "logs/t/g.log", failed("tracks", still))])
-    lines = failure_summary(status_table([*rows, static])).splitlines()
+    lines = summary_lines(at_tracks("g", still))
     assert "`skip: <why>` in its sidecar (data/raw/g.yaml for g" in lines[-2], lines
     assert not any("once its sidecar gives" in line for line in lines), lines
     refused = {

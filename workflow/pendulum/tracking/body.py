@@ -290,9 +290,9 @@ def find_body(
         )
     if first.component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
-    if near is not None and track is None and (missed := start_missed(first.component, near)):  # the user's
-        raise BodyError(f"{path}: {missed}")
     hull = cv2.convexHull(cv2.findNonZero(first.component.astype(np.uint8)))  # its area over its hull's: solidity
+    if near is not None and track is None and (missed := start_missed(first.component, hull, near)):  # the user's
+        raise BodyError(f"{path}: {missed}")
     if (solid := first.component.sum() / max(cv2.contourArea(hull), 1.0)) < MIN_SOLIDITY:  # not a body: its colour?
         raise VideoError(
             f"{path}: the heaviest moving object in the first frame is no compact body (it fills {100 * solid:.0f} % "

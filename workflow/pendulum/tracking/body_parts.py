@@ -228,15 +228,14 @@ START_SLACK_RADII = 0.5  # the user's start_px may miss the body's first-frame s
 START_SLACK_PX = 5.0  # ... and by this many px at least
 
 
-def start_missed(component: np.ndarray, near: tuple[float, float]) -> str | None:
+def start_missed(component: np.ndarray, hull: np.ndarray, near: tuple[float, float]) -> str | None:
     """Why ``near`` (the user's ``start_px``) points at no part of ``component``, the moving body nearest it in the
-    first frame: farther from its silhouette's convex hull (a ring's hole, a two-tone ball's half left out are the
-    body's) than :data:`START_SLACK_RADII` of its radius (and :data:`START_SLACK_PX`), so that the nearest moving
-    thing is not followed in its place; None where it is on it or that near."""
-    points = cv2.findNonZero(component.astype(np.uint8)).reshape(-1, 2)
-    xs, ys = points[:, 0], points[:, 1]
+    first frame: farther from its convex ``hull`` (a ring's hole, a two-tone ball's half left out are the body's)
+    than :data:`START_SLACK_RADII` of its radius (and :data:`START_SLACK_PX`), so that the nearest moving thing is
+    not followed in its place; None where it is on it or that near."""
+    ys, xs = np.nonzero(component)
     radius = math.sqrt(xs.size / math.pi)
-    gap = max(-cv2.pointPolygonTest(cv2.convexHull(points), (float(near[0]), float(near[1])), True), 0.0)
+    gap = max(-cv2.pointPolygonTest(hull, (float(near[0]), float(near[1])), True), 0.0)
     if gap <= max(START_SLACK_PX, START_SLACK_RADII * radius):
         return None
     return (

@@ -145,7 +145,8 @@ def two_objects_where(image: np.ndarray, background: np.ndarray, threshold: floa
     labels, stats, masses = components(diff, threshold, 3, close_size(diff.shape))
     order = _heavy(stats, masses, 0.0)
     pair = _far_pair(stats, masses, order)
-    if pair:  # each by its centroid weighted by D (a box's centre is pulled along a thread), within its box
+    if pair:  # each by its centroid weighted by D, within its box (its box's centre, or a hull's, is pulled along
+        # its thread: soft_centroid's filled hull put the real apple 48 px above itself)
         pair = []
         for i in order[:2]:
             x0, y0, w, h = (int(v) for v in stats[i, :4])
