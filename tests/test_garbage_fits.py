@@ -309,6 +309,43 @@ def test_an_added_mass_no_body_of_its_frontal_area_has_names_the_length():
             assert for_the_terminal(said[0]) and not says_rig_mismatch(said)
 
 
+
+def test_a_joint_fits_added_mass_scale_is_judged_by_every_trials_area_and_on_the_widened_interval():
+    """Two records of the apple fitted at the string's 1.04 m (the test above: 9 × ρA^1.5, warned): jointly, the
+    warning stands where the per-trial estimates agree; it goes where a trial's sidecar states a frontal area that
+    makes ρA^1.5 large enough (judged by the largest, not the first trial's), and where the per-trial estimates
+    scatter so that the joint interval, widened by their scale factor, reaches 3 × ρA^1.5 (before 2026-12-07 the
+    first record's area and the unwidened interval were judged)."""
+    from pendulum.fit.output_error import fit_joint
+
+    air = {"mass_kg": 0.18, "length_m": 1.053, "frontal_area_m2": 0.0038, "fluid_density_kg_m3": 1.2}
+    model = PendulumModel(Rig.from_mapping(air), ("quadratic_drag",))
+    tables = [
+        synthetic_angle_table(
+            model, {"added_mass_kg": 0.0, "drag_area_m2": 1.45 * 0.0038}, 22.0, rng=np.random.default_rng(s), fps=60.0
+        )
+        for s in (6, 7)
+    ]
+
+    def joint(areas, per_trial_mass):
+        records = [
+            load_record(t.copy(), f"apple{k}", {**air, "length_m": 1.04, "frontal_area_m2": a}, FitSettings())
+            for k, (t, a) in enumerate(zip(tables, areas, strict=True))
+        ]
+        per_trial = {
+            f"apple{k}": {"parameters": {"added_mass_kg": {"value": v, "stderr_statistical": 5e-7}}}
+            for k, v in enumerate(per_trial_mass)
+        }
+        fit = fit_joint(records, ["quadratic_drag"], per_trial)
+        return fit["parameters"]["added_mass_kg"], [w for w in fit["warnings"] if "ρA^1.5" in w]
+
+    entry, said = joint((0.0038, 0.0038), (0.0023, 0.0023))
+    assert entry["scale_factor"] == 1.0 and len(said) == 1 and entry["ci95"][0] > 3 * 1.2 * 0.0038**1.5, said
+    entry, said = joint((0.0038, 0.0038 * 2.5), (0.0023, 0.0023))  # ρA^1.5 4 × larger by the second trial's
+    assert said == [], said
+    entry, said = joint((0.0038, 0.0038), (0.0, 0.0046))  # estimates 9,200 σ apart: S ≈ 6,500
+    assert entry["scale_factor"] > 3000 and entry["ci95"][0] < 3 * 1.2 * 0.0038**1.5 and said == [], (entry, said)
+
 def test_a_mass_in_grams_gives_a_drag_coefficient_no_body_has_and_the_warning_names_the_mass():
     """The apple's 0.18 kg written as 180 (a lab's scale reads grams; a fresh-eyes user, 2026-12-03): an air
     pendulum's period does not show it (the rig checks pass), its C_d comes out ~1000× (1456): the warning names

@@ -100,13 +100,12 @@ def record_checks(record: AngleRecord, mask: np.ndarray, residual: np.ndarray, r
     }
 
 
-def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
+def rig_checks(rig: Rig, added_mass: dict, starts: list[dict], rigs: list[Rig] | None = None) -> list[str]:
     """Warnings when the measured period and the rig values cannot both be right, or the added mass that reconciles
-    them is more than any body of the rig's frontal area takes (:data:`ADDED_MASS_SCALE_LIMIT`)."""
+    them is more than any body of the frontal area of ``rigs`` (a joint fit's trials'; default ``[rig]``) takes
+    (:func:`added_mass_scale_warning`)."""
     bare = 2 * math.pi * math.sqrt(rig.pivot_inertia_kg_m2 / rig.restoring_torque_nm)
     measured = float(np.median([s["period_s"] for s in starts]))
-    scale = rig.fluid_density_kg_m3 * rig.frontal_area_m2**1.5  # a body's added mass is ~0.4–0.8 of this
-    least = float((added_mass.get("ci95") or [0.0])[0] or 0.0)  # the 95 % interval's lower end
     out = []
     if added_mass["at_bound"]:
         lower = float(added_mass.get("lower_bound") or 0.0)
@@ -127,18 +126,29 @@ def rig_checks(rig: Rig, added_mass: dict, starts: list[dict]) -> list[str]:
             "slow-motion clip plays slower than it was filmed: give the rate the camera filmed at in the trial's "
             "sidecar, data/raw/<trial>.yaml, e.g. capture_fps: 240)"
         )
-    elif scale > 0 and least > ADDED_MASS_SCALE_LIMIT * scale:
-        value = added_mass["value"]
-        out.append(
-            f"fitted added mass {value:.3g} kg is {value / scale:.0f}× ρA^1.5 ({scale:.2g} kg), its whole 95 % "
-            f"interval over {ADDED_MASS_SCALE_LIMIT:g}×: more than a solid body of this frontal area takes (a sphere's "
-            "is 0.38×, a flat plate's broadside 0.48×): check length_m, the distance from the pivot to the body's "
-            "centre (for a point mass, 1 % off moves the added mass by 1 % of mass and added mass together, "
-            f"{0.01 * (rig.mass_kg + value):.2g} kg here), body_inertia_kg_m2 (not given, the body's own inertia "
-            "about its centre, I_c / L², is counted as added mass), mass_kg, frontal_area_m2 and "
-            "fluid_density_kg_m3; water inside a free-flooding body counts as added mass too"
-        )
+    else:
+        out += [w for w in [added_mass_scale_warning(rigs or [rig], added_mass)] if w]
     return out
+
+
+def added_mass_scale_warning(rigs: list[Rig], added_mass: dict) -> str | None:
+    """The warning when the added mass's whole 95 % interval lies over :data:`ADDED_MASS_SCALE_LIMIT` × ρA^1.5,
+    A the frontal area (of the trials' ``rigs``: the largest ρA^1.5 where sidecars state different ones)."""
+    rig = max(rigs, key=lambda r: r.fluid_density_kg_m3 * r.frontal_area_m2**1.5)
+    scale = rig.fluid_density_kg_m3 * rig.frontal_area_m2**1.5  # a body's added mass is ~0.4–0.8 of this
+    least = float((added_mass.get("ci95") or [0.0])[0] or 0.0)  # the 95 % interval's lower end
+    if added_mass["at_bound"] or scale <= 0 or least <= ADDED_MASS_SCALE_LIMIT * scale:
+        return None
+    value = added_mass["value"]
+    return (
+        f"fitted added mass {value:.3g} kg is {value / scale:.0f}× ρA^1.5 ({scale:.2g} kg), its whole 95 % "
+        f"interval over {ADDED_MASS_SCALE_LIMIT:g}×: more than a solid body of this frontal area takes (a sphere's "
+        "is 0.38×, a flat plate's broadside 0.48×): check length_m, the distance from the pivot to the body's "
+        "centre (for a point mass, 1 % off moves the added mass by 1 % of mass and added mass together, "
+        f"{0.01 * (rig.mass_kg + value):.2g} kg here), body_inertia_kg_m2 (not given, the body's own inertia "
+        "about its centre, I_c / L², is counted as added mass), mass_kg, frontal_area_m2 and "
+        "fluid_density_kg_m3; water inside a free-flooding body counts as added mass too"
+    )
 
 
 # the added mass of a body of frontal area A, in units of ρ A^1.5: a sphere ½ ρ V = 0.38, a disk broadside

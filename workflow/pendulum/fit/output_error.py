@@ -38,6 +38,7 @@ from scipy.optimize import least_squares
 
 from pendulum.angles.swings import crossing_period
 from pendulum.fit.checks import (
+    added_mass_scale_warning,
     drag_checks,
     fastest_period_s,
     misfit_warning,
@@ -425,7 +426,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             area, area_sigma, differ = shared_frontal_area(records)
             params["drag_coefficient"] = drag_coefficient_entry(params[name], area, area_sigma)
             warnings += [differ] if differ else []
-    warnings += rig_checks(rig, params[ADDED_MASS], starts)
+    warnings += rig_checks(rig, params[ADDED_MASS], starts, [r.rig for r in records])
     warnings += drag_checks(rig, params["drag_coefficient"]) if "drag_coefficient" in params else []
     sd = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     corr = cov / np.outer(sd, sd)
@@ -526,18 +527,15 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
 
 
 def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], settings: FitSettings | None = None):
-    """Joint fit plus the consistency test.
-
-    When the per-trial estimates scatter more than their statistical intervals
-    allow (scale factor S > 1), the joint fit's statistical error is widened by S
-    (the Particle Data Group's rule); the systematic part (rig values, pivot: one
-    measurement shared by all trials) is added after, unscaled:
-    σ = √((S σ_stat)² + σ_sys²).
-    """
+    """Joint fit plus the consistency test. When the per-trial estimates scatter more than their statistical
+    intervals allow (scale factor S > 1), the joint fit's statistical error is widened by S (the Particle Data
+    Group's rule); the systematic part (rig values, pivot: one measurement shared by all trials) is added after,
+    unscaled: σ = √((S σ_stat)² + σ_sys²)."""
     settings = settings or FitSettings()
     joint = fit_trials(records, terms, settings)
-    consistency = consistency_test(per_trial, joint, settings.consistency_alpha)
-    joint["consistency"] = consistency
+    rigs = [r.rig for r in records]  # the added mass's scale warning is judged again on a widened interval
+    narrow = added_mass_scale_warning(rigs, joint["parameters"][ADDED_MASS])
+    joint["consistency"] = consistency = consistency_test(per_trial, joint, settings.consistency_alpha)
     for name, entry in joint["parameters"].items():
         source = "drag_area_m2" if name == "drag_coefficient" else name
         scale = consistency["parameters"][source]["scale_factor"]
@@ -546,4 +544,6 @@ def fit_joint(records: list[AngleRecord], terms, per_trial: dict[str, dict], set
             se = math.hypot(entry["stderr_statistical"] * entry["scale_factor"], entry["stderr_systematic"])
             entry["stderr"] = se
             entry["ci95"] = interval95(entry["value"], se, entry["lower_bound"], entry["at_bound"])
+    wide = added_mass_scale_warning(rigs, joint["parameters"][ADDED_MASS])
+    joint["warnings"] = [wide if w == narrow else w for w in joint["warnings"] if w != narrow or wide]
     return joint
