@@ -309,7 +309,6 @@ def test_an_added_mass_no_body_of_its_frontal_area_has_names_the_length():
             assert for_the_terminal(said[0]) and not says_rig_mismatch(said)
 
 
-
 def test_a_joint_fits_added_mass_scale_is_judged_by_every_trials_area_and_on_the_widened_interval():
     """Two records of the apple fitted at the string's 1.04 m (the test above: 9 × ρA^1.5, warned): jointly, the
     warning stands where the per-trial estimates agree; it goes where a trial's sidecar states a frontal area that
@@ -345,6 +344,7 @@ def test_a_joint_fits_added_mass_scale_is_judged_by_every_trials_area_and_on_the
     assert said == [], said
     entry, said = joint((0.0038, 0.0038), (0.0, 0.0046))  # estimates 9,200 σ apart: S ≈ 6,500
     assert entry["scale_factor"] > 3000 and entry["ci95"][0] < 3 * 1.2 * 0.0038**1.5 and said == [], (entry, said)
+
 
 def test_a_mass_in_grams_gives_a_drag_coefficient_no_body_has_and_the_warning_names_the_mass():
     """The apple's 0.18 kg written as 180 (a lab's scale reads grams; a fresh-eyes user, 2026-12-03): an air

@@ -186,7 +186,7 @@ def test_a_picture_stored_on_its_side_turns_the_vertical_given_with_it():
     """A phone held upright stores its picture on its side and says by how much players must turn it: where the
     swing hangs ±90° from the vertical given (0°, config's), the vertical is taken turned with the picture,
     whichever sign the file's rotation has; never where the given one fits the swing, or no turn does. Checked
-    on the real apple clip turned on its side with a display rotation of 90° (docs/footage.md): before
+    on the real apple clip turned on its side with a display rotation of 90° (docs/footage-notes.md): before
     2026-11-28 its angles stage refused it (the swing hangs −90°), now its record's period is 2.0779 s."""
     from pendulum.angles.record import vertical_turned_with_the_picture
 

@@ -108,7 +108,7 @@ def test_apple_angle_record_carries_the_second_harmonic_of_a_swing_seen_in_persp
     is a second harmonic, which a planar swing seen square-on has not, in phase with the swing (its plane turned
     against the phone's image plane) and a smaller part in quadrature (an elliptical swing); the apple's
     silhouette area changes by −3.5 % cos φ and −1.4 % sin φ with it, as a distance change of that size would
-    make it (docs/footage.md). Measured and said, with its sign, not absorbed silently."""
+    make it (docs/footage-notes.md). Measured and said, with its sign, not absorbed silently."""
     _, _, _, info = apple
     found = info.second_harmonic
     assert found["present"] and found["windows"] >= 15, found
@@ -233,7 +233,8 @@ def test_a_hand_holding_the_apple_before_the_release_is_never_taken_for_it(apple
     split): the held frames ``ok`` and the positions after the release up to 1.3 px off. Since 2026-12-03 the
     prediction goes on from the apple's own centre while the hand touches it (two pendulums whose bobs meet): the
     window then takes in less of the forearm, and a held frame whose silhouette comes out just under 1.5 times the
-    apple's (1.497) is ``occluded`` rather than ``held``: never ``ok`` either way. Other hands: docs/footage.md."""
+    apple's (1.497) is ``occluded`` rather than ``held``: never ``ok`` either way. Other hands:
+    docs/footage-notes.md."""
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import HANDS, make
 

@@ -38,7 +38,7 @@ def render(seed: int, workdir: Path, duration_s: float = 6.0) -> tuple[Path, lis
         frames, *truths = render_wall_pair(*trials)
         cam = trials[0].spec.camera
         # the same bytes in every run (x264's AVX-512 code once gave scene 9003 bytes whose left pendulum was
-        # tracked 0.59° off: docs/footage.md; write_video now keeps x264 to its AVX2 code)
+        # tracked 0.59° off: docs/footage-notes.md; write_video now keeps x264 to its AVX2 code)
         write_video(frames, video, cam.fps, cam.crf, cam.preset)
         for truth, path in zip(truths, paths, strict=True):
             truth.to_csv(path, index=False)

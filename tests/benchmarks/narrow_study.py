@@ -11,7 +11,7 @@ The body is tracked (``track_body``, config defaults); per scene ``ok%``, ``rms`
 true θ about the true pivot, less its mean), ``fill`` (the largest ``fill_error_grey`` of the filled scene
 behind its path, grey levels), ``warning`` and ``pass`` (ok% ≥ 95 and rms ≤ 0.02°), or the refusal.
 
-Developed on 9130–9145 (0.5–1.5 radii); held out 9146–9161 (0.5–2.0 radii): docs/footage.md.
+Developed on 9130–9145 (0.5–1.5 radii); held out 9146–9161 (0.5–2.0 radii): docs/footage-notes.md.
 """
 
 from __future__ import annotations

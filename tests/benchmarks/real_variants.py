@@ -34,9 +34,9 @@ The variants are real footage transformed, not renders: what they change is know
 is what a camera saw (the wall's shading composited as a camera sees it: :func:`_on_the_wall`).
 Measured 2026-12-03: 44 of 46 pass (37 of 39 before the dot and the people; 36 of 38 on 2026-11-29): not the post in
 front (90.8 % ok, every frame it hides part of the apple in flagged), nor the apple before a shadow band in grey
-(93.6 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage.md).
+(93.6 % of frames ok, below 95 %; in colour it is measured by its colour, 99.8 %; docs/footage-notes.md).
 2026-12-05: 45 of 47 (the same two; ``knocked_roll`` passes these criteria, its θ 0.069° RMS off the original's,
-0.49° before its knock was found from the swing's centre); θ against the original's record in docs/footage.md
+0.49° before its knock was found from the swing's centre); θ against the original's record in docs/footage-notes.md
 (*θ against the clip's own record*). 2026-12-05, with the turning ball (three sizes): 48 of 50, the same two; the
 turning ball measured by its outline's centre (docs/footage.md, *A ball seen in part*), refused or 0.6° off before.
 """
@@ -170,7 +170,7 @@ def _knocked_roll(image, index, n, at_s=KNOCK_S, roll_deg=KNOCK_ROLL_DEG, shift_
 
 def _knocked_late(image, index, n):
     """The clip at 30 fps knocked 4.8 s before its end (at 14 s: turned −0.7°, moved (−3, 2) px; a reviewer's
-    variant): two pairs of swing centres after the knock (docs/footage.md)."""
+    variant): two pairs of swing centres after the knock (docs/footage-notes.md)."""
     return _knocked_roll(image, index, n, at_s=14.0, roll_deg=-0.7, shift_px=(-3.0, 2.0), every=2)
 
 

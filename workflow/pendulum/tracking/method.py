@@ -195,10 +195,11 @@ def _by_colour(path, settings: TrackerSettings, body: pd.DataFrame, tried: dict,
 
     Usable frames decide (where the brightness silhouette was scaled by the wall's gain before a darker band,
     :func:`~pendulum.tracking.colour.scaled_by_wall`, a colour view usable in 95 % of the frames is kept: the band
-    leaves a body's colour as it was; docs/footage.md), not how much each silhouette's area changes mid-swing: on
+    leaves a body's colour as it was; docs/footage-notes.md), not how much each silhouette's area changes mid-swing: on
     the real clip's two-tone ball before hard-edged or bluish bands and filmed by hand, colour tracks 99.5–99.9 %
     usable were once dropped for a smaller change, for brightness tracks 89.8–95.0 % usable whose usable positions
-    were off the clip without the band by as much or more (0.34–2.5 px RMS against 0.34–0.41 px, docs/footage.md)."""
+    were off the clip without the band by as much or more (0.34–2.5 px RMS against 0.34–0.41 px,
+    docs/footage-notes.md)."""
     if not brightness_depends_on_wall(body):
         return body
     colour, facts = track_by_colour(path, settings, body, progress)
