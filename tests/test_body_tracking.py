@@ -1044,11 +1044,11 @@ def test_a_print_beside_its_heavier_soft_shadow_is_found_without_it(ball_blur_px
     assert math.hypot(alone.x - 97.0, alone.y - 122.0) <= 0.3, (alone.x, alone.y)
 
 
-def _print_with_shadow_joined(shadow_at=(168.0, 118.0), shadow_blur_px=9.0, sharp_lobe: bool = False) -> np.ndarray:
-    """|I − B| of :func:`_print_and_shadow`'s printed ball (radius 21 px at (150, 70), blur σ 1.4 px) with its soft
-    shadow touching it (a disk of 30 px radius, 30 levels deep, blurred by σ ``shadow_blur_px``, at ``shadow_at``:
-    one object with the ball, joined by a neck thicker than the opening that keeps the ball); ``sharp_lobe``: the
-    lobe drawn as sharp as the ball (a second body part, not a shadow)."""
+def _print_with_shadow_joined(shadow_at=(168.0, 118.0), shadow_blur_px=9.0, sharp_lobe: bool = False):
+    """|I − B| and I − B of :func:`_print_and_shadow`'s printed ball (radius 21 px at (150, 70), blur σ 1.4 px) with
+    its soft shadow touching it (a disk of 24 px radius, 26 grey levels deep, blurred by σ ``shadow_blur_px``, at
+    ``shadow_at``: one object with the ball, joined by a neck thicker than the opening that keeps the ball, lighter
+    than it); ``sharp_lobe``: the lobe drawn as sharp as the ball (a dark part of the body)."""
     import cv2
 
     yy, xx = np.mgrid[:220, :260].astype(np.float32)
@@ -1056,38 +1056,68 @@ def _print_with_shadow_joined(shadow_at=(168.0, 118.0), shadow_blur_px=9.0, shar
     checker = np.where((np.floor((xx - 150) / 7) + np.floor((yy - 70) / 7)) % 2 == 0, 55.0, -55.0)
     ball = cv2.GaussianBlur(np.where(inside, checker, 0.0).astype(np.float32), (0, 0), 1.4)
     lobe = np.zeros_like(ball)
-    cv2.circle(lobe, (int(shadow_at[0]), int(shadow_at[1])), 30, 60.0 if sharp_lobe else 30.0, -1)
+    cv2.circle(lobe, (int(shadow_at[0]), int(shadow_at[1])), 24, 60.0 if sharp_lobe else 26.0, -1)
     lobe = cv2.GaussianBlur(lobe, (0, 0), 1.4 if sharp_lobe else math.hypot(shadow_blur_px, 1.4))
-    return np.abs(ball + np.where(inside, 0.0, -lobe)).astype(np.float32)
+    signed = (ball + np.where(inside, 0.0, -lobe)).astype(np.float32)
+    return np.abs(signed), signed
 
 
-@pytest.mark.parametrize(
-    "shadow_at, shadow_blur_px", [((168.0, 118.0), 9.0), ((150.0, 122.0), 6.0), ((190.0, 110.0), 9.0)]
-)
-def test_a_print_joined_to_its_soft_shadow_is_found_without_it(shadow_at, shadow_blur_px):
+@pytest.mark.parametrize("shadow_at", [(168.0, 118.0), (130.0, 118.0), (150.0, 120.0), (115.0, 105.0)])
+def test_a_print_joined_to_its_soft_shadow_is_found_without_it(shadow_at):
     """Body study scene 7398 (2026-12-07): a printed ball of 33 px radius whose two soft shadows touch it in the
     picture, joined by a neck thicker than the opening that keeps the ball: one object three times its area, its
     centroid 54 px off the ball, followed so in every frame (θ 0.76° RMS off the truth, 100 % of the frames ok,
-    nothing said). The object is cut where it is thinnest between its two lobes and the lobe whose rim is over three
-    times softer left out: the ball found within 0.5 px of its drawn centre; a lobe as sharp as the ball (a part of
-    the body) and a compact body are left whole, and a start_px on the shadow keeps it."""
+    nothing said). The object is cut where it is thinnest between its two lobes and a side whose rim is over three
+    times softer and darker than the scene is left out: the ball's place within 0.2 px of its drawn centre, in the
+    first frame and from a track's prediction on it; a prediction on the shadow, a lobe as sharp as the ball (a part
+    of the body) and one lighter than the scene are left whole. (A shadow blurred by σ 6 px here, its edge less than
+    three times softer than the ball's and it the heavier, is still taken with it: docs/footage-notes.md.)"""
     from pendulum.tracking.body_parts import body_component, body_measure, without_soft_lobe
 
-    diff = _print_with_shadow_joined(shadow_at, shadow_blur_px)
+    diff, signed = _print_with_shadow_joined(shadow_at, 9.0)
     joined, _ = body_component(diff, 4.0, 3, 5)
     assert joined[70, 150] and joined[int(shadow_at[1]), int(shadow_at[0])], "one object"
-    seen = body_measure(diff, 4.0, 5, None)  # its place the ball's (its pixels as before: the scene's size)
-    assert math.hypot(seen.x - 150.0, seen.y - 70.0) <= 0.5, (seen.x, seen.y)
-    alone = without_soft_lobe(diff, joined)
-    assert alone[70, 150] and not alone[int(shadow_at[1]), int(shadow_at[0])]
-    on_shadow = without_soft_lobe(diff, joined, (shadow_at[0], shadow_at[1]))
-    assert on_shadow is joined
-    sharp = _print_with_shadow_joined(shadow_at, sharp_lobe=True)
+    before = body_measure(diff, 4.0, 5, None)  # without the frame's I − B: the object's centroid, as before
+    assert math.hypot(before.x - 150.0, before.y - 70.0) > 10.0, (before.x, before.y)
+    seen = body_measure(diff, 4.0, 5, None, True, signed)  # its pixels as before: the scene's size
+    assert math.hypot(seen.x - 150.0, seen.y - 70.0) <= 0.2 and np.array_equal(seen.component, before.component)
+    tracked = without_soft_lobe(diff, joined, signed, (152.0, 73.0))  # a track's prediction on the ball
+    ys, xs = np.nonzero(tracked)
+    assert not tracked[int(shadow_at[1]), int(shadow_at[0])] and math.hypot(xs.mean() - 150, ys.mean() - 70) <= 1.0
+    assert without_soft_lobe(diff, joined, signed, shadow_at) is joined  # the prediction on the shadow
+    assert without_soft_lobe(diff, joined, -signed) is joined  # lighter than the scene: no shadow
+    sharp, sharp_signed = _print_with_shadow_joined(shadow_at, sharp_lobe=True)
     whole, _ = body_component(sharp, 4.0, 3, 5)
-    assert without_soft_lobe(sharp, whole) is whole
-    yy, xx = np.mgrid[:120, :120]
-    disk = np.where(np.hypot(xx - 60, yy - 60) <= 25, 50.0, 0.0).astype(np.float32)  # a compact body
-    assert without_soft_lobe(disk, disk > 0) is not None and np.array_equal(without_soft_lobe(disk, disk > 0), disk > 0)
+    assert without_soft_lobe(sharp, whole, sharp_signed) is whole
+
+
+def test_a_body_joined_to_a_hand_or_a_darker_part_is_not_cut_from_it():
+    """The other side of the soft lobe's cut (a reviewer's counter-examples): a ball 25 grey levels darker than the
+    wall touching a hand 70 levels darker, both defocused alike (σ 3 px: a hand that holds the body is as far from
+    the camera), is left whole, from the first frame and from a track's prediction on the ball; and a defocused body
+    (σ 5 px) touching a sharp, darker object that is the lighter of the two is left whole in the first frame (its
+    shadow would be the lighter), where a prediction on the body keeps it whole too."""
+    import cv2
+
+    from pendulum.tracking.body_parts import body_component, without_soft_lobe
+
+    yy, xx = np.mgrid[:200, :260].astype(np.float32)
+
+    def disk(cx, cy, radius, level, blur):
+        return cv2.GaussianBlur(
+            np.where(np.hypot(xx - cx, yy - cy) <= radius, level, 0.0).astype(np.float32), (0, 0), blur
+        )
+
+    for ball, other in (
+        (disk(100, 100, 30, -25.0, 3.0), disk(150, 104, 20, -70.0, 3.0)),  # a hand as defocused as the body
+        (disk(100, 100, 30, -40.0, 5.0), disk(145, 104, 12, -70.0, 1.0)),  # a sharp object, the lighter
+    ):
+        signed = np.minimum(ball, other)
+        diff = np.abs(signed)
+        joined, _ = body_component(diff, 4.0, 3, 5)
+        assert joined[100, 100], "the body in the object"
+        assert without_soft_lobe(diff, joined, signed) is joined
+        assert without_soft_lobe(diff, joined, signed, (102.0, 100.0)) is joined
 
 
 def _ball_and_shadow(shadow_depth: float, shadow_blur_px: float, gap_rows: tuple = (90, 90)) -> np.ndarray:

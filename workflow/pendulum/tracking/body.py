@@ -87,6 +87,7 @@ from pendulum.tracking.body_parts import (
     body_core,
     body_measure,
     body_reach,
+    box_at_border,
     open_size,
     own_centre,
     silhouette_cut,
@@ -256,7 +257,9 @@ def find_body(
         """The body in the first frame, and as most of the clip shows it: of samples spread over the clip, the
         body in full view of median area, where the first frame's is out of view in part or not of its size
         (within :data:`TYPICAL_AREA_RATIO`: a hand holding it before the release)."""
-        first = body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near, view is None)
+        first = body_measure(
+            one_sided(d := images[0] - background, polarity), threshold, close_px, near, view is None, d
+        )
         if first is None or first.component is None or near is not None:
             return first, first
         seen = []
@@ -396,7 +399,9 @@ def track_body(
                     low = silhouette_cut(scene.noise_grey, here)
                     component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
-                component = without_soft_lobe(diff, component, (px - x0, py - y0))  # its soft shadow joined to it
+                component = (
+                    without_soft_lobe(diff, component, signed, (px - x0, py - y0)) if view is None else component
+                )
                 _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
                 if np.count_nonzero(component) > MAX_AREA_RATIO * body_area:  # with a hand, another bob
                     own = own_centre(component, scene.inner_radius_px, (px - x0, py - y0))
@@ -406,13 +411,7 @@ def track_body(
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
                     edges = edge_points(diff, component, signed, scene.polarity, view is not None)  # its outline
                     edges += np.float32((x0, y0))
-                    bx0, by0, bw, bh = box
-                    touches = (
-                        (bx0 + x0 <= 1 and x0 == 0)
-                        or (by0 + y0 <= 1 and y0 == 0)
-                        or (bx0 + bw + x0 >= width - 1 and x1 == width)
-                        or (by0 + bh + y0 >= height - 1 and y1 == height)
-                    )
+                    touches = box_at_border(box, (y0, y1, x0, x1), (height, width))
                     flag = "edge" if touches else "ok"
                     if not touches:
                         seen.add(len(rows), component, x0, y0, x, y)
