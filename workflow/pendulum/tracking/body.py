@@ -2,65 +2,67 @@
 
 What a Tracker (Open Source Physics) user does by hand, made precise for real footage (an apple, a ball, a vehicle):
 
-1. **Scene.** ≤ 2 × :data:`SCENE_SAMPLES` frames spread over the clip, each brought to one exposure (gain and offset
-   against their median: auto-exposure drift), and their per-pixel median (where it holds a body at rest over half the
-   clip, from the samples that show its ghost: ``body_scene.scene_states``); then again, up to :data:`SCENE_PASSES`
-   times, with each sample's moving objects (by their hulls) left out; pixels almost no sample shows clear (a swing
-   narrower than the body) filled from around them, refused where that fill is likely off by max(3σ,
-   :data:`UNSEEN_FILL_SHARE` C) or cannot be checked (a rigid body is then followed by its look:
-   :mod:`pendulum.tracking.look`), else warned of where the silhouette changes mid-swing. Static shadows, wall
-   gradients and stripes are part of the scene; σ is the MAD of I − B.
-2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the window's offset, a
-   line in the row fitted to its border, which follows slow exposure drift and a light's bands rolling down the
-   frame: :func:`pendulum.tracking.scene_stack.border_offset`), or for a one-sided body
-   (``body_scene.body_polarity``: at least 80 % of its first-frame pixels' |I − B| on one side of the scene, an apple
-   or a two-tone ball's dark half before a light wall, where that side alone finds the same body) that side's only,
-   D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays out wherever the wall behind
-   it is darker or lighter; a wall darker than a dark body hides it), above T = max(5σ, ¼ C), C the body's contrast,
-   closed by a disk of about half the body's inner radius (a print's dark patches are one object), its holes filled
-   where together under a tenth of it (a dot or a label on it: ``body_scene.fill_markings``) and opened by one of
-   about two thirds of it (a string, a stem, a thin rod is cut off; a soft shadow is below T, or cut off where it
-   joins the body by a neck: ``body_parts.without_soft_lobe``); the connected component nearest the prediction (where
-   that is over :data:`MAX_AREA_RATIO` of the body's area and another is the body's size: that one, a hand drawn back
-   after the release), with every component within two closing widths of it and within 1.3 × the body's reach of the
-   prediction (a part of it, not a light blinking beside it); where that is over MAX_AREA_RATIO of the body (a hand,
-   a second bob it meets), the prediction goes on from the body's own centre in it (``body_parts.own_centre``). The
-   first frame's body is the heaviest moving object above a quarter of its own contrast (its part at its thickest
-   point), or the one at ``start_px``; its size, contrast and silhouette split are the first frame's, or, where that
-   differs from the median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by more than
-   :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the body's contrast in
-   a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found again above ¼ of its own
-   contrast there. A one-sided body's I − B (where over its noise) is divided by the wall's gain
-   (``body_scene.wall_gain``: under 1 where the body keeps less than 0.8 of its contrast before the light wall):
-   about the difference it would make before the light wall, so that its part before a darker band stays in its
-   silhouette.
-3. **Position.** The silhouette: the component's pixels that differ by more than a share of its contrast C_f fixed for
-   the clip (``body_scene.silhouette_fraction``: ¼, or the Otsu split of a two-tone body), filled to their convex hull
-   (a part that hardly differs from the wall, a bright half before a bright wall, is left out the same way in every
-   frame); its soft-edged centroid x̂ = Σ w x / Σ w, w = 1 in the hull's core, the pixel's coverage D / C_local within
-   2 px of its outline (no pixel locking). Any point fixed to a rigid pendulum turns about the pivot with it, so its
-   angle about the pivot is θ up to a constant (the vertical). Beside it, its round outline's centre (a ball seen in
-   part: :mod:`pendulum.tracking.outline`), kept where the path says the centroid moves on the body.
+1. **Scene.** ≤ 2 × :data:`SCENE_SAMPLES` frames spread over the clip, each brought to one exposure
+   (gain and offset against their median: auto-exposure drift), and their per-pixel median (where it holds a
+   body at rest over half the clip, from the samples that show its ghost: ``body_scene.scene_states``); then
+   again, up to :data:`SCENE_PASSES` times, with each sample's moving objects (by their hulls) left out;
+   pixels almost no sample shows clear (a swing narrower than the body) filled from around them, refused where
+   that fill is likely off by max(3σ, :data:`UNSEEN_FILL_SHARE` C) or cannot be checked (a rigid body is then
+   followed by its look: :mod:`pendulum.tracking.look`), else warned of where the silhouette changes mid-swing.
+   Static shadows, wall gradients and stripes are part of the scene; σ is the MAD of I − B.
+2. **Body.** In a window around the predicted position, the difference D = |I − B − o| (o: the
+   window's offset, a line in the row fitted to its border, which follows slow exposure drift and a light's
+   bands rolling down the frame: :func:`pendulum.tracking.scene_stack.border_offset`), or for a one-sided body
+   (``body_scene.body_polarity``: at least 80 % of its first-frame pixels' |I − B| on one side of the scene,
+   an apple or a two-tone ball's dark half before a light wall, where that side alone finds the same body)
+   that side's only, D = −(I − B − o) or I − B − o clipped at 0 (a part of nearly the wall's grey then stays
+   out wherever the wall behind it is darker or lighter; a wall darker than a dark body hides it), above
+   T = max(5σ, ¼ C), C the body's contrast, closed by a disk of about half the body's inner radius (a print's
+   dark patches are one object), its holes filled where together under a tenth of it (a dot or a label on it:
+   ``body_scene.fill_markings``) and opened by one of about two thirds of it (a string, a stem, a thin rod is cut off; a
+   soft shadow is below T); the connected component nearest the prediction (where that is over
+   :data:`MAX_AREA_RATIO` of the body's area and another is the body's size: that one, a hand drawn back
+   after the release), with every component within two closing widths of it and within 1.3 × the body's reach of
+   the prediction (a part of it, not a light blinking beside it); where that is over MAX_AREA_RATIO of the body (a
+   hand, a second bob it meets), the prediction goes on from the body's own centre in it (``body_parts.own_centre``).
+   The first frame's body is the heaviest moving object above a quarter of its own contrast (its part at its
+   thickest point), or the one at ``start_px``; its size, contrast and silhouette split are the first frame's,
+   or, where that differs from the median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by
+   more than :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the
+   body's contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
+   again above ¼ of its own contrast there. A one-sided body's I − B (where over its noise) is divided by the
+   wall's gain (``body_scene.wall_gain``: under 1 where the body keeps less than 0.8 of its contrast before the
+   light wall): about the difference it would make before the light wall, so that its part before a darker band
+   stays in its silhouette.
+3. **Position.** The silhouette: the component's pixels that differ by more than a share of its
+   contrast C_f fixed for the clip (``body_scene.silhouette_fraction``: ¼, or the Otsu split of a
+   two-tone body), filled to their convex hull (a part that hardly differs from the wall, a bright half before
+   a bright wall, is left out the same way in every frame); its soft-edged centroid x̂ = Σ w x / Σ w,
+   w = 1 in the hull's core, the pixel's coverage D / C_local within 2 px of its outline (no pixel
+   locking). Any point fixed to a rigid pendulum turns about the pivot with it, so its angle about the
+   pivot is θ up to a constant (the vertical). Beside it, its round outline's centre (a ball seen in part:
+   :mod:`pendulum.tracking.outline`), kept where the path says the centroid moves on the body.
 
-Flags from the measurement's own evidence (never thresholds fitted to renders): ``edge`` (the body itself, within 1.2
-inner radii of its thickest point, not a rod or thread leaving the frame, touches the frame's border), ``occluded`` (its
-covered area departs from its running median by 6 robust σ and 10 %, or lies beyond 1.5× or ½ of its median where it
-moves, or the soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its radius (≥ 0.3 px), and the
-frames within 0.2 s of a size flag in its run off 1.2× its size either way, a merge coming and going:
-:func:`pendulum.tracking.checks.grown_runs`; or it reaches a place something in front of the swing hides:
-:mod:`pendulum.tracking.occluders`), ``jump`` (leave-one-out cubic, as for the marker), ``held`` (over 1.5× that median
-before the body's first free frame or after its last: a hand before the release, or one that catches it; or, still, over
-1.2× it from the record's first frame or to its last: fingers alone over its edge) and ``lost`` (no body near the
-prediction).
+Flags from the measurement's own evidence (never thresholds fitted to renders): ``edge`` (the body itself, within
+1.2 inner radii of its thickest point, not a rod or thread leaving the frame, touches the frame's border),
+``occluded`` (its covered area departs from its running median by 6 robust σ and 10 %, or lies beyond 1.5× or ½ of
+its median where it moves, or the soft and plain silhouette's centroids disagree by 6 robust σ and 1.5 % of its
+radius (≥ 0.3 px), and the frames within 0.2 s of a size flag in its run off 1.2× its size either way, a merge
+coming and going: :func:`pendulum.tracking.checks.grown_runs`; or it reaches a place something in front of the
+swing hides: :mod:`pendulum.tracking.occluders`), ``jump`` (leave-one-out cubic, as for the marker), ``held``
+(over 1.5× that median before the body's first free frame or after its last: a hand before the release, or one that
+catches it; or, still, over 1.2× it from the record's first frame or to its last: fingers alone over its edge) and
+``lost`` (no body near the prediction).
 
-A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most samples) shows as a
-silhouette smaller or larger mid-swing than at the ends (:func:`pendulum.tracking.path_shape.rest_place_area_ratio`
-outside 0.9–1/0.9): the scene there is taken again from the two ends of the swing
-(:func:`pendulum.tracking.body_scene.rest_place_scene`) and the body tracked again, up to :data:`REST_PLACE_REPAIRS`
-times; then refused, unless the scene from the swing's ends saw the rest place and is the median's there
-(``rest_place_clear``: it never held the body; the body's look changes with the wall behind it, a two-tone ball's light
-half before a shadow band): then a one-sided body is measured by its side only (as in step 2, where that was not taken),
-and a silhouette still smaller or larger mid-swing is kept with a ``warning`` in the track's body facts.
+A scene that holds the body (a narrow swing: it covers its rest place, or its swing's ends, in most samples) shows
+as a silhouette smaller or larger mid-swing than at the ends
+(:func:`pendulum.tracking.path_shape.rest_place_area_ratio` outside 0.9–1/0.9): the scene there is taken again
+from the two ends of the swing (:func:`pendulum.tracking.body_scene.rest_place_scene`) and the body tracked again,
+up to :data:`REST_PLACE_REPAIRS` times; then refused, unless the scene from the swing's ends saw the rest place
+and is the median's there (``rest_place_clear``: it never held the body; the body's look changes with the wall
+behind it, a two-tone ball's light half before a shadow band): then a one-sided body is measured by its side only
+(as in step 2, where that was not taken), and a silhouette still smaller or larger mid-swing is kept with a
+``warning`` in the track's body facts.
 
 ``view`` (in :func:`find_body` and :func:`track_body`): the image taken of each frame, its luma by default
 (:func:`pendulum.tracking.colour.colour_view`: its colour's difference from the wall's)."""
@@ -87,13 +89,11 @@ from pendulum.tracking.body_parts import (
     body_core,
     body_measure,
     body_reach,
-    box_at_border,
     open_size,
     own_centre,
     silhouette_cut,
     start_missed,
     touches_border,
-    without_soft_lobe,
 )
 from pendulum.tracking.body_scene import (
     STRONG_FRACTION,
@@ -257,9 +257,7 @@ def find_body(
         """The body in the first frame, and as most of the clip shows it: of samples spread over the clip, the
         body in full view of median area, where the first frame's is out of view in part or not of its size
         (within :data:`TYPICAL_AREA_RATIO`: a hand holding it before the release)."""
-        first = body_measure(
-            one_sided(d := images[0] - background, polarity), threshold, close_px, near, view is None, d
-        )
+        first = body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near, view is None)
         if first is None or first.component is None or near is not None:
             return first, first
         seen = []
@@ -399,9 +397,6 @@ def track_body(
                     low = silhouette_cut(scene.noise_grey, here)
                     component, box = body_component(diff, low, open_px, close_px, (px - x0, py - y0), body_area, extent)
             if component is not None:
-                component = (
-                    without_soft_lobe(diff, component, signed, (px - x0, py - y0)) if view is None else component
-                )
                 _, box = body_core(component, edge_px)  # in view or not: the body itself, without its rod
                 if np.count_nonzero(component) > MAX_AREA_RATIO * body_area:  # with a hand, another bob
                     own = own_centre(component, scene.inner_radius_px, (px - x0, py - y0))
@@ -411,7 +406,13 @@ def track_body(
                     x, y, bx, by = sx + x0, sy + y0, bx + x0, by + y0
                     edges = edge_points(diff, component, signed, scene.polarity, view is not None)  # its outline
                     edges += np.float32((x0, y0))
-                    touches = box_at_border(box, (y0, y1, x0, x1), (height, width))
+                    bx0, by0, bw, bh = box
+                    touches = (
+                        (bx0 + x0 <= 1 and x0 == 0)
+                        or (by0 + y0 <= 1 and y0 == 0)
+                        or (bx0 + bw + x0 >= width - 1 and x1 == width)
+                        or (by0 + bh + y0 >= height - 1 and y1 == height)
+                    )
                     flag = "edge" if touches else "ok"
                     if not touches:
                         seen.add(len(rows), component, x0, y0, x, y)

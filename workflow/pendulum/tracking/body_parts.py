@@ -37,19 +37,6 @@ def component_contrast(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, 
     return float(np.percentile(crop[labels[y0 : y0 + h, x0 : x0 + w] == i], 90))
 
 
-def _gradient(diff: np.ndarray) -> np.ndarray:
-    """|∇D| of D smoothed by σ = 1 px (grey levels per px)."""
-    smooth = cv2.GaussianBlur(diff.astype(np.float32), (0, 0), 1.0)
-    return np.hypot(cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)) / 8
-
-
-def _outline_band(mask: np.ndarray) -> np.ndarray:
-    """A mask's outline, from 3 px inside it to 2 px outside (a large body's inside does not count)."""
-    outside = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))) > 0
-    inside = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7)), borderType=cv2.BORDER_REPLICATE)
-    return outside & ~(inside > 0)
-
-
 def edge_sharpness(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: int) -> float:
     """How sharply component ``i`` of ``diff`` ends (1/px, about 1/w for an edge w px wide): the 90th percentile of
     |∇D| (D smoothed by σ = 1 px) on its outline (from 3 px inside to 2 px outside it: a large body's inside does not
@@ -59,11 +46,15 @@ def edge_sharpness(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, i: i
     pad = 6  # beyond the outline's 2 px, the smoothing's and the Sobel kernel's reach
     ya, yb = max(y0 - pad, 0), min(y0 + h + pad, diff.shape[0])
     xa, xb = max(x0 - pad, 0), min(x0 + w + pad, diff.shape[1])
-    outline = _outline_band((labels[ya:yb, xa:xb] == i).astype(np.uint8))
+    mask = (labels[ya:yb, xa:xb] == i).astype(np.uint8)
+    crop = diff[ya:yb, xa:xb].astype(np.float32)
+    smooth = cv2.GaussianBlur(crop, (0, 0), 1.0)
+    gradient = np.hypot(cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)) / 8
+    outside = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))) > 0
+    inside = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7)), borderType=cv2.BORDER_REPLICATE)
+    outline = outside & ~(inside > 0)
     level = component_contrast(diff, labels, stats, i)
-    return (
-        float(np.percentile(_gradient(diff[ya:yb, xa:xb])[outline], 90)) / level if level > 0 and outline.any() else 0.0
-    )
+    return float(np.percentile(gradient[outline], 90)) / level if level > 0 and outline.any() else 0.0
 
 
 def _boxes_within(a: np.ndarray, b: np.ndarray, gap: int) -> bool:
@@ -183,18 +174,6 @@ def body_component(
     return mask, tuple(box)
 
 
-def box_at_border(box, cut, frame_shape) -> bool:
-    """Whether a body's box ``(x, y, w, h)`` in a cut-out ``cut = (y0, y1, x0, x1)`` of a frame of ``frame_shape``
-    comes within 1 px of the frame's edge, on the cut-out's sides that are the frame's."""
-    (bx, by, bw, bh), (y0, y1, x0, x1), (h, w) = box, cut, frame_shape
-    return bool(
-        (bx + x0 <= 1 and x0 == 0)
-        or (by + y0 <= 1 and y0 == 0)
-        or (bx + bw + x0 >= w - 1 and x1 == w)
-        or (by + bh + y0 >= h - 1 and y1 == h)
-    )
-
-
 def touches_border(component: np.ndarray, cut=None, frame_shape=None) -> bool:
     """Whether a body's pixels reach the frame's outermost rows or columns (part of it out of view); for a
     component of a cut-out ``cut = (y0, y1, x0, x1)`` of a frame of ``frame_shape``, only its sides that are the
@@ -291,111 +270,14 @@ class Seen(NamedTuple):
     window: tuple | None = None
 
 
-LOBE_DEPTH_SHARE, LOBE_APART = 0.5, 1.0  # a lobe: as thick as this share of the body, its centre this many radii off
-NECK_SHARE = 0.9  # ... joined by a neck at most this share of the lobe's thickness
-MIN_LOBE_PX = 3.0  # a lobe thinner than this (inner radius) is not judged
-MIN_RIM_SHARE = 0.3  # ... nor one whose rim away from the cut is under this share of its outline
-
-
-def _rim_sharpness(diff: np.ndarray, part: np.ndarray, other: np.ndarray, cut_px: int) -> float | None:
-    """:func:`edge_sharpness` of ``part`` over its outline away from ``other`` (the cut between them, ``cut_px`` on
-    either side, is no edge); None where too little of its outline is left to judge (a small lobe)."""
-    cut = cv2.dilate(other.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (cut_px, cut_px))) > 0
-    band = _outline_band(part.astype(np.uint8))
-    rim = band & ~cut
-    level = float(np.percentile(diff[part], 90))
-    if level <= 0 or rim.sum() < MIN_RIM_SHARE * band.sum():
-        return None
-    return float(np.percentile(_gradient(diff)[rim], 90)) / level
-
-
-def without_soft_lobe(diff: np.ndarray, component: np.ndarray, signed: np.ndarray, near=None) -> np.ndarray:
-    """``component`` less a soft, darker lobe joined to it: the body's soft shadow on the wall, touching it in the
-    picture by a neck that an opening which keeps the body keeps too (body study scene 7398: a printed ball of 33 px
-    radius and its two soft shadows below it, one object three times the ball's area, its centroid 54 px off the
-    ball's centre, θ 0.76° RMS off the truth in every frame `ok`). Where a second lobe at least
-    :data:`LOBE_DEPTH_SHARE` as thick as the component's thickest point lies over :data:`LOBE_APART` of its radii
-    from it, joined by a neck thinner than :data:`NECK_SHARE` of the lobe, the two sides of the line across the neck
-    are judged as :func:`soft_components` judges components (:func:`_rim_sharpness`: the rim away from the cut over
-    three times softer than the other's, or two thirds and fainter and lighter). A soft side is cut off where it is
-    a shadow, darker than the scene (``signed``, I − B, below 0 over most of it: a shadow only darkens the wall);
-    where the side kept holds ``near`` (start_px, or the track's prediction: nearer its lobe's inscribed disk than
-    the other's), or, with no ``near``, where the side cut off is the lighter (a defocused body beside a sharp,
-    darker hand is not cut off). The body kept: its side of the line and its lobe's inscribed disk. Only the two
-    thickest lobes are compared (a body with two shadows joined on either side of it is left whole), and a compact
-    body (no second lobe), two sides alike (an elongated body's two ends) and a shadow that overlaps the body with
-    no neck between them are left whole: ``component`` itself is returned."""
-    ys, xs = np.nonzero(component)
-    if xs.size < MIN_BODY_AREA_PX:
-        return component
-    pad = 8  # the outline band's and the gradient's reach
-    y0, x0 = max(int(ys.min()) - pad, 0), max(int(xs.min()) - pad, 0)
-    y1, x1 = min(int(ys.max()) + pad + 1, component.shape[0]), min(int(xs.max()) + pad + 1, component.shape[1])
-    mask = component[y0:y1, x0:x1].astype(np.uint8)
-    crop, crop_signed = diff[y0:y1, x0:x1], signed[y0:y1, x0:x1]
-    depth = cv2.distanceTransform(mask, cv2.DIST_L2, 5)
-    inner = float(depth.max())
-    if inner < MIN_LOBE_PX / LOBE_DEPTH_SHARE:
-        return component
-    ty, tx = np.unravel_index(int(np.argmax(depth)), depth.shape)
-    ys, xs = np.nonzero(depth >= LOBE_DEPTH_SHARE * inner)
-    far = np.hypot(xs - tx, ys - ty) > LOBE_APART * inner
-    if not far.any():
-        return component
-    k = int(np.argmax(depth[ys[far], xs[far]]))
-    sx, sy = int(xs[far][k]), int(ys[far][k])
-    a, b = np.array([tx, ty], float), np.array([sx, sy], float)
-    steps = np.linspace(0.0, 1.0, max(int(np.hypot(*(b - a))), 2))
-    along = (a + steps[:, None] * (b - a)).round().astype(int)
-    thinnest = along[int(np.argmin(depth[along[:, 1], along[:, 0]]))]
-    if depth[thinnest[1], thinnest[0]] > NECK_SHARE * depth[sy, sx]:
-        return component  # no neck between them: one body
-    py, px = np.mgrid[0 : mask.shape[0], 0 : mask.shape[1]]
-    beyond = (px - thinnest[0]) * (b[0] - a[0]) + (py - thinnest[1]) * (b[1] - a[1]) > 0
-    parts = [(mask > 0) & ~beyond, (mask > 0) & beyond]
-    radii = (float(depth[ty, tx]), float(depth[sy, sx]))
-    cut_px = 2 * int(round(min(radii) / 3)) + 5
-    sharp = [_rim_sharpness(crop, part, other, cut_px) for part, other in (parts, parts[::-1])]
-    if None in sharp:
-        return component
-    level = [float(np.percentile(crop[part], 90)) for part in parts]
-    mass = [float(crop[part].sum()) for part in parts]
-
-    def softer(i: int, j: int) -> bool:  # as soft_components judges a component beside a heavy one
-        ratio = sharp[i] / sharp[j] if sharp[j] > 0 else math.inf
-        faint = level[i] < FAINT_CONTRAST_RATIO * level[j] and mass[i] < mass[j]
-        return ratio < SOFT_EDGE_RATIO or (ratio < FAINT_EDGE_RATIO and faint)
-
-    soft = [k for k in (0, 1) if softer(k, 1 - k)]
-    if len(soft) != 1 or np.median(crop_signed[parts[soft[0]]]) >= 0:  # none, both, or not darker: no shadow
-        return component
-    drop, keep = soft[0], 1 - soft[0]
-    centres = (a, b)
-    if near is None:
-        if mass[drop] >= mass[keep]:
-            return component
-    else:
-        nx, ny = near[0] - x0, near[1] - y0
-        to_disk = [math.hypot(nx - c[0], ny - c[1]) - r for c, r in zip(centres, radii, strict=True)]
-        if not to_disk[keep] < to_disk[drop]:
-            return component
-    disk = np.hypot(px - centres[keep][0], py - centres[keep][1]) <= radii[keep] + 1.0
-    out = np.zeros(component.shape, bool)
-    out[y0:y1, x0:x1] = (mask > 0) & (parts[keep] | disk)
-    return out
-
-
-def body_measure(
-    diff: np.ndarray, threshold: float, close_px: int, near, shadows_apart: bool = True, signed=None
-) -> Seen | None:
+def body_measure(diff: np.ndarray, threshold: float, close_px: int, near, shadows_apart: bool = True) -> Seen | None:
     """The body in one frame's difference from the scene (:class:`Seen`); None when nothing moves.
 
     The heaviest moving object (or the one at ``near``) of those not much softer-edged than another heavy one (its
     soft shadow on the wall, :func:`soft_components`), again above a quarter of its own contrast (a fainter shadow
     beside it falls away), then opened to cut its thread (the part at its thickest point kept). Without
     ``shadows_apart`` (the colour view: white light casts no shadow in it, and its chroma's edges are soft) the
-    heaviest, as before. With ``signed`` (the frame's I − B), its place is measured without a soft shadow joined to
-    it (:func:`without_soft_lobe`); its pixels, size and contrast are the component's, as before."""
+    heaviest, as before."""
     component, _ = body_component(diff, threshold, 3, close_px, near=near, shadows_apart=shadows_apart)
     if component is None:
         return None
@@ -414,8 +296,5 @@ def body_measure(
         return Seen(math.nan, math.nan, contrast, STRONG_FRACTION, None, inner)
     inner = float(cv2.distanceTransform(opened.astype(np.uint8), cv2.DIST_L2, 5).max())
     fraction = silhouette_fraction(diff[opened])
-    alone = (
-        opened if signed is None or not shadows_apart else without_soft_lobe(diff, opened, signed, near)
-    )  # not its soft shadow's place
-    x, y, _, _, _ = soft_centroid(diff, alone, fraction if alone is opened else silhouette_fraction(diff[alone]))
+    x, y, _, _, _ = soft_centroid(diff, opened, fraction)
     return Seen(x, y, contrast, fraction, opened, inner)
