@@ -150,9 +150,8 @@ def two_objects_where(image: np.ndarray, background: np.ndarray, threshold: floa
         pair = []
         for i in order[:2]:
             x0, y0, w, h = (int(v) for v in stats[i, :4])
-            weight = np.where(labels[y0 : y0 + h, x0 : x0 + w] == i, diff[y0 : y0 + h, x0 : x0 + w], 0.0)
-            ys, xs = np.mgrid[y0 : y0 + h, x0 : x0 + w]
-            pair.append(((weight * xs).sum() / weight.sum(), (weight * ys).sum() / weight.sum()))
+            m = cv2.moments(np.where(labels[y0 : y0 + h, x0 : x0 + w] == i, diff[y0 : y0 + h, x0 : x0 + w], 0.0))
+            pair.append((x0 + m["m10"] / m["m00"], y0 + m["m01"] / m["m00"]))
     (ax, ay), (bx, by) = pair or sampled
     where = "in the first frame" if pair else "in a sampled frame"
     return f"{where} near ({ax:.0f}, {ay:.0f}) and ({bx:.0f}, {by:.0f}) px"
