@@ -51,6 +51,7 @@ from pendulum.tracking.settings import TrackerSettings
 ON_CIRCLE_PX = (1.5, 1.0, 0.75)  # the successive fits' tolerances: |distance from the centre − radius|
 MIN_LIMB_SHARE = 1 / 3  # of the rays on its circle: its limb seen (a sphere shows at least half of it)
 CONFIRMED_LIMB_SHARE = 1 / 4  # … a brightness circle where the colour view's silhouette confirms its place
+PART_LIMB_SHARE = 1 / 6  # … a limb seen in part, taken where its centre keeps to the path (outline._taken_back)
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 MIN_POINTS = 8  # edge points a circle is fitted to
 VOTE_RAY_STEP = 6  # the vote's circles pass through pairs of every sixth ray's points
@@ -240,28 +241,35 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
     return out
 
 
-def _whole_limb(
+def _taken_back(
     track: pd.DataFrame, corrected: pd.DataFrame, seen: np.ndarray, noise_px: float, settings: TrackerSettings
-) -> np.ndarray:
-    """Frames the silhouette flagged ``occluded`` or ``jump`` (before its first usable frame or after its last, only
-    where they move by over :data:`STILL_PX` a frame: a hand may hold it still there) whose outline is seen as whole
-    as in the usable frames (at least half the rays, and the :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count,
-    on its circle) and whose outline centre keeps to the usable frames' path: within :data:`ON_PATH_NOISE` times its
-    noise (and :data:`ON_PATH_PX`) of the circle through them (``corrected``: the outline's path with the camera's
-    creep taken out), and no jump (:func:`~pendulum.tracking.checks.flag_jumps` on the path with them) in a run of
-    them or within its stencil of one (a run of shifted frames makes its usable neighbours the jumps).
+) -> tuple[np.ndarray, np.ndarray]:
+    """Frames usable again by their outline: (whole, part). *Whole*: frames the silhouette flagged ``occluded`` or
+    ``jump`` whose outline is seen as whole as in the usable frames (at least half the rays, and the
+    :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count, on its circle). *Part*: frames the silhouette found usable
+    whose limb was seen in part (at least :data:`PART_LIMB_SHARE` of the rays on its circle, under the share that
+    counts as seen: a print's light squares lost against the wall where they meet the limb). Either only where its
+    outline centre keeps to the usable frames' path: within :data:`ON_PATH_NOISE` times its noise (and
+    :data:`ON_PATH_PX`) of the circle through them (``corrected``: the outline's path with the camera's creep taken
+    out), and no jump (:func:`~pendulum.tracking.checks.flag_jumps` on the path with them) in a run of them or
+    within its stencil of one (a run of shifted frames makes its usable neighbours the jumps); before the first
+    usable frame or after the last, only where they move by over :data:`STILL_PX` a frame (a hand may hold it still
+    there).
 
-    Such a flag is the silhouette's: its area or centroid changed (a two-tone ball's light half standing out where
+    A silhouette's flag there is its own: its area or centroid changed (a two-tone ball's light half standing out where
     the wall behind it darkens, seed 7149 of the body study: 1.35 times the area at one end of the swing), which does
     not move a sphere's limb. A thing in front of the body or merged with it at half its contrast or more hides part
     of the limb or bends it off the circle; one fainter (a soft shadow merged with it) can shift the limb by under the
     circle's tolerance and the centre by up to 1.6 px (a reviewer's renders): only a shift across the path is seen
     here, not one along it."""
+    nothing = np.zeros(len(track), bool)
     if not seen.any():
-        return np.zeros(len(track), bool)
+        return nothing, nothing
     rays = track.outline_rays.to_numpy(float)
     whole = max(LIMB_RAYS / 2, float(np.quantile(rays[seen], WHOLE_LIMB_QUANTILE)))
-    candidates = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= whole)
+    flagged = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= whole)
+    part = (track.flag == "ok").to_numpy() & ~seen & (rays >= PART_LIMB_SHARE * LIMB_RAYS)
+    candidates = flagged | part
     x, y = corrected.x_px.to_numpy(float), corrected.y_px.to_numpy(float)
     order, free = np.arange(len(track)), np.flatnonzero(seen)
     for end in (order < free[0], order > free[-1]):  # before the first usable frame or after the last: swinging
@@ -269,14 +277,15 @@ def _whole_limb(
         if not (steps.size and np.median(steps) > STILL_PX):  # held still there (a hand), or too short to tell
             candidates &= ~end
     if not candidates.any() or seen.sum() < MIN_POINTS or not math.isfinite(noise_px):
-        return np.zeros(len(track), bool)
+        return nothing, nothing
     jumps = flag_jumps(x, y, seen | candidates, settings)
     near_jump = maximum_filter1d(jumps.astype(np.uint8), 2 * JUMP_HALF_WINDOW + 1) > 0
     runs, _ = label(candidates)
     candidates &= ~np.isin(runs, np.unique(runs[near_jump & (runs > 0)]))  # a run with a jump in or beside it
     cx, cy, radius = fit_circle(x[seen], y[seen])
     with np.errstate(invalid="ignore"):
-        return candidates & (np.abs(np.hypot(x - cx, y - cy) - radius) <= max(ON_PATH_NOISE * noise_px, ON_PATH_PX))
+        back = candidates & (np.abs(np.hypot(x - cx, y - cy) - radius) <= max(ON_PATH_NOISE * noise_px, ON_PATH_PX))
+    return back & flagged, back & part
 
 
 def centres_apart(centroid: pd.DataFrame, outline: pd.DataFrame, both: np.ndarray) -> tuple[float, float]:
@@ -306,7 +315,7 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
     """The track with its outline's centres where they make the better pendulum (module docstring), without the
     outline columns; ``attrs["body"]["centre"]``: what each gave and which was kept. Measured by its outline, the
     frames the silhouette flagged for its area or centroid but whose limb is seen whole are usable again
-    (:func:`_whole_limb`, with ``settings``' jump test)."""
+    (:func:`_taken_back`, with ``settings``' jump test), and so are the usable frames whose limb was seen in part."""
     if OUTLINE_COLUMNS[0] not in track.columns:
         return track
     centroid = track.drop(columns=OUTLINE_COLUMNS)
@@ -373,9 +382,9 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
             f"{noise_outline:.2f} px): no better pendulum, by its silhouette's centroid"
         )
         return centroid
-    unseen = int((ok & ~seen).sum())
-    restored = _whole_limb(track, on_path, seen, noise_outline, settings or TrackerSettings())
-    outline.loc[restored, "flag"] = "ok"
+    restored, in_part = _taken_back(track, on_path, seen, noise_outline, settings or TrackerSettings())
+    outline.loc[restored | in_part, "flag"] = "ok"
+    unseen = int((ok & ~seen & ~in_part).sum())
     facts["by"] = "outline"
     turns = ": a ball seen in part (one half of a two-tone ball, a print's dark patches) that turns on its string"
     if wanders or better:
@@ -407,6 +416,11 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
         turns += " (its outline in the brightness view)"
     facts["why"] = (
         f"{evidence}{turns}, measured by its outline's centre"
+        + (
+            f"; {int(in_part.sum())} frames whose limb was seen in part are usable by it (their centres on the path)"
+            if in_part.any()
+            else ""
+        )
         + (f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else "")
         + (
             f"; {int(restored.sum())} frames its silhouette flagged (its area or centroid changed) are usable by "
@@ -415,7 +429,7 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
             else ""
         )
     )
-    facts["whole_limb_frames"] = int(restored.sum())
+    facts["whole_limb_frames"], facts["part_limb_frames"] = int(restored.sum()), int(in_part.sum())
     outline.attrs = {**centroid.attrs, "body": {**centroid.attrs["body"], "centre": facts}}
     if "method" in outline.attrs:  # said where the method is
         method = outline.attrs["method"]
