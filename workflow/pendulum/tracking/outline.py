@@ -63,7 +63,6 @@ WANDER_NOISE_RATIO = 2.0  # a centroid's wander off the circle, beyond its noise
 APART_NOISE_RATIO = 3.0  # the two centres' difference wandering by this × its noise: one of them moves on the body
 APART_NOISE_SLACK = 1.25  # ... the outline then kept if no more than this × as noisy (an apple's: 2–4 ×)
 APART_MIN_DEG = 0.01  # ... and by this much of θ on the path's arm at least: a smaller wander is not worth a change
-WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
 ON_PATH_NOISE, ON_PATH_PX = 4.0, 0.3  # … its centre this near the usable frames' circle (× their noise, and px)
 OUTLINE_COLUMNS = ["outline_x_px", "outline_y_px", "outline_r_px", "outline_rays"]
 
@@ -242,11 +241,15 @@ def sharper_outline(colour: pd.DataFrame, brightness: pd.DataFrame) -> pd.DataFr
 
 
 def _taken_back(
-    track: pd.DataFrame, corrected: pd.DataFrame, seen: np.ndarray, noise_px: float, settings: TrackerSettings
+    track: pd.DataFrame,
+    corrected: pd.DataFrame,
+    seen: np.ndarray,
+    least_rays: float,
+    noise_px: float,
+    settings: TrackerSettings,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Frames usable again by their outline: (whole, part). *Whole*: frames the silhouette flagged ``occluded`` or
-    ``jump`` whose outline is seen as whole as in the usable frames (at least half the rays, and the
-    :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count, on its circle). *Part*: frames the silhouette found usable
+    """Frames usable again by their outline: (flagged, part). *Flagged*: frames the silhouette flagged ``occluded``
+    or ``jump`` whose limb is seen (``least_rays`` or more on its circle). *Part*: frames the silhouette found usable
     whose limb was seen in part (at least :data:`PART_LIMB_SHARE` of the rays on its circle, under the share that
     counts as seen: a print's light squares lost against the wall where they meet the limb). Either only where its
     outline centre keeps to the usable frames' path: within :data:`ON_PATH_NOISE` times its noise (and
@@ -257,17 +260,17 @@ def _taken_back(
     there).
 
     A silhouette's flag there is its own: its area or centroid changed (a two-tone ball's light half standing out where
-    the wall behind it darkens, seed 7149 of the body study: 1.35 times the area at one end of the swing), which does
-    not move a sphere's limb. A thing in front of the body or merged with it at half its contrast or more hides part
-    of the limb or bends it off the circle; one fainter (a soft shadow merged with it) can shift the limb by under the
-    circle's tolerance and the centre by up to 1.6 px (a reviewer's renders): only a shift across the path is seen
-    here, not one along it."""
+    the wall behind it darkens, seed 7149 of the body study: 1.35 times the area at one end of the swing; its dark half
+    lost against a dark band, 7411: 0.3 times, 40–70 of the rays on its limb), which does not move a sphere's limb. A
+    thing in front of the body hides part of the limb, whose rest still gives its circle; one merged with it at half its
+    contrast or more bends the limb off the circle (fewer rays on it, a centre off the path); one fainter (a soft shadow
+    merged with it) can shift the limb by under the circle's tolerance and the centre by up to 1.6 px (a reviewer's
+    renders): only a shift across the path is seen here, not one along it."""
     nothing = np.zeros(len(track), bool)
     if not seen.any():
         return nothing, nothing
     rays = track.outline_rays.to_numpy(float)
-    whole = max(LIMB_RAYS / 2, float(np.quantile(rays[seen], WHOLE_LIMB_QUANTILE)))
-    flagged = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= whole)
+    flagged = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= least_rays)
     part = (track.flag == "ok").to_numpy() & ~seen & (rays >= PART_LIMB_SHARE * LIMB_RAYS)
     candidates = flagged | part
     x, y = corrected.x_px.to_numpy(float), corrected.y_px.to_numpy(float)
@@ -314,7 +317,7 @@ def centres_apart(centroid: pd.DataFrame, outline: pd.DataFrame, both: np.ndarra
 def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = None) -> pd.DataFrame:
     """The track with its outline's centres where they make the better pendulum (module docstring), without the
     outline columns; ``attrs["body"]["centre"]``: what each gave and which was kept. Measured by its outline, the
-    frames the silhouette flagged for its area or centroid but whose limb is seen whole are usable again
+    frames the silhouette flagged for its area or centroid but whose limb is seen are usable again
     (:func:`_taken_back`, with ``settings``' jump test), and so are the usable frames whose limb was seen in part."""
     if OUTLINE_COLUMNS[0] not in track.columns:
         return track
@@ -382,7 +385,7 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
             f"{noise_outline:.2f} px): no better pendulum, by its silhouette's centroid"
         )
         return centroid
-    restored, in_part = _taken_back(track, on_path, seen, noise_outline, settings or TrackerSettings())
+    restored, in_part = _taken_back(track, on_path, seen, least_rays, noise_outline, settings or TrackerSettings())
     outline.loc[restored | in_part, "flag"] = "ok"
     unseen = int((ok & ~seen & ~in_part).sum())
     facts["by"] = "outline"
@@ -424,12 +427,12 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
         + (f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else "")
         + (
             f"; {int(restored.sum())} frames its silhouette flagged (its area or centroid changed) are usable by "
-            "their outline, seen whole"
+            "their outline, seen as a circle's"
             if restored.any()
             else ""
         )
     )
-    facts["whole_limb_frames"], facts["part_limb_frames"] = int(restored.sum()), int(in_part.sum())
+    facts["limb_seen_frames"], facts["limb_in_part_frames"] = int(restored.sum()), int(in_part.sum())
     outline.attrs = {**centroid.attrs, "body": {**centroid.attrs["body"], "centre": facts}}
     if "method" in outline.attrs:  # said where the method is
         method = outline.attrs["method"]
