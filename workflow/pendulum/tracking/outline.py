@@ -11,8 +11,10 @@ a circle through each frame's edge points, started from their enclosing circle a
 squares) to the points within :data:`ON_CIRCLE_PX` of it, and then the centre alone refitted (Gauss–Newton) at the
 clip's median radius, from that circle or, where it holds under half the rays (a crescent's may have nearly the
 radius and not the centre), from a vote, whichever holds more points: points inside the circle (a seam, the part
-that does not stand out) are left out, the limb kept. A frame whose circle holds fewer than :data:`MIN_LIMB_SHARE`
-of the rays did not show its limb (a sphere shows at least half of it whatever its markings).
+that does not stand out) are left out, the limb kept. A frame whose circle holds :data:`MIN_LIMB_SHARE` of the rays
+or more showed its limb (a sphere shows at least half of it whatever its markings); one that holds
+:data:`PART_LIMB_SHARE` showed it in part (a print's light squares lost against a wall of their grey), and is used
+only where the swing puts it (:func:`_taken_back`).
 
 A track measured by its colour is offered its brightness view's outline (:func:`sharper_outline`: the luma's limb,
 sharper than the chroma's). :func:`centre_by_outline` keeps the outline's centres where the measurement itself says
@@ -51,6 +53,9 @@ from pendulum.tracking.settings import TrackerSettings
 ON_CIRCLE_PX = (1.5, 1.0, 0.75)  # the successive fits' tolerances: |distance from the centre − radius|
 MIN_LIMB_SHARE = 1 / 3  # of the rays on its circle: its limb seen (a sphere shows at least half of it)
 CONFIRMED_LIMB_SHARE = 1 / 4  # … a brightness circle where the colour view's silhouette confirms its place
+WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
+ALONG_NOISE = 3.0  # … and where a swing fitted to them puts it, within this × the path's noise (and ON_PATH_PX)
+ALONG_WINDOW_S, ALONG_SIDE_FRAMES = 0.5, 4  # a frame taken back: the usable frames this near on both sides, and as many
 PART_LIMB_SHARE = 1 / 6  # … a limb seen in part, taken where its centre keeps to the path (outline._taken_back)
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 MIN_POINTS = 8  # edge points a circle is fitted to
@@ -251,32 +256,36 @@ def _taken_back(
     """Frames usable again by their outline: (flagged, part). *Flagged*: frames the silhouette flagged ``occluded``
     or ``jump`` whose limb is seen (``least_rays`` or more on its circle). *Part*: frames the silhouette found usable
     whose limb was seen in part (at least :data:`PART_LIMB_SHARE` of the rays on its circle, under the share that
-    counts as seen: a print's light squares lost against the wall where they meet the limb). Either only where its
+    counts as seen: a print's light squares lost against the wall where they meet the limb). Each only where its
     outline centre keeps to the usable frames' path: within :data:`ON_PATH_NOISE` times its noise (and
     :data:`ON_PATH_PX`) of the circle through them (``corrected``: the outline's path with the camera's creep taken
     out), and no jump (:func:`~pendulum.tracking.checks.flag_jumps` on the path with them) in a run of them or
-    within its stencil of one (a run of shifted frames makes its usable neighbours the jumps); before the first
-    usable frame or after the last, only where they move by over :data:`STILL_PX` a frame (a hand may hold it still
-    there).
+    within its stencil of one (a run of shifted frames makes its usable neighbours the jumps). A limb seen whole (half
+    the rays, and the :data:`WHOLE_LIMB_QUANTILE` of the usable frames' count) is taken so, before the first usable
+    frame or after the last only where it moves by over :data:`STILL_PX` a frame (a hand may hold it still there);
+    any other frame also where the swing puts it along the path (:func:`_along_the_path`).
 
     A silhouette's flag there is its own: its area or centroid changed (a two-tone ball's light half standing out where
     the wall behind it darkens, seed 7149 of the body study: 1.35 times the area at one end of the swing; its dark half
     lost against a dark band, 7411: 0.3 times, 40–70 of the rays on its limb), which does not move a sphere's limb. A
-    thing in front of the body hides part of the limb, whose rest still gives its circle; one merged with it at half its
-    contrast or more bends the limb off the circle (fewer rays on it, a centre off the path); one fainter (a soft shadow
-    merged with it) can shift the limb by under the circle's tolerance and the centre by up to 1.6 px (a reviewer's
-    renders): only a shift across the path is seen here, not one along it."""
+    thing in front of the body hides part of the limb, whose rest still gives its circle, or pulls the circle along
+    the swing (a reviewer's runs: a bump of 1–20 px that builds and recedes, a drift into frames whose limb is lost,
+    none taken back over 0.5 px off); one merged with it at half its contrast or more bends the limb off the circle
+    (fewer rays on it, a centre off the path); one fainter (a soft shadow merged with it) can shift a whole limb by
+    under the circle's tolerance and the centre by up to 1.6 px (a reviewer's renders), across the path seen here,
+    along it by under the jump test's 1 px only."""
     nothing = np.zeros(len(track), bool)
     if not seen.any():
         return nothing, nothing
     rays = track.outline_rays.to_numpy(float)
     flagged = track.flag.isin(["occluded", "jump"]).to_numpy() & (rays >= least_rays)
     part = (track.flag == "ok").to_numpy() & ~seen & (rays >= PART_LIMB_SHARE * LIMB_RAYS)
+    whole = flagged & (rays >= max(LIMB_RAYS / 2, float(np.quantile(rays[seen], WHOLE_LIMB_QUANTILE))))
     candidates = flagged | part
     x, y = corrected.x_px.to_numpy(float), corrected.y_px.to_numpy(float)
     order, free = np.arange(len(track)), np.flatnonzero(seen)
     for end in (order < free[0], order > free[-1]):  # before the first usable frame or after the last: swinging
-        steps = np.hypot(np.diff(x[end & candidates]), np.diff(y[end & candidates]))
+        steps = np.hypot(np.diff(x[end & whole]), np.diff(y[end & whole]))
         if not (steps.size and np.median(steps) > STILL_PX):  # held still there (a hand), or too short to tell
             candidates &= ~end
     if not candidates.any() or seen.sum() < MIN_POINTS or not math.isfinite(noise_px):
@@ -286,9 +295,63 @@ def _taken_back(
     runs, _ = label(candidates)
     candidates &= ~np.isin(runs, np.unique(runs[near_jump & (runs > 0)]))  # a run with a jump in or beside it
     cx, cy, radius = fit_circle(x[seen], y[seen])
+    tolerance = max(ON_PATH_NOISE * noise_px, ON_PATH_PX)
     with np.errstate(invalid="ignore"):
-        back = candidates & (np.abs(np.hypot(x - cx, y - cy) - radius) <= max(ON_PATH_NOISE * noise_px, ON_PATH_PX))
+        back = candidates & (np.abs(np.hypot(x - cx, y - cy) - radius) <= tolerance)
+    arc = radius * np.unwrap(np.arctan2(x - cx, y - cy))  # along the path (px); NaN where no centre
+    along = max(ALONG_NOISE * noise_px, ON_PATH_PX)
+    back &= whole | _along_the_path(arc, track.time_s.to_numpy(float), seen, back & ~whole, along)
     return back & flagged, back & part
+
+
+def _swing_rate(arc: np.ndarray, t: np.ndarray, seen: np.ndarray) -> float | None:
+    """The swing's angular frequency ω (rad/s) from the usable frames' place along the path: π per crossing of its
+    median between the first crossing and the last; None with fewer than three."""
+    at = np.flatnonzero(seen & np.isfinite(arc))
+    side = np.sign(arc[at] - np.median(arc[at]))
+    cross = np.flatnonzero(side[1:] * side[:-1] < 0)
+    if cross.size < 3:
+        return None
+    times = 0.5 * (t[at][cross] + t[at][cross + 1])
+    return math.pi * (cross.size - 1) / (times[-1] - times[0])
+
+
+def _swing_terms(tau: np.ndarray, omega: float) -> np.ndarray:
+    """The columns of s = a + b τ + (c + d τ) sin ωτ + (e + f τ) cos ωτ at times ``tau``: a swing whose amplitude and
+    phase drift."""
+    wave = np.column_stack([np.sin(omega * tau), np.cos(omega * tau)])
+    return np.column_stack([np.ones_like(tau), tau, wave, wave * tau[:, None]])
+
+
+def _along_the_path(arc: np.ndarray, t: np.ndarray, seen: np.ndarray, candidates: np.ndarray, tolerance: float):
+    """The ``candidates`` whose place along the path (``arc``, px) is where the usable frames on both sides put it:
+    a swing fitted to the ``seen`` frames within :data:`ALONG_WINDOW_S` before and after each run of them (at least
+    :data:`ALONG_SIDE_FRAMES` on each side; the run no longer than that window), s = a + b t + (c + d t) sin ωt +
+    (e + f t) cos ωt at the swing's own ω (:func:`_swing_rate`: its amplitude and phase free to drift), within
+    ``tolerance`` of them, and at the frame within ``tolerance``. A frame that a hand holds, or whose circle a thing
+    in front of it pulls along the swing, is not where the swing is."""
+    keep = np.zeros(len(arc), bool)
+    omega = _swing_rate(arc, t, seen)
+    if omega is None:
+        return keep
+    runs, n = label(candidates)
+    seen_at = np.flatnonzero(seen & np.isfinite(arc))
+    for run in range(1, n + 1):
+        inside = np.flatnonzero(runs == run)
+        start, end = t[inside[0]], t[inside[-1]]
+        if end - start > ALONG_WINDOW_S:
+            continue
+        before = seen_at[(t[seen_at] < start) & (t[seen_at] >= start - ALONG_WINDOW_S)]
+        after = seen_at[(t[seen_at] > end) & (t[seen_at] <= end + ALONG_WINDOW_S)]
+        if min(before.size, after.size) < ALONG_SIDE_FRAMES:
+            continue
+        around, middle = np.concatenate([before, after]), 0.5 * (start + end)
+        terms = _swing_terms(t[around] - middle, omega)
+        fitted, *_ = np.linalg.lstsq(terms, arc[around], rcond=None)
+        if np.sqrt(np.mean((terms @ fitted - arc[around]) ** 2)) > tolerance:
+            continue
+        keep[inside] = np.abs(_swing_terms(t[inside] - middle, omega) @ fitted - arc[inside]) <= tolerance
+    return keep
 
 
 def centres_apart(centroid: pd.DataFrame, outline: pd.DataFrame, both: np.ndarray) -> tuple[float, float]:
@@ -424,7 +487,11 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
             if in_part.any()
             else ""
         )
-        + (f"; {unseen} frames whose outline was not seen are flagged occluded" if unseen else "")
+        + (
+            f"; {unseen} frames whose outline was not seen (or seen in part off the swing) are flagged"
+            if unseen
+            else ""
+        )
         + (
             f"; {int(restored.sum())} frames its silhouette flagged (its area or centroid changed) are usable by "
             "their outline, seen as a circle's"
