@@ -42,7 +42,7 @@ import math
 import cv2
 import numpy as np
 import pandas as pd
-from scipy.ndimage import label, maximum_filter1d
+from scipy.ndimage import find_objects, label, maximum_filter1d
 
 from pendulum.tracking.arcs import fit_circle
 from pendulum.tracking.checks import JUMP_HALF_WINDOW, STILL_PX, flag_jumps
@@ -55,7 +55,9 @@ MIN_LIMB_SHARE = 1 / 3  # of the rays on its circle: its limb seen (a sphere sho
 CONFIRMED_LIMB_SHARE = 1 / 4  # … a brightness circle where the colour view's silhouette confirms its place
 WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
 ALONG_NOISE = 3.0  # … and where a swing fitted to them puts it, within this × the path's noise (and ON_PATH_PX)
-ALONG_WINDOW_S, ALONG_SIDE_FRAMES = 0.5, 4  # a frame taken back: the usable frames this near on both sides, and as many
+ALONG_RUN_S, ALONG_WINDOW_S, ALONG_SIDE_FRAMES = 0.25, 0.5, 4  # a run taken back: its length; the usable frames
+# this near on both sides, and as many in unbroken stretches of as many
+CROSSING_REACH = 0.2  # of the swing's reach (its 95th percentile): a crossing of the path's middle counted (ω)
 PART_LIMB_SHARE = 1 / 6  # … a limb seen in part, taken where its centre keeps to the path (outline._taken_back)
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
 MIN_POINTS = 8  # edge points a circle is fitted to
@@ -268,12 +270,12 @@ def _taken_back(
     A silhouette's flag there is its own: its area or centroid changed (a two-tone ball's light half standing out where
     the wall behind it darkens, seed 7149 of the body study: 1.35 times the area at one end of the swing; its dark half
     lost against a dark band, 7411: 0.3 times, 40–70 of the rays on its limb), which does not move a sphere's limb. A
-    thing in front of the body hides part of the limb, whose rest still gives its circle, or pulls the circle along
-    the swing (a reviewer's runs: a bump of 1–20 px that builds and recedes, a drift into frames whose limb is lost,
-    none taken back over 0.5 px off); one merged with it at half its contrast or more bends the limb off the circle
-    (fewer rays on it, a centre off the path); one fainter (a soft shadow merged with it) can shift a whole limb by
-    under the circle's tolerance and the centre by up to 1.6 px (a reviewer's renders), across the path seen here,
-    along it by under the jump test's 1 px only."""
+    thing in front of the body hides part of the limb, whose rest still gives its circle, or pulls the circle along the
+    swing (a reviewer's runs: a bump of 1–20 px that builds and recedes, a drift into frames whose limb is lost, none
+    taken back over 0.5 px off but where the usable frames beside them are as far off); one merged with it at half its
+    contrast or more bends the limb off the circle (fewer rays on it, a centre off the path); one fainter (a soft shadow
+    merged with it) can shift a whole limb by under the circle's tolerance and the centre by up to 1.6 px (a reviewer's
+    renders), across the path seen here, along it by under the jump test's 1 px only."""
     nothing = np.zeros(len(track), bool)
     if not seen.any():
         return nothing, nothing
@@ -298,7 +300,8 @@ def _taken_back(
     tolerance = max(ON_PATH_NOISE * noise_px, ON_PATH_PX)
     with np.errstate(invalid="ignore"):
         back = candidates & (np.abs(np.hypot(x - cx, y - cy) - radius) <= tolerance)
-    arc = radius * np.unwrap(np.arctan2(x - cx, y - cy))  # along the path (px); NaN where no centre
+    turn = np.arctan2(x - cx, y - cy) - math.atan2(float(np.nanmean(x[seen])) - cx, float(np.nanmean(y[seen])) - cy)
+    arc = radius * np.angle(np.exp(1j * turn))  # along the path from its middle (px; a pivot below too); NaN: no centre
     along = max(ALONG_NOISE * noise_px, ON_PATH_PX)
     back &= whole | _along_the_path(arc, track.time_s.to_numpy(float), seen, back & ~whole, along)
     return back & flagged, back & part
@@ -306,44 +309,59 @@ def _taken_back(
 
 def _swing_rate(arc: np.ndarray, t: np.ndarray, seen: np.ndarray) -> float | None:
     """The swing's angular frequency ω (rad/s) from the usable frames' place along the path: π per crossing of its
-    median between the first crossing and the last; None with fewer than three."""
+    median between the first crossing and the last, a crossing counted where the path goes from a fifth of its
+    swing's reach on one side to as far on the other (the noise of a swing dying to rest crosses nothing); None with
+    fewer than three."""
     at = np.flatnonzero(seen & np.isfinite(arc))
-    side = np.sign(arc[at] - np.median(arc[at]))
-    cross = np.flatnonzero(side[1:] * side[:-1] < 0)
-    if cross.size < 3:
+    if at.size < MIN_POINTS:
         return None
-    times = 0.5 * (t[at][cross] + t[at][cross + 1])
-    return math.pi * (cross.size - 1) / (times[-1] - times[0])
+    centred = arc[at] - np.median(arc[at])
+    reach = CROSSING_REACH * float(np.quantile(np.abs(centred), 0.95))
+    side, crossings = 0, []
+    for k in np.flatnonzero(np.abs(centred) > reach):
+        now = 1 if centred[k] > 0 else -1
+        if side and now != side:
+            crossings.append(t[at[k]])
+        side = now
+    if len(crossings) < 3:
+        return None
+    return math.pi * (len(crossings) - 1) / (crossings[-1] - crossings[0])
 
 
 def _swing_terms(tau: np.ndarray, omega: float) -> np.ndarray:
-    """The columns of s = a + b τ + (c + d τ) sin ωτ + (e + f τ) cos ωτ at times ``tau``: a swing whose amplitude and
-    phase drift."""
-    wave = np.column_stack([np.sin(omega * tau), np.cos(omega * tau)])
-    return np.column_stack([np.ones_like(tau), tau, wave, wave * tau[:, None]])
+    """The columns of s = a + b τ + Σ_{n = 1, 3} (cₙ + dₙ τ) sin nωτ + (eₙ + fₙ τ) cos nωτ at times ``tau`` (s, from
+    the middle of a run): a swing whose amplitude and phase drift, and its third harmonic (a large swing's)."""
+    columns = [np.ones_like(tau), tau]
+    for n in (1, 3):
+        wave = np.column_stack([np.sin(n * omega * tau), np.cos(n * omega * tau)])
+        columns += [wave, wave * tau[:, None]]
+    return np.column_stack(columns)
 
 
 def _along_the_path(arc: np.ndarray, t: np.ndarray, seen: np.ndarray, candidates: np.ndarray, tolerance: float):
-    """The ``candidates`` whose place along the path (``arc``, px) is where the usable frames on both sides put it:
-    a swing fitted to the ``seen`` frames within :data:`ALONG_WINDOW_S` before and after each run of them (at least
-    :data:`ALONG_SIDE_FRAMES` on each side; the run no longer than that window), s = a + b t + (c + d t) sin ωt +
-    (e + f t) cos ωt at the swing's own ω (:func:`_swing_rate`: its amplitude and phase free to drift), within
-    ``tolerance`` of them, and at the frame within ``tolerance``. A frame that a hand holds, or whose circle a thing
-    in front of it pulls along the swing, is not where the swing is."""
+    """The ``candidates`` whose place along the path (``arc``, px) is where the usable frames on both sides put it.
+    Per run of them no longer than :data:`ALONG_RUN_S`: the swing :func:`_swing_terms` at its own ω
+    (:func:`_swing_rate`) fitted to the ``seen`` frames within :data:`ALONG_WINDOW_S` before and after it that lie in
+    unbroken stretches of :data:`ALONG_SIDE_FRAMES` or more (a usable frame among flagged ones may share their fault),
+    at least that many on each side and the fit within ``tolerance`` of them (RMS); each frame of the run within
+    ``tolerance`` of it is kept. Across a run of 0.25 s the swing (its third harmonic included) is out by under a
+    tenth of a pixel on a 450 px arm swinging 0.6 rad. A frame that a hand holds, or whose circle a thing in front of
+    it pulls along the swing, is not where the swing is."""
     keep = np.zeros(len(arc), bool)
     omega = _swing_rate(arc, t, seen)
     if omega is None:
         return keep
-    runs, n = label(candidates)
-    seen_at = np.flatnonzero(seen & np.isfinite(arc))
-    for run in range(1, n + 1):
-        inside = np.flatnonzero(runs == run)
+    usable = seen & np.isfinite(arc)
+    stretches, _ = label(usable)
+    anchors = np.flatnonzero(usable & (np.bincount(stretches)[stretches] >= ALONG_SIDE_FRAMES))
+    times = t[anchors]
+    runs, _ = label(candidates)
+    for found in find_objects(runs):
+        inside = np.arange(found[0].start, found[0].stop)
         start, end = t[inside[0]], t[inside[-1]]
-        if end - start > ALONG_WINDOW_S:
-            continue
-        before = seen_at[(t[seen_at] < start) & (t[seen_at] >= start - ALONG_WINDOW_S)]
-        after = seen_at[(t[seen_at] > end) & (t[seen_at] <= end + ALONG_WINDOW_S)]
-        if min(before.size, after.size) < ALONG_SIDE_FRAMES:
+        before = anchors[np.searchsorted(times, start - ALONG_WINDOW_S) : np.searchsorted(times, start)]
+        after = anchors[np.searchsorted(times, end, "right") : np.searchsorted(times, end + ALONG_WINDOW_S, "right")]
+        if end - start > ALONG_RUN_S or min(before.size, after.size) < ALONG_SIDE_FRAMES:
             continue
         around, middle = np.concatenate([before, after]), 0.5 * (start + end)
         terms = _swing_terms(t[around] - middle, omega)
@@ -483,7 +501,7 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
     facts["why"] = (
         f"{evidence}{turns}, measured by its outline's centre"
         + (
-            f"; {int(in_part.sum())} frames whose limb was seen in part are usable by it (their centres on the path)"
+            f"; {int(in_part.sum())} frames whose limb was seen in part are usable by it (where the swing puts them)"
             if in_part.any()
             else ""
         )
