@@ -337,7 +337,7 @@ def test_usable_frames_whose_limb_was_seen_in_part_are_kept_where_their_centre_k
     facts = out.attrs["body"]["centre"]
     assert facts["by"] == "outline" and facts["limb_in_part_frames"] == 15 and facts["limb_seen_frames"] == 0, facts
     assert "15 frames whose limb was seen in part are usable" in facts["why"], facts
-    assert "100 frames whose outline was not seen (or seen in part off the swing) are flagged" in facts["why"], facts
+    assert "100 frames whose outline was not seen (or seen in part off the swing) are flagged occluded" in facts["why"]
     assert (out.flag[200:215] == "ok").all() and np.allclose(out.x_px[200:215], track.outline_x_px[200:215])
     assert (out.flag[300:360] == "occluded").all()
     assert (out.flag[400:410] == "occluded").all() and (out.flag[500:520] == "occluded").all()

@@ -54,9 +54,10 @@ ON_CIRCLE_PX = (1.5, 1.0, 0.75)  # the successive fits' tolerances: |distance fr
 MIN_LIMB_SHARE = 1 / 3  # of the rays on its circle: its limb seen (a sphere shows at least half of it)
 CONFIRMED_LIMB_SHARE = 1 / 4  # … a brightness circle where the colour view's silhouette confirms its place
 WHOLE_LIMB_QUANTILE = 0.1  # of the usable frames' rays on their circle: a limb seen as whole as theirs
-ALONG_NOISE = 3.0  # … and where a swing fitted to them puts it, within this × the path's noise (and ON_PATH_PX)
-ALONG_RUN_S, ALONG_WINDOW_S, ALONG_SIDE_FRAMES = 0.25, 0.5, 4  # a run taken back: its length; the usable frames
-# this near on both sides, and as many in unbroken stretches of as many
+ALONG_NOISE = 3.0  # a frame taken back along the path: within this × the path's noise (and ON_PATH_PX) of the swing
+ALONG_RUN_S = 0.25  # … in a run this long at most
+ALONG_WINDOW_S = 0.5  # … the swing fitted to the usable frames this near on each side
+ALONG_SIDE_FRAMES = 4  # … at least this many on each side, in unbroken stretches of as many
 CROSSING_REACH = 0.2  # of the swing's reach (its 95th percentile): a crossing of the path's middle counted (ω)
 PART_LIMB_SHARE = 1 / 6  # … a limb seen in part, taken where its centre keeps to the path (outline._taken_back)
 MIN_SEEN_SHARE = 0.9  # of the usable frames, with their limb seen, for the outline to be tried
@@ -272,10 +273,10 @@ def _taken_back(
     lost against a dark band, 7411: 0.3 times, 40–70 of the rays on its limb), which does not move a sphere's limb. A
     thing in front of the body hides part of the limb, whose rest still gives its circle, or pulls the circle along the
     swing (a reviewer's runs: a bump of 1–20 px that builds and recedes, a drift into frames whose limb is lost, none
-    taken back over 0.5 px off but where the usable frames beside them are as far off); one merged with it at half its
-    contrast or more bends the limb off the circle (fewer rays on it, a centre off the path); one fainter (a soft shadow
-    merged with it) can shift a whole limb by under the circle's tolerance and the centre by up to 1.6 px (a reviewer's
-    renders), across the path seen here, along it by under the jump test's 1 px only."""
+    taken back over 0.5 px off); one merged with it at half its contrast or more bends the limb off the circle (fewer
+    rays on it, a centre off the path); one fainter (a soft shadow merged with it) can shift a whole limb by under the
+    circle's tolerance and the centre by up to 1.6 px (a reviewer's renders), across the path seen here, along it by
+    under the jump test's 1 px only."""
     nothing = np.zeros(len(track), bool)
     if not seen.any():
         return nothing, nothing
@@ -343,9 +344,10 @@ def _along_the_path(arc: np.ndarray, t: np.ndarray, seen: np.ndarray, candidates
     Per run of them no longer than :data:`ALONG_RUN_S`: the swing :func:`_swing_terms` at its own ω
     (:func:`_swing_rate`) fitted to the ``seen`` frames within :data:`ALONG_WINDOW_S` before and after it that lie in
     unbroken stretches of :data:`ALONG_SIDE_FRAMES` or more (a usable frame among flagged ones may share their fault),
-    at least that many on each side and the fit within ``tolerance`` of them (RMS); each frame of the run within
-    ``tolerance`` of it is kept. Across a run of 0.25 s the swing (its third harmonic included) is out by under a
-    tenth of a pixel on a 450 px arm swinging 0.6 rad. A frame that a hand holds, or whose circle a thing in front of
+    at least that many on each side and twice the swing's terms in all, the fit within ``tolerance`` of them (RMS);
+    each frame of the run within ``tolerance`` of it is kept. Across a run of 0.25 s that swing is out by 0.13–0.29 px
+    at worst on arms of 450–900 px swinging 0.3–1 rad (the frames' noise, 0.08 px, included; across 0.5 s by up to
+    1 px). A frame that a hand holds, or whose circle a thing in front of
     it pulls along the swing, is not where the swing is."""
     keep = np.zeros(len(arc), bool)
     omega = _swing_rate(arc, t, seen)
@@ -365,6 +367,8 @@ def _along_the_path(arc: np.ndarray, t: np.ndarray, seen: np.ndarray, candidates
             continue
         around, middle = np.concatenate([before, after]), 0.5 * (start + end)
         terms = _swing_terms(t[around] - middle, omega)
+        if around.size < 2 * terms.shape[1]:  # twice the swing's terms: its fit to them a test of it
+            continue
         fitted, *_ = np.linalg.lstsq(terms, arc[around], rcond=None)
         if np.sqrt(np.mean((terms @ fitted - arc[around]) ** 2)) > tolerance:
             continue
@@ -506,7 +510,7 @@ def centre_by_outline(track: pd.DataFrame, settings: TrackerSettings | None = No
             else ""
         )
         + (
-            f"; {unseen} frames whose outline was not seen (or seen in part off the swing) are flagged"
+            f"; {unseen} frames whose outline was not seen (or seen in part off the swing) are flagged occluded"
             if unseen
             else ""
         )
