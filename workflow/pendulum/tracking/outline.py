@@ -340,15 +340,14 @@ def _swing_terms(tau: np.ndarray, omega: float) -> np.ndarray:
 
 
 def _along_the_path(arc: np.ndarray, t: np.ndarray, seen: np.ndarray, candidates: np.ndarray, tolerance: float):
-    """The ``candidates`` whose place along the path (``arc``, px) is where the usable frames on both sides put it.
-    Per run of them no longer than :data:`ALONG_RUN_S`: the swing :func:`_swing_terms` at its own ω
-    (:func:`_swing_rate`) fitted to the ``seen`` frames within :data:`ALONG_WINDOW_S` before and after it that lie in
-    unbroken stretches of :data:`ALONG_SIDE_FRAMES` or more (a usable frame among flagged ones may share their fault),
-    at least that many on each side and twice the swing's terms in all, the fit within ``tolerance`` of them (RMS);
-    each frame of the run within ``tolerance`` of it is kept. Across a run of 0.25 s that swing is out by 0.13–0.29 px
-    at worst on arms of 450–900 px swinging 0.3–1 rad (the frames' noise, 0.08 px, included; across 0.5 s by up to
-    1 px). A frame that a hand holds, or whose circle a thing in front of
-    it pulls along the swing, is not where the swing is."""
+    """The ``candidates`` whose place along the path (``arc``, px) is where the usable frames on both sides put it. Per
+    run of them no longer than :data:`ALONG_RUN_S`: the swing :func:`_swing_terms` at its own ω (:func:`_swing_rate`)
+    fitted to the ``seen`` frames within :data:`ALONG_WINDOW_S` before and after it that lie in unbroken stretches of
+    :data:`ALONG_SIDE_FRAMES` or more (a usable frame among flagged ones may share their fault), at least that many
+    on each side and twice the swing's terms in all, the fit within ``tolerance`` of them (RMS); each frame of the
+    run within ``tolerance`` of it is kept. Across a run of 0.25 s that swing is out by 0.13–0.29 px at worst on arms
+    of 450–900 px swinging 0.3–1 rad (the frames' noise, 0.08 px, included; across 0.5 s by up to 1 px). A frame that
+    a hand holds, or whose circle a thing in front of it pulls along the swing, is not where the swing is."""
     keep = np.zeros(len(arc), bool)
     omega = _swing_rate(arc, t, seen)
     if omega is None:
