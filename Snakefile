@@ -47,14 +47,14 @@ rule all:
         default_targets(),
 
 
-# After Snakemake's own lines, where a user reads last: the trials no variant fits, then the trials that failed
+# After Snakemake's own lines, where a user reads last: the raw folder's files that are no trial, the trials no variant fits, then the trials that failed
 # (one line each) or how many were ok and skipped, as the last job (check_trials) logged them in this run.
 from pendulum.outcomes import print_outcome  # noqa: E402
 
 
 onsuccess:
-    print_outcome("logs/status/check.log", RUN_STARTED_S)
+    print_outcome("logs/status/check.log", RUN_STARTED_S, PASSED_OVER)
 
 
 onerror:
-    print_outcome("logs/status/check.log", RUN_STARTED_S)
+    print_outcome("logs/status/check.log", RUN_STARTED_S, PASSED_OVER)

@@ -19,6 +19,7 @@ import yaml
 
 from conftest import DEMO_RAW, ROOT
 from pendulum.angles.record import InputError, angles_from_track, angles_from_tracker_csv, read_tracker_csv
+from pendulum.camera.raw_folder import discover_trials
 from pendulum.camera.video import VideoError, frame_timeline, iter_luma
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
@@ -31,7 +32,7 @@ from pendulum.synthetic.scene import draw_disk
 from pendulum.synthetic.specs import Camera, Occlusions, TrialSpec
 from pendulum.tracking.marker import track_video
 from pendulum.tracking.settings import TrackerSettings
-from pendulum.trials import ConfigError, discover_trials, trial_settings, validate_config
+from pendulum.trials import ConfigError, trial_settings, validate_config
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}

@@ -13,8 +13,9 @@ import yaml
 
 from conftest import ROOT
 from pendulum import io
+from pendulum.camera.raw_folder import discover_trials, passed_over, trial_name
 from pendulum.status import run_stage
-from pendulum.trials import ConfigError, discover_trials, trial_name, trial_settings, validate_config
+from pendulum.trials import ConfigError, trial_settings, validate_config
 
 CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
 
@@ -96,6 +97,44 @@ def test_files_with_spaces_and_brackets_are_trials_and_keep_their_own_names(tmp_
     assert trials["run_7_left"].path == str(tmp_path / "run 7 (left).mp4")
     assert trials["run_7_left"].sidecar == {"mass_kg": 3.6}  # its sidecar: the same file name, .yaml
     assert trials["table_exported"].kind == "angles"
+
+
+def test_a_raw_folder_that_is_missing_or_holds_no_trial_is_refused_naming_what_it_holds(tmp_path):
+    """A fresh-eyes user's runs (2026-12-07): `--config raw_dir=data/rawx` (no such folder) and a folder holding only
+    `apple.m4v` both ended "1 of 1 steps (100%) done", exit 0, nothing said, the previous run's report left standing
+    as if new."""
+    with pytest.raises(ConfigError, match=r"rawx: no such folder \(config raw_dir.*set raw_dir to the folder"):
+        discover_trials(tmp_path / "rawx")
+    (tmp_path / "notes.txt").write_text("swing 3 was bumped\n")
+    (tmp_path / "clip.m2ts").write_bytes(b"")
+    (tmp_path / ".DS_Store").write_bytes(b"")
+    with pytest.raises(
+        ConfigError,
+        match=r"no video \(\.mp4, .*\) or angle table \(\.csv\) in it \(passed over: "
+        r"clip\.m2ts, notes\.txt\); put the trials' files in it",
+    ):
+        discover_trials(tmp_path)
+
+
+def test_a_phones_camcorders_and_recorders_containers_are_videos_and_other_files_are_said_to_be_passed_over(
+    tmp_path, capsys
+):
+    """.m4v (a phone's export), .MTS (a camcorder's), .mkv and .webm (screen and webcam recorders), .3gp are read as
+    videos (the decoder reads each: tests/test_phone_files.py); a file that is none of a video, an angle table or a
+    sidecar is listed in the run's last lines, not dropped unsaid."""
+    from pendulum.outcomes import print_outcome
+
+    for name in ("IMG_0001.m4v", "00012.MTS", "take.mkv", "webcam.webm", "old.3gp", "run.mp4", "notes.txt", "a.mpg"):
+        (tmp_path / name).write_bytes(b"")
+    (tmp_path / "run.yaml").write_text("mass_kg: 0.18\n")
+    (tmp_path / "._run.mp4").write_bytes(b"\x00")
+    trials = discover_trials(tmp_path)
+    assert sorted(trials) == ["00012", "IMG_0001", "old", "run", "take", "webcam"]
+    assert {t.kind for t in trials.values()} == {"video"}
+    assert [p.name for p in passed_over(tmp_path)] == ["a.mpg", "notes.txt"]
+    print_outcome(tmp_path / "check.log", since_s=0, passed_over=passed_over(tmp_path))
+    err = capsys.readouterr().err
+    assert f"Passed over in {tmp_path.as_posix()} (no video or angle table by its extension): a.mpg, notes.txt" in err
 
 
 def test_two_files_giving_one_trial_name_are_refused_naming_both(tmp_path):

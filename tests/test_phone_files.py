@@ -85,12 +85,20 @@ def test_trimmed_clip_timeline_is_the_decoded_frames(tmp_path, monkeypatch):
 
 
 def write_frames(
-    path, frames, times_s=None, rate=30, codec="libx264", pix_fmt="yuv420p", rotation=None, ticks_per_s=90000
+    path,
+    frames,
+    times_s=None,
+    rate=30,
+    codec="libx264",
+    pix_fmt="yuv420p",
+    rotation=None,
+    ticks_per_s=90000,
+    container_format="mp4",
 ):
     """``frames`` written at ``times_s`` (every 1/``rate`` s when None), stamped in ticks of 1/``ticks_per_s`` s
-    (rounded to them)."""
+    (rounded to them), in a ``container_format`` container (FFmpeg's name)."""
     tick = Fraction(1, ticks_per_s)
-    with av.open(str(path), mode="w", format="mp4") as container:
+    with av.open(str(path), mode="w", format=container_format) as container:
         stream = container.add_stream(codec, rate=rate)
         stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], pix_fmt
         stream.codec_context.time_base = tick
@@ -224,3 +232,31 @@ def test_undecodable_video_data_fails_at_the_frames_stage_naming_the_file(tmp_pa
     (tmp_path / "noise.mp4").write_bytes(bytes(data))
     with pytest.raises(VideoError, match=r"noise\.mp4: no frame of its h264 video stream could be decoded .*copy"):
         frame_timeline(tmp_path / "noise.mp4")
+
+
+@pytest.mark.parametrize(
+    "name, container_format, codec",
+    [
+        ("phone.m4v", "ipod", "libx264"),
+        ("camcorder.MTS", "mpegts", "libx264"),
+        ("recorder.mkv", "matroska", "libx264"),
+        ("webcam.webm", "webm", "libvpx-vp9"),
+        ("old_phone.3gp", "3gp", "libx264"),
+    ],
+)
+def test_every_container_read_as_a_video_gives_its_frames_at_their_times(tmp_path, name, container_format, codec):
+    """The containers a trial may come in (pendulum.camera.video.VIDEO_EXTENSIONS) beyond .mp4, .mov and .avi: each
+    file's timeline is its frames, from 0 s at the rate written, and each frame's luma is the one written (a
+    transport stream's clock starts 2 frames in here: the times are from its first frame)."""
+    from pendulum.camera.video import VIDEO_EXTENSIONS
+
+    assert (tmp_path / name).suffix.lower() in VIDEO_EXTENSIONS
+    frames = moving_square(24)
+    write_frames(tmp_path / name, frames, rate=25, codec=codec, container_format=container_format)
+    info, timeline = frame_timeline(tmp_path / name)
+    decoded = [(t, y.copy()) for _, t, y in iter_luma(tmp_path / name)]
+    assert len(timeline) == len(decoded) == 24 and not info.variable_frame_rate
+    assert np.allclose(timeline.time_s, np.arange(24) / 25, atol=1e-6)
+    assert np.allclose([t for t, _ in decoded], timeline.time_s, atol=1e-9)
+    for (_, image), written in zip(decoded, frames, strict=True):
+        assert np.abs(image.astype(float) - limited_range(written)).max() <= 3.0

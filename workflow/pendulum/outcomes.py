@@ -272,8 +272,14 @@ def _recorded(row) -> str:
     return f" (its track and angle record stand: {frames}period {period:.4g} s as swung)"
 
 
-def print_outcome(log_path, since_s: float) -> None:
-    """The Snakefile's ``onsuccess`` and ``onerror``: :func:`outcome_logged` printed last, under a heading."""
+def print_outcome(log_path, since_s: float, passed_over: list | None = None) -> None:
+    """The Snakefile's ``onsuccess`` and ``onerror``: :func:`outcome_logged` printed last, under a heading, after
+    the raw folder's files that are no trial (``passed_over``: :func:`pendulum.camera.raw_folder.passed_over`), so
+    that a video in a container not read as one is not left out unsaid."""
+    if passed_over:
+        names = ", ".join(Path(p).name for p in passed_over)
+        folder = Path(passed_over[0]).parent.as_posix()
+        print(f"\nPassed over in {folder} (no video or angle table by its extension): {names}", file=sys.stderr)
     said = outcome_logged(log_path, since_s)
     if said:
         print(f"\nTrials ({Path(log_path).as_posix()}):\n{said}", file=sys.stderr)

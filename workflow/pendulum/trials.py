@@ -11,7 +11,6 @@ from pathlib import Path
 import jsonschema
 import yaml
 
-from pendulum.camera.video import VIDEO_EXTENSIONS
 from pendulum.model.rig import BUOYANCY_KEYS, RIG_VALUE_UNITS
 
 SCHEMA_DIR = Path(__file__).resolve().parents[1] / "schemas"
@@ -19,11 +18,8 @@ RIG_KEYS = tuple(RIG_VALUE_UNITS)  # every rig value a rig or sidecar may state
 GEOMETRY_KEYS = ("pivot_px", "vertical_deg")
 REQUIRED_RIG_KEYS = ("mass_kg", "length_m", "frontal_area_m2")  # a rig defined in a sidecar must give these
 TRACKING_KEYS = ("marker_radius_px", "polarity", "start_px", "method", "capture_fps")
-ANGLE_TABLE_EXTENSIONS = (".csv",)
-NOT_IN_A_NAME = re.compile(r"[^A-Za-z0-9_.+-]+")  # spaces, brackets, accents, …: each run becomes one _
 # a number as YAML 1.2 (and a person) writes it; PyYAML (YAML 1.1) leaves 5e-05 or 1e3 as text
 NUMBER_TEXT = re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$")
-RESERVED_NAMES = ("joint", "summary")  # file names of the aggregate fits
 
 
 class ConfigError(ValueError):
@@ -258,111 +254,6 @@ class Trial:
     path: str
     sidecar: dict = field(default_factory=dict)
     sidecar_path: str | None = None
-
-
-# Latin letters that Unicode does not decompose into a base letter and a mark
-LATIN_LETTERS = str.maketrans(
-    {
-        "ß": "ss",
-        "æ": "ae",
-        "Æ": "AE",
-        "ø": "o",
-        "Ø": "O",
-        "œ": "oe",
-        "Œ": "OE",
-        "þ": "th",
-        "Þ": "Th",
-        "ð": "d",
-        "Ð": "D",
-        "ł": "l",
-        "Ł": "L",
-        "đ": "d",
-        "Đ": "D",
-    }
-)
-SIDECAR_EXTENSIONS = (".yaml", ".yml")
-
-
-def trial_name(stem: str) -> str:
-    """The trial's name from its file's stem: accents dropped (``é`` → ``e``, ``ß`` → ``ss``), then every run of
-    characters other than letters, digits and ``_ . + -`` becomes one ``_``, and ``_ . + -`` at either end are
-    dropped (``run 7 (left)`` → ``run_7_left``, ``VID 2026-11-25 14.03`` → ``VID_2026-11-25_14.03``). Where
-    that drops letters or digits of another script (``опыт 1``), or leaves nothing, ``_`` and the first 8 hex
-    digits of the stem's SHA-1 are added, so different names stay different (``опыт 1`` → ``1_3f2a…``). The
-    name is used in results/ paths; the file keeps its own name (the status table and report show it)."""
-    import hashlib
-    import unicodedata
-
-    folded = unicodedata.normalize("NFKD", stem.translate(LATIN_LETTERS))
-    plain = "".join(c for c in folded if not unicodedata.combining(c))
-    name = NOT_IN_A_NAME.sub("_", plain).strip("_.+-")
-    lost = any(c.isalnum() and not c.isascii() for c in plain)  # letters or digits of another script
-    if lost or not name:
-        digest = hashlib.sha1(stem.encode("utf-8", "surrogateescape")).hexdigest()[:8]
-        name = f"{name}_{digest}" if name else f"trial_{digest}"
-    return name
-
-
-def _sidecar_of(path: Path, name: str) -> Path | None:
-    """The trial's sidecar: its file's name with .yaml (or .yml) for its extension or after it (``run1.yaml`` or
-    ``run1.mp4.yaml``), or its trial name with .yaml (or .yml); two of them refused naming both."""
-    candidates = [path.with_suffix(ext) for ext in SIDECAR_EXTENSIONS]
-    candidates += [path.with_name(path.name + ext) for ext in SIDECAR_EXTENSIONS]
-    candidates += [path.with_name(name + ext) for ext in SIDECAR_EXTENSIONS if name != path.stem]
-    found = [c for c in dict.fromkeys(candidates) if c.is_file()]
-    if len(found) > 1:
-        raise ConfigError(f"{found[0]} and {found[1]} are both sidecars of {path} (trial {name!r}); keep one of them")
-    return found[0] if found else None
-
-
-def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
-    """Every video (.mp4/.avi/.mov) and angle table (.csv) in ``raw_dir``, by trial name (:func:`trial_name`).
-
-    Hidden files (``.DS_Store``, macOS's ``._name.mp4`` copies) are not data and are passed over. Two files
-    whose trial names differ only in case are refused (they would be one file on macOS and Windows), as is a
-    sidecar that belongs to no trial (it would be silently ignored).
-    """
-    raw_dir = Path(raw_dir)
-    trials: dict[str, Trial] = {}
-    if not raw_dir.is_dir():
-        return trials
-    by_case: dict[str, str] = {}
-    used: set[Path] = set()
-    for path in sorted(raw_dir.iterdir()):
-        suffix = path.suffix.lower()
-        if path.name.startswith(".") or not path.is_file() or suffix not in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS:
-            continue
-        name = trial_name(path.stem)
-        if name.lower() in RESERVED_NAMES:
-            raise ConfigError(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
-        if name.lower() in by_case:
-            other = trials[by_case[name.lower()]]
-            raise ConfigError(
-                f"{path} and {other.path} both give trial {name!r} (a trial's name is its file name with spaces, "
-                "brackets and other signs made _, and names that differ only in case are one file on macOS and "
-                "Windows); rename one of them"
-            )
-        by_case[name.lower()] = name
-        kind = "video" if suffix in VIDEO_EXTENSIONS else "angles"
-        trial = Trial(name, kind, str(path))
-        sidecar = _sidecar_of(path, name)
-        if sidecar is not None:
-            trial.sidecar, trial.sidecar_path = read_sidecar(sidecar), str(sidecar)
-            used.add(sidecar)
-        trials[name] = trial
-    stray = [
-        p
-        for p in sorted(raw_dir.iterdir())
-        if p.suffix.lower() in SIDECAR_EXTENSIONS and p.is_file() and not p.name.startswith(".") and p not in used
-    ]
-    if stray:
-        raise ConfigError(
-            f"{stray[0]}: a sidecar of no trial (no video or angle table named {stray[0].stem} or with that trial "
-            "name), so it would be ignored; name it after its video, with .yaml for the video's extension or "
-            "after it (data/raw/run1.yaml or data/raw/run1.mp4.yaml for data/raw/run1.mp4), or move it out of "
-            "the raw folder"
-        )
-    return trials
 
 
 def split_skipped(trials: dict[str, Trial]) -> tuple[dict[str, Trial], dict[str, dict]]:

@@ -12,11 +12,11 @@ from pendulum.groups import (  # noqa: E402
     group_trial_rigs,
     group_trials,
 )
+from pendulum.camera.raw_folder import discover_trials, passed_over  # noqa: E402
 from pendulum.trials import (  # noqa: E402
     GEOMETRY_KEYS,
     RIG_KEYS,
     add_sidecar_rigs,
-    discover_trials,
     kept_geometry_trials,
     needs_rig_geometry,
     pooled_trials,
@@ -38,6 +38,7 @@ validate_config(
 
 # a sidecar's `skip: <why>` leaves its trial out of every job (listed as skipped, failing nothing)
 FOUND = discover_trials(config["raw_dir"])
+PASSED_OVER = passed_over(config["raw_dir"])  # said in the run's last lines (Snakefile)
 TRIALS, SKIPPED = split_skipped(FOUND)
 # rigs defined in sidecars join config["rigs"] (a skipped trial's sidecar too: its rig may be the others')
 SIDECAR_RIGS = add_sidecar_rigs(config, FOUND)

@@ -20,7 +20,9 @@ import pandas as pd
 
 from pendulum.camera.stamps import read_clock, regular_times
 
-VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov")
+# the containers a lab's cameras write: phones (.mov, .mp4, .m4v, .3gp), action cameras (.mp4), camcorders (.mts),
+# screen and webcam recorders (.mkv, .webm), older cameras (.avi); any of them decoded by FFmpeg (PyAV)
+VIDEO_EXTENSIONS = (".mp4", ".mov", ".m4v", ".avi", ".mkv", ".webm", ".mts", ".3gp")
 
 
 class VideoError(RuntimeError):

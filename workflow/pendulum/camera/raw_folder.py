@@ -1,0 +1,151 @@
+"""The raw folder: which of its files are trials (a video or an angle table), their names and their sidecars.
+
+A trial is named after its file (:func:`trial_name`); its sidecar is found beside it (:func:`_sidecar_of`); a file
+that is no trial and no sidecar is :func:`passed_over` (named in the run's last lines); a folder that is missing or
+holds no trial is refused (:func:`discover_trials`).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from pendulum.camera.video import VIDEO_EXTENSIONS
+from pendulum.trials import ConfigError, Trial, read_sidecar
+
+ANGLE_TABLE_EXTENSIONS = (".csv",)
+NOT_IN_A_NAME = re.compile(r"[^A-Za-z0-9_.+-]+")  # spaces, brackets, accents, …: each run becomes one _
+RESERVED_NAMES = ("joint", "summary")  # file names of the aggregate fits
+
+
+# Latin letters that Unicode does not decompose into a base letter and a mark
+LATIN_LETTERS = str.maketrans(
+    {
+        "ß": "ss",
+        "æ": "ae",
+        "Æ": "AE",
+        "ø": "o",
+        "Ø": "O",
+        "œ": "oe",
+        "Œ": "OE",
+        "þ": "th",
+        "Þ": "Th",
+        "ð": "d",
+        "Ð": "D",
+        "ł": "l",
+        "Ł": "L",
+        "đ": "d",
+        "Đ": "D",
+    }
+)
+SIDECAR_EXTENSIONS = (".yaml", ".yml")
+
+
+def trial_name(stem: str) -> str:
+    """The trial's name from its file's stem: accents dropped (``é`` → ``e``, ``ß`` → ``ss``), then every run of
+    characters other than letters, digits and ``_ . + -`` becomes one ``_``, and ``_ . + -`` at either end are
+    dropped (``run 7 (left)`` → ``run_7_left``, ``VID 2026-11-25 14.03`` → ``VID_2026-11-25_14.03``). Where
+    that drops letters or digits of another script (``опыт 1``), or leaves nothing, ``_`` and the first 8 hex
+    digits of the stem's SHA-1 are added, so different names stay different (``опыт 1`` → ``1_3f2a…``). The
+    name is used in results/ paths; the file keeps its own name (the status table and report show it)."""
+    import hashlib
+    import unicodedata
+
+    folded = unicodedata.normalize("NFKD", stem.translate(LATIN_LETTERS))
+    plain = "".join(c for c in folded if not unicodedata.combining(c))
+    name = NOT_IN_A_NAME.sub("_", plain).strip("_.+-")
+    lost = any(c.isalnum() and not c.isascii() for c in plain)  # letters or digits of another script
+    if lost or not name:
+        digest = hashlib.sha1(stem.encode("utf-8", "surrogateescape")).hexdigest()[:8]
+        name = f"{name}_{digest}" if name else f"trial_{digest}"
+    return name
+
+
+def _sidecar_of(path: Path, name: str) -> Path | None:
+    """The trial's sidecar: its file's name with .yaml (or .yml) for its extension or after it (``run1.yaml`` or
+    ``run1.mp4.yaml``), or its trial name with .yaml (or .yml); two of them refused naming both."""
+    candidates = [path.with_suffix(ext) for ext in SIDECAR_EXTENSIONS]
+    candidates += [path.with_name(path.name + ext) for ext in SIDECAR_EXTENSIONS]
+    candidates += [path.with_name(name + ext) for ext in SIDECAR_EXTENSIONS if name != path.stem]
+    found = [c for c in dict.fromkeys(candidates) if c.is_file()]
+    if len(found) > 1:
+        raise ConfigError(f"{found[0]} and {found[1]} are both sidecars of {path} (trial {name!r}); keep one of them")
+    return found[0] if found else None
+
+
+def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
+    """Every video (:data:`~pendulum.camera.video.VIDEO_EXTENSIONS`) and angle table (.csv) in ``raw_dir``, by trial
+    name (:func:`trial_name`).
+
+    Hidden files (``.DS_Store``, macOS's ``._name.mp4`` copies) are not data and are passed over. Two files
+    whose trial names differ only in case are refused (they would be one file on macOS and Windows), as is a
+    sidecar that belongs to no trial (it would be silently ignored), and a folder that is missing or holds no trial
+    (a run would build nothing and leave an earlier report standing); other files are :func:`passed_over`.
+    """
+    raw_dir = Path(raw_dir)
+    trials: dict[str, Trial] = {}
+    if not raw_dir.is_dir():
+        raise ConfigError(
+            f"{raw_dir}: no such folder (config raw_dir, the folder of the trials' videos and angle tables); "
+            "make it and put the videos in it, or set raw_dir to the folder that holds them"
+        )
+    by_case: dict[str, str] = {}
+    used: set[Path] = set()
+    for path in sorted(raw_dir.iterdir()):
+        suffix = path.suffix.lower()
+        if path.name.startswith(".") or not path.is_file() or suffix not in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS:
+            continue
+        name = trial_name(path.stem)
+        if name.lower() in RESERVED_NAMES:
+            raise ConfigError(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
+        if name.lower() in by_case:
+            other = trials[by_case[name.lower()]]
+            raise ConfigError(
+                f"{path} and {other.path} both give trial {name!r} (a trial's name is its file name with spaces, "
+                "brackets and other signs made _, and names that differ only in case are one file on macOS and "
+                "Windows); rename one of them"
+            )
+        by_case[name.lower()] = name
+        kind = "video" if suffix in VIDEO_EXTENSIONS else "angles"
+        trial = Trial(name, kind, str(path))
+        sidecar = _sidecar_of(path, name)
+        if sidecar is not None:
+            trial.sidecar, trial.sidecar_path = read_sidecar(sidecar), str(sidecar)
+            used.add(sidecar)
+        trials[name] = trial
+    stray = [
+        p
+        for p in sorted(raw_dir.iterdir())
+        if p.suffix.lower() in SIDECAR_EXTENSIONS and p.is_file() and not p.name.startswith(".") and p not in used
+    ]
+    if stray:
+        raise ConfigError(
+            f"{stray[0]}: a sidecar of no trial (no video or angle table named {stray[0].stem} or with that trial "
+            "name), so it would be ignored; name it after its video, with .yaml for the video's extension or "
+            "after it (data/raw/run1.yaml or data/raw/run1.mp4.yaml for data/raw/run1.mp4), or move it out of "
+            "the raw folder"
+        )
+    if not trials:  # a run would build nothing and say nothing, and an earlier report would stand as if new
+        others = passed_over(raw_dir)
+        raise ConfigError(
+            f"{raw_dir}: no video ({', '.join(VIDEO_EXTENSIONS)}) or angle table ({', '.join(ANGLE_TABLE_EXTENSIONS)}) "
+            "in it"
+            + (
+                f" (passed over: {', '.join(p.name for p in others[:5])}{', …' if len(others) > 5 else ''})"
+                if others
+                else ""
+            )
+            + "; put the trials' files in it, or set raw_dir to the folder that holds them"
+        )
+    return trials
+
+
+def passed_over(raw_dir: str | Path) -> list[Path]:
+    """The files in ``raw_dir`` that are neither a trial (a video or an angle table) nor a sidecar, hidden files
+    left out: a video in a container not read as one (its extension), or notes kept beside the videos."""
+    known = VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS + SIDECAR_EXTENSIONS
+    return [
+        p
+        for p in sorted(Path(raw_dir).iterdir())
+        if p.is_file() and not p.name.startswith(".") and p.suffix.lower() not in known
+    ]
