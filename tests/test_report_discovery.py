@@ -173,6 +173,16 @@ def test_named_effects_show_their_evidence_rms_shrink_and_coefficients_with_inte
     assert "Trials used: t1, t2; none left out." in html
 
 
+def test_a_coefficient_whose_interval_reaches_its_bound_is_given_as_the_summary_gives_it():
+    """A fresh-eyes user's apple in air (2026-12-07): the summary gave m_a 0.0026 [0, 0.0060] kg plain, "(reaches
+    0)", as docs/report.md says; discovery's final-model table gave it in bold, as a measurement."""
+    parameters = {"added_mass_kg": _entry(0.0026, 0.0, 0.0060), "drag_area_m2": _entry(0.0049, 0.0036, 0.0062)}
+    doc = _document(rounds=[{"model": ["quadratic_drag"], "candidates": []}], parameters=parameters)
+    table = D.parameters_table(doc)
+    assert "<b>0.0026" not in table and "[0.0000, 0.0060] (reaches 0)" in table
+    assert "<b>0.0049</b>" in table and "[0.0036, 0.0062]<" in table
+
+
 def test_unexplained_structure_is_said_with_the_residual_check_and_nothing_is_named():
     verdict = "unexplained: the residual (0.30° RMS) is 88× the noise floor and not white, and no candidate removes it"
     rejected = _evidence(
@@ -305,6 +315,11 @@ def test_the_extinction_caption_says_which_models_lines_lie_over_each_other():
     assert "Coulomb" not in note and "coulomb" not in note, note
     table["amplitude_loss_rad"] *= table.model.map({"quadratic_drag+linear_damping": 1.1}).fillna(1.0)
     assert "Lines that lie over each other" not in figures_html(document, _residuals(models), table, D._PLAIN)
+    # two models whose losses differ by 0.01 %: said so, not "at most 0.0 % apart" (a fresh-eyes user, 2026-12-07)
+    table = _extinction(models)
+    table["amplitude_loss_rad"] *= table.model.map({"quadratic_drag+linear_damping": 1.0001}).fillna(1.0)
+    text = html_module.unescape(figures_html(document, _residuals(models), table, D._PLAIN))
+    assert "linear (viscous) damping (under 0.05 % apart)" in text and "0.0 %" not in text
 
 
 @pytest.mark.parametrize("n_trials", [5, 7, 20])

@@ -25,6 +25,7 @@ from pendulum.report.format import (
     fmt,
     garbage_badge,
     is_finite,
+    reaches_bound,
     table_html,
     td,
 )
@@ -44,13 +45,6 @@ def _traded_against(name: str, warnings: list[str]) -> tuple[str, float] | None:
             other = found.group(2) if found.group(1) == name else found.group(1)
             return other, float(found.group(3))
     return None
-
-
-def reaches_bound(entry: dict) -> bool:
-    """Whether a coefficient's 95 % interval reaches its lower bound although the estimate is off it: the records
-    and rig values do not resolve it from that bound (the apple in air: m_a 0.00037 kg, interval [0, 0.0011])."""
-    low, bound = (entry.get("ci95") or [None])[0], entry.get("lower_bound")
-    return not entry.get("at_bound") and is_finite(low) and is_finite(bound) and float(low) <= float(bound)
 
 
 def unresolved_sentence(label: str, entry: dict) -> str:

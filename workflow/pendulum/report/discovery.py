@@ -19,7 +19,16 @@ from pendulum.discovery.findings import PATTERN_PLACE, part_name
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.report.data import ReportData, failure_text, is_ok, read_json, read_table
 from pendulum.report.discovery_figures import figures_html, model_key, model_label
-from pendulum.report.format import COEFFICIENTS, esc, estimate_parts, fmt, is_finite, table_html, td
+from pendulum.report.format import (
+    COEFFICIENTS,
+    esc,
+    estimate_parts,
+    fmt,
+    is_finite,
+    reaches_bound,
+    table_html,
+    td,
+)
 
 _PLAIN = lambda text: text  # noqa: E731  (a caption left unnumbered)
 
@@ -302,7 +311,11 @@ def parameters_table(document: dict, caption=_PLAIN, truth=None) -> str:
     for key, entry in parameters.items():
         value, qualifier = estimate_parts(entry)
         flag = " flagged" if entry.get("at_bound") or entry.get("identifiable") is False else ""
-        value, qualifier = f'<span class="v"><b>{esc(value)}</b></span>', f'<span class="v">{esc(qualifier)}</span>'
+        if reaches_bound(entry):  # not resolved from its bound: as the summary gives it, no bold
+            value, qualifier = esc(value), f"{esc(qualifier)} (reaches {fmt(entry['lower_bound'], 3)})"
+        else:
+            value, qualifier = f"<b>{esc(value)}</b>", esc(qualifier)
+        value, qualifier = f'<span class="v">{value}</span>', f'<span class="v">{qualifier}</span>'
         row = [td(coefficient_label(key)), td(value, "num" + flag), td(qualifier, "num" + flag)]
         row += [td(esc(truths[key] or "—"), "num truth")] if has_truth else []
         rows.append(row + [td(esc(entry.get("note") or entry.get("reason") or ""))])

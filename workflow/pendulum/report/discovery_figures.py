@@ -111,7 +111,9 @@ def _overlapping(document: dict, extinction: pd.DataFrame) -> str:
             apart = float(np.max(np.abs(np.log(ca.amplitude_loss_rad / cb.amplitude_loss_rad))))
             if apart <= math.log1p(OVERLAP):
                 label_a, label_b = esc(model_label(document, a)), esc(model_label(document, b))
-                pairs.append(f"{label_a} and {label_b} (at most {100 * math.expm1(apart):.1f} % apart)")
+                pct = 100 * math.expm1(apart)  # under 0.05 %: not "at most 0.0 % apart" (a new user's report)
+                within = f"at most {pct:.1f} % apart" if pct >= 0.05 else "under 0.05 % apart"
+                pairs.append(f"{label_a} and {label_b} ({within})")
     if not pairs:
         return ""
     return (
