@@ -229,6 +229,15 @@ def test_a_period_the_rig_values_cannot_give_is_named():
     weighed = {k: v for k, v in rig.items() if k != "displaced_volume_m3"} | {"submerged_mass_kg": 1.03}
     message = rig_period_problem(load_record(frame, "apple", weighed, FitSettings()), 2.06, 0.0)
     assert "(length_m 0.76, mass_kg 3.53, submerged_mass_kg 1.03, fluid_density_kg_m3 1000)" in message
+    assert "centimetres" not in message and "millimetres" not in message
+    # a length in centimetres (a fresh-eyes user's sidecar, 2026-12-07: `length_m: 104`): the unit asked about
+    air = {"mass_kg": 0.18, "frontal_area_m2": 0.0044, "fluid_density_kg_m3": 1.2}
+    for length, unit in ((104.0, "centimetres"), (1040.0, "millimetres")):
+        message = rig_period_problem(load_record(frame, "apple", air | {"length_m": length}, FitSettings()), 2.06, 0)
+        assert (
+            message
+            and f"length_m {length:.4g} is about {100 if unit[0] == 'c' else 1000} times that: in {unit}?" in message
+        )
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -226,8 +226,17 @@ def rig_period_problem(
         f"({fastest:.4g} s at small amplitude with the least added mass): its values (length_m {rig.length_m:.4g}, "
         f"mass_kg {rig.mass_kg:.4g}, {buoyancy}, fluid_density_kg_m3 "
         f"{rig.fluid_density_kg_m3:.4g}) are not this pendulum's (a simple pendulum of this period is "
-        f"{simple:.3g} m long); give the trial's rig in config or its sidecar"
+        f"{simple:.3g} m long){_length_unit_hint(rig.length_m, simple)}; give the trial's rig in config or its sidecar"
     )
+
+
+def _length_unit_hint(length_m: float, simple_m: float) -> str:
+    """'; length_m … is 100 times that: in centimetres?' where the stated length is a unit's factor (100: cm, 1000:
+    mm) times the simple pendulum's, within 25 % (a body's size and added mass lengthen the period); else ''."""
+    for factor, unit in ((100.0, "centimetres"), (1000.0, "millimetres")):
+        if simple_m > 0 and abs(math.log(length_m / (factor * simple_m))) <= math.log(1.25):
+            return f"; length_m {length_m:.4g} is about {factor:.0f} times that: in {unit}? (length_m is in metres)"
+    return ""
 
 
 MISFIT_RATIO = 5.0  # residual RMS over the record's sample-to-sample noise above which the model is called wrong
