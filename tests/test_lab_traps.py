@@ -111,7 +111,14 @@ def test_a_raw_folder_that_is_missing_or_holds_no_trial_is_refused_naming_what_i
     with pytest.raises(
         ConfigError,
         match=r"no video \(\.mp4, .*\) or angle table \(\.csv\) in it \(passed over: "
-        r"clip\.m2ts, notes\.txt\); put the trials' files in it",
+        r"clip\.m2ts, notes\.txt\); put the trials' files in it, or set raw_dir",
+    ):
+        discover_trials(tmp_path)
+    (tmp_path / "day 1").mkdir()  # videos sorted into folders: not read, and said so
+    (tmp_path / "day 1" / "run1.mp4").write_bytes(b"")
+    with pytest.raises(
+        ConfigError,
+        match=r"passed over: clip\.m2ts, notes\.txt, day 1/\); .* \(the files in its folders are not read\)",
     ):
         discover_trials(tmp_path)
 

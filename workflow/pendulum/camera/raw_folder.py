@@ -126,16 +126,15 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
             "the raw folder"
         )
     if not trials:  # a run would build nothing and say nothing, and an earlier report would stand as if new
-        others = passed_over(raw_dir)
+        folders = [f"{p.name}/" for p in sorted(raw_dir.iterdir()) if p.is_dir() and not p.name.startswith(".")]
+        others = [p.name for p in passed_over(raw_dir)] + folders
         raise ConfigError(
             f"{raw_dir}: no video ({', '.join(VIDEO_EXTENSIONS)}) or angle table ({', '.join(ANGLE_TABLE_EXTENSIONS)}) "
             "in it"
-            + (
-                f" (passed over: {', '.join(p.name for p in others[:5])}{', …' if len(others) > 5 else ''})"
-                if others
-                else ""
-            )
-            + "; put the trials' files in it, or set raw_dir to the folder that holds them"
+            + (f" (passed over: {', '.join(others[:5])}{', …' if len(others) > 5 else ''})" if others else "")
+            + "; put the trials' files in it"
+            + (" (the files in its folders are not read)" if folders else "")
+            + ", or set raw_dir to the folder that holds them"
         )
     return trials
 
