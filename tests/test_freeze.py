@@ -112,10 +112,12 @@ def test_the_manifest_covers_every_file_and_verifies_with_sha256sum(frozen):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def test_raw_input_hashes_are_those_of_the_raw_files(frozen, repo):
+def test_raw_input_hashes_are_those_of_the_raw_files_and_the_truth_files(frozen, repo):
+    """The truth files too: the frozen report shows the estimates beside them (until 2026-12-07 not hashed)."""
     folder, _ = frozen
     lines = dict(reversed(line.split("  ", 1)) for line in (folder / "raw_inputs.sha256").read_text().splitlines())
-    raw = sorted(p for p in (repo / "data/raw").rglob("*") if p.is_file())
+    raw = sorted(p for folder in ("data/raw", "data/truth") for p in (repo / folder).rglob("*") if p.is_file())
+    assert any("data/truth/" in str(p) for p in raw)
     assert sorted(lines) == [str(p.relative_to(repo)) for p in raw]
     for path in raw:
         assert lines[str(path.relative_to(repo))] == hashlib.sha256(path.read_bytes()).hexdigest()
@@ -197,6 +199,21 @@ def test_a_dirty_tree_is_refused_unless_allowed_and_then_marked(frozen, repo):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
+def test_a_tag_whose_folder_was_deleted_is_refused_by_the_workflow_and_the_freeze_says_what_to_cite(frozen, repo):
+    """The run's last lines name the folder and its manifest's SHA-256 (a fresh-eyes user found them only in the
+    log); deleting the folder and freezing its tag again is refused, non-zero (it was "Nothing to be done")."""
+    proc = run(["-c1", "freeze", "--config", "freeze_tag=t3"], repo)
+    folder = repo / "results/frozen/t3"
+    cited = hashlib.sha256((folder / MANIFEST).read_bytes()).hexdigest()
+    assert f"froze results/frozen/t3; cite it with the SHA-256 of its {MANIFEST}: {cited}" in proc.stderr
+    for path in folder.rglob("*"):
+        path.chmod(0o755 if path.is_dir() else 0o644)
+    shutil.rmtree(folder)
+    again = run(["-c1", "freeze", "--config", "freeze_tag=t3"], repo, check=False)
+    assert again.returncode != 0 and not folder.exists()
+    assert "freeze_tag t3 was frozen before (benchmarks/jobs/freeze/t3.tsv)" in again.stdout + again.stderr
+
+
 def test_a_freeze_needs_a_safe_tag(repo):
     missing = run(["-n", "freeze"], repo, check=False)
     assert missing.returncode != 0 and "freeze_tag=NAME" in missing.stdout + missing.stderr
@@ -237,13 +254,13 @@ def fake_workdir(root: Path) -> Path:
     return root
 
 
-def freeze_here(tag="x", results=("results/fits/summary.csv",), **kwargs):
+def freeze_here(tag="x", results=("results/fits/summary.csv",), raw_dir="data/raw", **kwargs):
     return freeze(
         tag=tag,
         results=list(results),
         lock_file="environment-lock.txt",
-        config={"raw_dir": "data/raw", "freeze_tag": tag},
-        raw_dir="data/raw",
+        config={"raw_dir": raw_dir, "freeze_tag": tag},
+        raw_dir=raw_dir,
         code_root=".",
         frozen_at=datetime(2024, 5, 6, 7, 8, 9, tzinfo=UTC),
         **kwargs,
@@ -347,3 +364,57 @@ def test_the_trials_sidecars_are_frozen_with_the_results(tmp_path, monkeypatch):
         assert (folder / f"data/raw/{name}.yaml").read_bytes() == (tmp_path / f"data/raw/{name}.yaml").read_bytes()
     assert json.loads((folder / "provenance.json").read_text())["sidecars"] == ["data/raw/a.yaml", "data/raw/b.yaml"]
     assert "data/raw/a.yaml" in (folder / MANIFEST).read_text() and sha256sum_check(folder, MANIFEST).returncode == 0
+    assert "| `data/raw/*.yaml` | each trial's sidecar as used" in (folder / "README.md").read_text()  # its guide too
+
+
+def test_a_tag_frozen_before_whose_folder_is_gone_is_refused_not_taken_as_done(tmp_path):
+    """A fresh-eyes user (2026-12-07) deleted results/frozen/v4 and froze v4 again: "Nothing to be done", exit 0, no
+    folder (the freeze rule's only file, its benchmark, was still there). A tag names one folder for good."""
+    record = tmp_path / "benchmarks/jobs/freeze/v4.tsv"
+    check_request("v4", True, tmp_path / "results/frozen", tmp_path, record=record)  # never frozen: fine
+    record.parent.mkdir(parents=True)
+    record.write_text("s\n1.0\n")
+    with pytest.raises(FreezeError, match=r"freeze_tag v4 was frozen before \(.*v4\.tsv\), but .*frozen/v4 is gone"):
+        check_request("v4", True, tmp_path / "results/frozen", tmp_path, record=record)
+
+
+def test_data_and_config_wherever_the_config_puts_them_leave_the_code_clean_and_are_hashed(tmp_path, monkeypatch):
+    """A fresh-eyes user's freezes (2026-12-07) were refused as dirty for `raw_dir: mydata`, a camera clip in
+    data/calibration/ (where docs/configuration.md puts it) and an untracked `--configfile run2.yaml`; and the
+    truth files the frozen report shows, and the clips, were never hashed."""
+    from pendulum.provenance import data_paths, git_state
+
+    work = fake_workdir(tmp_path)
+    monkeypatch.chdir(work)
+    (work / "code.py").write_text("x = 1\n")
+    git(work, "init", "-q")
+    git(work, "add", "code.py", "environment-lock.txt")
+    git(work, "commit", "-q", "-m", "code")
+    for path in ("mydata/run 1.mp4", "truth/run 1.yaml", "data/calibration/lens.mp4", "run2.yaml"):
+        (work / path).parent.mkdir(parents=True, exist_ok=True)
+        (work / path).write_text(path)
+    config = {
+        "raw_dir": "mydata",
+        "truth_dir": "truth",
+        "cameras": {"tank": {"calibration_video": "data/calibration/lens.mp4", "square_size_m": 0.02}},
+    }
+    data = data_paths(config, [str(work / "run2.yaml"), "/elsewhere/other.yaml"], work)
+    assert data == ("mydata", "truth", "data/calibration/lens.mp4", "run2.yaml")
+    assert git_state(work)["dirty_files"] == [
+        "data/calibration/lens.mp4",
+        "mydata/run 1.mp4",
+        "run2.yaml",
+        "truth/run 1.yaml",
+    ]
+    assert git_state(work, data)["dirty"] is False
+    check_request("v1", False, "results/frozen", work, data)  # not refused
+    (work / "code.py").write_text("x = 2\n")
+    with pytest.raises(FreezeError, match=r"differs from commit .* in code\.py: commit"):
+        check_request("v1", False, "results/frozen", work, data)
+    git(work, "checkout", "-q", "code.py")
+    folder, _ = freeze_here(tag="v1", raw_dir="mydata", data=data, inputs=("truth", "data/calibration/lens.mp4"))
+    hashed = [line.split("  ", 1)[1] for line in (folder / "raw_inputs.sha256").read_text().splitlines()]
+    assert hashed == ["data/calibration/lens.mp4", "mydata/run 1.mp4", "truth/run 1.yaml"]
+    assert sha256sum_check(work, folder / "raw_inputs.sha256").returncode == 0
+    doc = json.loads((folder / "provenance.json").read_text())
+    assert doc["dirty"] is False and doc["raw_inputs"]["also"] == ["truth", "data/calibration/lens.mp4"]

@@ -37,12 +37,16 @@ def _listed(paths: list[str]) -> str:
     return shown + (f" and {more} more" if more > 0 else "")
 
 
-def check_request(tag, allow_dirty: bool, frozen_dir: str | Path, code_root: str | Path) -> dict:
+def check_request(
+    tag, allow_dirty: bool, frozen_dir: str | Path, code_root: str | Path, data: tuple = (), record=None
+) -> dict:
     """Refuse a freeze before anything is built or touched; return the code's git state.
 
-    Refused: no tag or an unsafe one, a tag whose folder exists, a work tree whose code
-    differs from the commit (or no git work tree at all) unless ``allow_dirty``; data and
-    config.yaml may differ (``provenance.NOT_CODE``: the folder keeps the config as used).
+    Refused: no tag or an unsafe one, a tag whose folder exists, a tag frozen before whose folder is gone
+    (``record``, that freeze's benchmark file, still there: Snakemake would take the freeze as done and say
+    nothing), a work tree whose code differs from the commit (or no git work tree at all) unless ``allow_dirty``;
+    data and config may differ (``provenance.NOT_CODE`` and ``data``, :func:`pendulum.provenance.data_paths`:
+    the folder keeps the config as used and the data's hashes).
     """
     if tag is None or tag == "":
         raise FreezeError("the freeze target needs a name: snakemake -c1 freeze --config freeze_tag=NAME")
@@ -51,7 +55,12 @@ def check_request(tag, allow_dirty: bool, frozen_dir: str | Path, code_root: str
     folder = Path(frozen_dir) / tag
     if os.path.lexists(folder):
         raise FreezeError(f"{folder} already exists; a frozen folder is never overwritten: choose another freeze_tag")
-    git = git_state(code_root)
+    if record and os.path.exists(record):
+        raise FreezeError(
+            f"freeze_tag {tag} was frozen before ({record}), but {folder} is gone: a tag names one frozen folder "
+            f"for good; choose another freeze_tag, or delete {record} to freeze under this one again"
+        )
+    git = git_state(code_root, tuple(data))
     if allow_dirty:
         return git
     if git["commit"] is None:
@@ -72,9 +81,17 @@ def freeze_inputs(request: dict, results: list, excluded=()) -> list[str]:
     """The results a freeze copies (``results`` less ``excluded``, sorted), once `check_request` passes.
 
     The freeze rule's input function: a refused freeze stops while the DAG is built, so nothing runs.
-    ``request`` holds ``tag``, ``allow_dirty``, ``frozen_dir`` and ``code_root``.
+    ``request`` holds ``tag``, ``allow_dirty``, ``frozen_dir``, ``code_root``, ``data`` and ``record``
+    (:func:`check_request`).
     """
-    check_request(request["tag"], request["allow_dirty"], request["frozen_dir"], request["code_root"])
+    check_request(
+        request["tag"],
+        request["allow_dirty"],
+        request["frozen_dir"],
+        request["code_root"],
+        request.get("data", ()),
+        request.get("record"),
+    )
     return sorted({str(path) for path in results} - {str(path) for path in excluded})
 
 
@@ -94,11 +111,14 @@ def sha256sum_line(digest: str, name: str) -> str:
     return f"{digest}  {name}\n"
 
 
-def raw_input_hashes(raw_dir: str | Path) -> str:
-    """`sha256sum` lines of every file under the raw folder, named as seen from the workflow's directory."""
-    raw_dir = Path(raw_dir)
-    files = sorted(p for p in raw_dir.rglob("*") if p.is_file())
-    return "".join(sha256sum_line(sha256_file(p), p.as_posix()) for p in files)
+def raw_input_hashes(*paths: str | Path) -> str:
+    """`sha256sum` lines of every file under each of ``paths`` (a folder: the raw folder, the truth folder) or of
+    it (a file: a camera's clip), named as seen from the workflow's directory; a path that does not exist is
+    left out."""
+    files = set()
+    for path in map(Path, paths):
+        files |= {p for p in path.rglob("*") if p.is_file()} if path.is_dir() else {path} if path.is_file() else set()
+    return "".join(sha256sum_line(sha256_file(p), p.as_posix()) for p in sorted(files))
 
 
 def manifest(folder: str | Path) -> str:
@@ -198,6 +218,10 @@ def folder_readme(tag: str, provenance: dict, n_results: int) -> str:
     commit = git["commit"] or "unknown (not a git work tree)"
     dirty = " — DIRTY, see DIRTY" if git.get("dirty") or git["commit"] is None else ""
     where = f" of {git['repository']}" if git.get("repository") else ""
+    folders = sorted({Path(name).parent.as_posix() for name in provenance.get("sidecars") or []})
+    sidecars = "".join(
+        f"| `{folder}/*.yaml` | each trial's sidecar as used (its rig, values and settings) |\n" for folder in folders
+    )
     return f"""# Frozen results: {tag}
 
 Frozen {provenance["frozen_at_utc"]} from commit {commit}{where}{dirty}.
@@ -209,8 +233,8 @@ Verify every file: `sha256sum -c {MANIFEST}` in this folder. Verify the raw inpu
 | --- | --- |
 | `results/` | the {n_results} result files as the workflow wrote them (no frame images) |
 | `config.yaml` | the configuration as used (schema defaults filled in) |
-| `provenance.json` | commit, dirty flag, command, time of freezing, software, config SHA-256, trials |
-| `{RAW_HASHES}` | SHA-256 of every raw input file |
+{sidecars}| `provenance.json` | commit, dirty flag, command, time of freezing, software, config SHA-256, trials |
+| `{RAW_HASHES}` | SHA-256 of every input file: the raw folder's, the truth files', the camera clips' |
 | `environment-lock.txt` | the pinned environment of the commit (`pip install --require-hashes -r`) |
 | `installed-packages.txt` | every package installed when freezing |
 | `CITATION.cff` | how to cite this folder |
@@ -251,15 +275,19 @@ def freeze(
     frozen_at: datetime | None = None,
     log=None,
     sidecars: list[str] = (),
+    data: tuple = (),
+    inputs: tuple = (),
 ) -> tuple[Path, str]:
     """Write ``frozen_dir/tag/`` and return it with the SHA-256 of its manifest.
 
     ``results`` are paths relative to the workflow's directory (files or folders), copied to the
     same relative paths in the folder, and so are the trials' ``sidecars`` (each trial's rig, its own values and
-    settings, a skip and why: the configuration as used is config.yaml and these). Nothing named ``tag`` exists
+    settings, a skip and why: the configuration as used is config.yaml and these). ``data``: the paths whose
+    changes do not make the code dirty (:func:`pendulum.provenance.data_paths`); ``inputs``: the data files and
+    folders hashed beside the raw folder (the truth folder, the camera clips). Nothing named ``tag`` exists
     unless every file was written.
     """
-    git = check_request(tag, allow_dirty, frozen_dir, code_root)
+    git = check_request(tag, allow_dirty, frozen_dir, code_root, data)
     frozen_dir = Path(frozen_dir)
     frozen_at = (frozen_at or datetime.now(UTC)).astimezone(UTC)
     used = config_as_used(config)
@@ -281,7 +309,7 @@ def freeze(
         shutil.copyfile(lock_file, tmp / "environment-lock.txt")
         packages = installed_packages()
         (tmp / "installed-packages.txt").write_text("".join(f"{p}\n" for p in packages), encoding="utf-8")
-        (tmp / RAW_HASHES).write_text(raw_input_hashes(raw_dir), encoding="utf-8")
+        (tmp / RAW_HASHES).write_text(raw_input_hashes(raw_dir, *inputs), encoding="utf-8")
         header = (
             f"# Configuration as used for the frozen results {tag}: config.yaml and any --configfile/--config,\n"
             "# the schema's defaults filled in, the freeze's own keys left out. Its SHA-256 (canonical JSON,\n"
@@ -301,7 +329,11 @@ def freeze(
             "config_sha256": digest,
             "software": software(),
             "environment_lock_differences": lock_differences(lock_text, packages),
-            "raw_inputs": {"directory": Path(raw_dir).as_posix(), "hashes": RAW_HASHES},
+            "raw_inputs": {
+                "directory": Path(raw_dir).as_posix(),
+                "also": [Path(path).as_posix() for path in inputs],
+                "hashes": RAW_HASHES,
+            },
             "trials": trial_outcomes(status_table if status_table in names else None),
             "results": [name.as_posix() for name in names],
             "sidecars": [name.as_posix() for name in kept_sidecars],

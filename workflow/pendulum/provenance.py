@@ -35,7 +35,8 @@ CORE_PACKAGES = (
 )
 
 # Paths whose changes do not make a work tree "dirty": what the workflow writes, the user's
-# data (hashed separately when a result is frozen; truth files of synthetic trials are data too)
+# data (hashed when a result is frozen; truth files of synthetic trials are data too; wherever the config puts
+# them: data_paths)
 # and config.yaml (recorded as used, with its digest, in every report and frozen folder): a
 # researcher following README "Your own videos" edits these, not the code.
 NOT_CODE = ("results", "logs", ".snakemake", ".venv", "data/raw", "data/truth", "config.yaml")
@@ -101,12 +102,34 @@ def repository_url(remote: str | None) -> str | None:
     return remote[:-4] if remote.endswith(".git") else remote
 
 
-def git_state(root: str | Path = ".") -> dict:
+def data_paths(config: dict, configfiles=(), root: str | Path = ".") -> tuple[str, ...]:
+    """The user's data and configuration where the config puts them, as paths relative to ``root`` (those inside
+    it): ``raw_dir``, ``truth_dir``, each camera setup's clips and the configuration files (config.yaml and any
+    ``--configfile``). Like :data:`NOT_CODE`, changes there do not make the code dirty (a fresh-eyes user's
+    ``raw_dir: mydata``, a camera's clip in data/calibration/ and an untracked ``--configfile`` each refused a
+    freeze, 2026-12-07)."""
+    root = Path(root).resolve()
+    given = [config.get("raw_dir"), config.get("truth_dir")]
+    for setup in (config.get("cameras") or {}).values():
+        given += [(setup or {}).get("calibration_video"), (setup or {}).get("plane_video")]
+    given += list(configfiles)
+    out = []
+    for path in given:
+        if not path:
+            continue
+        try:
+            out.append((root / path).resolve().relative_to(root).as_posix())
+        except ValueError:  # outside the work tree: never in git's status
+            continue
+    return tuple(dict.fromkeys(p for p in out if p != "."))
+
+
+def git_state(root: str | Path = ".", data: tuple[str, ...] = ()) -> dict:
     """Commit, its UTC commit time, whether the code differs from it, and the repository's address.
 
     Outside a git work tree every field is None. `dirty_files` lists changed or untracked paths outside
     :data:`NOT_CODE` (results/, logs/, .snakemake/, .venv/, data/raw/, data/truth/ and config.yaml, which is
-    recorded as used, with its digest, instead). `repository` is the
+    recorded as used, with its digest, instead) and outside ``data`` (:func:`data_paths`). `repository` is the
     ``origin`` remote as a web address (:func:`repository_url`; None without one or for a local path).
     """
     root = Path(root)
@@ -118,7 +141,7 @@ def git_state(root: str | Path = ".") -> dict:
     dirty_files = sorted(
         path
         for path in (line[3:].split(" -> ")[-1].strip('"') for line in status.splitlines() if line.strip())
-        if not any(path == p or path.startswith(p + "/") for p in NOT_CODE)
+        if not any(path == p or path.startswith(p + "/") for p in NOT_CODE + tuple(data))
     )
     return {
         "commit": commit,

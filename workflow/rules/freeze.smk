@@ -3,12 +3,25 @@ import shlex
 from pendulum.freeze import freeze_inputs  # noqa: E402
 from pendulum.provenance import config_as_used  # noqa: E402
 
+FREEZE_BENCHMARK = (
+    f"benchmarks/jobs/freeze/{config.get('freeze_tag') or 'untagged'}.tsv"
+)
 FREEZE_REQUEST = {
     "tag": config.get("freeze_tag"),
     "allow_dirty": bool(config.get("freeze_allow_dirty", False)),
     "frozen_dir": "results/frozen",
     "code_root": workflow.basedir,
+    # the data and config wherever the config puts them: their changes are not the code's (provenance.data_paths)
+    "data": data_paths(config, workflow.configfiles, workflow.basedir),
+    # an earlier freeze of this tag whose folder is gone: refused, not taken as done (freeze.check_request)
+    "record": FREEZE_BENCHMARK,
 }
+# hashed beside the raw folder: the truth files and each camera setup's clips
+FREEZE_INPUTS = [config.get("truth_dir")] + [
+    setup.get(key)
+    for setup in (config.get("cameras") or {}).values()
+    for key in ("calibration_video", "plane_video")
+]
 # Not frozen: frame images (bulky; the contact sheets stay) and the run's all-ok flag
 # (a frozen folder may hold failed trials: results/status/trials.csv says which and why).
 NOT_FROZEN = ["results/status/all_trials_ok.txt"] + [
@@ -23,7 +36,8 @@ localrules:
 rule freeze:
     """Results, report, configuration as used, environment and provenance copied to
     results/frozen/<freeze_tag>/ with a SHA-256 manifest. No declared output, so Snakemake never
-    deletes a frozen folder: a taken tag, a missing one or a dirty tree is refused while the DAG is
+    deletes a frozen folder: a taken tag (or one frozen before whose folder is gone), a missing one or a
+    dirty tree is refused while the DAG is
     built (nothing runs); the script writes under a temporary name and renames."""
     input:
         results=lambda wildcards: freeze_inputs(
@@ -41,7 +55,7 @@ rule freeze:
     log:
         f"logs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.log",
     benchmark:
-        f"benchmarks/jobs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.tsv"
+        f"benchmarks/jobs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.tsv"  # = FREEZE_BENCHMARK
     threads: 1
     resources:
         mem_mb=500,
@@ -51,6 +65,7 @@ rule freeze:
         config=config_as_used(config),
         citation=config.get("citation"),
         raw_dir=config["raw_dir"],
+        inputs=[path for path in FREEZE_INPUTS if path],
         command=shlex.join(["snakemake", *sys.argv[1:]]),
     script:
         "../scripts/freeze.py"

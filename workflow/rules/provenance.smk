@@ -9,6 +9,7 @@ from pendulum.io import write_text  # noqa: E402
 from pendulum.provenance import (
     code_digest_text,
     config_digest,
+    data_paths,
     git_state,
     imported_modules,
     package_versions,
@@ -80,7 +81,9 @@ def code_digest(script):
 
 def report_provenance():
     """Commit (time, dirty flag), configuration digest and package versions; nothing time-dependent."""
-    git = git_state(workflow.basedir)
+    git = git_state(
+        workflow.basedir, data_paths(config, workflow.configfiles, workflow.basedir)
+    )
     return {
         "commit": git["commit"],
         "commit_time_utc": git["commit_time_utc"],
