@@ -832,13 +832,13 @@ def test_the_header_says_what_no_interval_holds_a_point_mass_and_the_rod(documen
     added mass, in no interval; the rod is not in the equation. Said where it applies, and not otherwise."""
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
     assert (
-        "They do not hold the equation's own form: the rod's (or string's) mass, buoyancy and drag are not in it."
-        in text
+        "They do not hold the equation's own form: m, B and the drag are the body's; the rod's (or string's) own mass, "
+        "buoyancy and drag are not in it." in text
     )
     assert "On rig rig no Ip (body_inertia_kg_m2) is stated: the body is a point mass, Ip = mL²" in text
     monkeypatch.setitem(documents.rigs["rig"]["values"], "body_inertia_kg_m2", 2.0)
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
-    assert "the rod's (or string's) mass" in text and "point mass" not in text
+    assert "the rod's (or string's) own mass" in text and "point mass" not in text
 
 
 def test_a_rig_weighed_in_its_fluid_shows_its_submerged_mass_and_the_volume_it_gives(documents, monkeypatch):

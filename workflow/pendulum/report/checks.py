@@ -305,8 +305,8 @@ class CheckSections(ReportData):
             else ""
         )
         return (
-            " They do not hold the equation's own form: the rod's (or string's) mass, buoyancy and drag are not in it."
-            + where
+            " They do not hold the equation's own form: m, B and the drag are the body's; the rod's (or string's) own "
+            "mass, buoyancy and drag are not in it." + where
         )
 
     def calibration_table(self) -> str:
