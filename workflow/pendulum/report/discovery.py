@@ -328,8 +328,9 @@ def parameters_table(document: dict, caption=_PLAIN, truth=None) -> str:
         rows,
         caption=caption(
             f"Final model ({esc(terms)}): coefficients with 95 % intervals (statistical and systematic parts "
-            "combined, as in the fits); a coefficient at its lower bound is given as the bound with its one-sided "
-            "upper limit."
+            "combined, as in the fits, but not widened by the joint fits' consistency scale factor S: where the "
+            "trials disagree beyond their intervals, the summary's joint-fit intervals are the wider, and they "
+            "stand); a coefficient at its lower bound is given as the bound with its one-sided upper limit."
         ),
         table_id=f"discovery-parameters-{document.get('group', '')}",
     )
