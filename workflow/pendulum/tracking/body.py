@@ -462,7 +462,7 @@ def track_body(
     free = order[usable]
     with_more = np.isin(flags, ("occluded", "edge")) & (mass > MAX_AREA_RATIO * own)
     flags[with_more & ((order < free[0]) | (order > free[-1]) if free.size else with_more)] = "held"
-    jumps = flag_jumps(x, y, usable, settings)
+    jumps = flag_jumps(x, y, usable, settings, table.time_s.to_numpy())
     flags[jumps & usable] = "jump"
     table["flag"] = flags
     counts = table.flag.value_counts().to_dict()

@@ -229,7 +229,7 @@ def track_by_look(path, settings: TrackerSettings, refused: pd.DataFrame, scene,
     flags[measured & (1.0 - rho > MISFIT_RATIO * max(misfit, 1e-4))] = "occluded"
     px, py = table.x_px.to_numpy(float), table.y_px.to_numpy(float)
     usable = flags == "ok"
-    flags[flag_jumps(px, py, usable, settings) & usable] = "jump"
+    flags[flag_jumps(px, py, usable, settings, table.time_s.to_numpy()) & usable] = "jump"
     table["flag"] = flags
     reference_rho = float(np.median(rho[flags == "ok"])) if (flags == "ok").any() else 1.0
     table["quality"] = table["signal_ratio"] = rho / reference_rho

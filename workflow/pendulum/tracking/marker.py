@@ -495,7 +495,7 @@ def track_video(
         )
     signal.finish(table)  # the first frames' ratios; frames flagged for their signal alone judged again
     usable = (table.flag == "ok").to_numpy()
-    jumps = flag_jumps(table.x_px.to_numpy(), table.y_px.to_numpy(), usable, settings)
+    jumps = flag_jumps(table.x_px.to_numpy(), table.y_px.to_numpy(), usable, settings, table.time_s.to_numpy())
     table.loc[jumps, "flag"] = "jump"
     exposure = settings.exposure_fraction
     if settings.centroid == "linear" and len(table):

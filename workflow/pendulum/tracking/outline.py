@@ -293,7 +293,7 @@ def _taken_back(
             candidates &= ~end
     if not candidates.any() or seen.sum() < MIN_POINTS or not math.isfinite(noise_px):
         return nothing, nothing
-    jumps = flag_jumps(x, y, seen | candidates, settings)
+    jumps = flag_jumps(x, y, seen | candidates, settings, track.time_s.to_numpy())
     near_jump = maximum_filter1d(jumps.astype(np.uint8), 2 * JUMP_HALF_WINDOW + 1) > 0
     runs, _ = label(candidates)
     candidates &= ~np.isin(runs, np.unique(runs[near_jump & (runs > 0)]))  # a run with a jump in or beside it
