@@ -250,12 +250,15 @@ def test_crossing_period_of_a_record_that_runs_to_rest(fps):
 
 def test_a_record_without_a_release_is_labelled_by_its_first_turning_point():
     """The † angle: a record that starts just past a turning point (the apple clip: −22.06°, then +22.07°) starts at
-    it, as a release would; one that starts mid-swing takes the first turning point it reaches."""
+    it, as a release would; one that starts mid-swing takes the first turning point it reaches, also where it starts
+    on its way back from a turning point out of view (a fresh-eyes user's clip cropped at one end, 2026-12-07: at
+    0.91 of the amplitude, moving at 0.42 of the top speed, it was labelled by its first sample, −18.5°)."""
     from pendulum.angles.record import angle_record
 
     t = np.arange(0, 10, 1 / 60)
     flags = np.full(t.size, "ok", dtype=object)
-    for phase, side in ((0.05, 1), (math.pi + 0.05, -1), (-math.pi / 2, 1), (math.pi / 2, -1)):
+    cases = ((0.05, 1), (math.pi + 0.05, -1), (-math.pi / 2, 1), (math.pi / 2, -1), (0.43, -1), (math.pi + 0.43, 1))
+    for phase, side in cases:
         theta = 0.38 * np.cos(2 * math.pi * t / 2.078 + phase)
         _, info = angle_record(t, theta, np.ones(t.size), flags, vertical_deg=0.0, length_m=1.0, source="x")
         assert not info.release_detected

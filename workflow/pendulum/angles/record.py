@@ -165,9 +165,30 @@ def angle_record(
         start = table.theta_deg.dropna()
         start = float(start.iloc[0]) if len(start) else first
         # a record that starts just past a turning point on the other side (the apple clip: −22.06°, then +22.07°)
-        # starts at that turning point, as a release would
-        info.first_extremum_deg = start if start * first < 0 and abs(start) > 0.5 * abs(first) else first
+        # starts at that turning point, as a release would; one that starts on its way back from a turning point
+        # out of view (a fresh-eyes user's clip cropped at one end: −18.5°, moving at 40 % of the swing's speed)
+        # takes the first turning point it reaches
+        at_rest = _starts_slowly(table, first, info.period_s)
+        info.first_extremum_deg = start if start * first < 0 and abs(start) > 0.5 * abs(first) and at_rest else first
     return table, info
+
+
+START_SPEED_SHARE = 0.25  # of the swing's top speed ω|θ_max|: a record starting slower starts at a turning point
+
+
+def _starts_slowly(table: pd.DataFrame, first_deg: float, period_s: float | None) -> bool:
+    """Whether the record's first samples move at under :data:`START_SPEED_SHARE` of the swing's top speed
+    (2π/T)|θ₁|, θ₁ its first turning point: the slope at the first sample of a parabola through the samples of the
+    first twelfth of a period (at least three). True where the period is not known (no speed to compare)."""
+    if period_s is None or not math.isfinite(period_s) or period_s <= 0:
+        return True
+    seen = table.dropna(subset=["theta_deg"])
+    t, theta = seen.time_s.to_numpy(float), seen.theta_deg.to_numpy(float)
+    n = max(3, int(np.searchsorted(t, t[0] + period_s / 12, side="right"))) if t.size else 0
+    if t.size < 3:
+        return True
+    slope = np.polyfit(t[:n] - t[0], theta[:n], 2 if n >= 4 else 1)[-2]  # dθ/dt at the first sample
+    return abs(slope) < START_SPEED_SHARE * 2 * math.pi / period_s * abs(first_deg)
 
 
 def record_digest(table: pd.DataFrame) -> str:
