@@ -44,7 +44,7 @@ localrules:
 rule all:
     default_target: True
     input:
-        default_targets(),
+        lambda wildcards: default_targets(),  # asked for here alone (an empty raw folder stops it)
 
 
 # After Snakemake's own lines, where a user reads last: the raw folder's files that are no trial, the trials no variant fits, then the trials that failed

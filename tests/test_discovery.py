@@ -72,6 +72,7 @@ def test_demo_discovery_names_the_hidden_effects_and_covers_the_truth(demo_proje
     # each reused fit's warning says which fit it is of: a trial's residual differs between its own and the joint fit
     warned = doc["baseline"]["fit_warnings"]
     assert warned and all(w.startswith(("fit of demo_", "joint fit of paper_rig: trial demo_")) for w in warned), warned
+    assert not any(w.startswith("fit of ") and ": trial demo_" in w for w in warned), warned  # named once
     truths = [yaml.safe_load((DEMO_TRUTH / f"{t}.yaml").read_text()) for t in sorted(demo_trials())]
     truth = truths[0]["truth"]
     assert all(t["truth"] == truth for t in truths)

@@ -4,6 +4,7 @@ import copy
 import errno
 import logging
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -99,28 +100,34 @@ def test_files_with_spaces_and_brackets_are_trials_and_keep_their_own_names(tmp_
     assert trials["table_exported"].kind == "angles"
 
 
-def test_a_raw_folder_that_is_missing_or_holds_no_trial_is_refused_naming_what_it_holds(tmp_path):
+def test_a_raw_folder_that_is_missing_or_holds_no_trial_is_said_naming_what_it_holds(tmp_path):
     """A fresh-eyes user's runs (2026-12-07): `--config raw_dir=data/rawx` (no such folder) and a folder holding only
     `apple.m4v` both ended "1 of 1 steps (100%) done", exit 0, nothing said, the previous run's report left standing
-    as if new."""
-    with pytest.raises(ConfigError, match=r"rawx: no such folder \(config raw_dir.*set raw_dir to the folder"):
-        discover_trials(tmp_path / "rawx")
+    as if new. The plain run's target now stops with this (tests/test_workflow.py); a camera's calibration, which
+    needs no trial, is not stopped (a reviewer)."""
+    from pendulum.camera.raw_folder import raw_folder_problem
+
+    assert discover_trials(tmp_path / "rawx") == {} and passed_over(tmp_path / "rawx") == []
+    problem = raw_folder_problem(tmp_path / "rawx", {})
+    assert re.search(r"rawx: no such folder \(config raw_dir.*set raw_dir to the folder", problem), problem
+    (tmp_path / "a file").write_text("")
+    assert "a file: a file, not a folder" in raw_folder_problem(tmp_path / "a file", {})
     (tmp_path / "notes.txt").write_text("swing 3 was bumped\n")
     (tmp_path / "clip.m2ts").write_bytes(b"")
     (tmp_path / ".DS_Store").write_bytes(b"")
-    with pytest.raises(
-        ConfigError,
-        match=r"no video \(\.mp4, .*\) or angle table \(\.csv\) in it \(passed over: "
-        r"clip\.m2ts, notes\.txt\); put the trials' files in it, or set raw_dir",
-    ):
-        discover_trials(tmp_path)
+    assert discover_trials(tmp_path) == {}
+    problem = raw_folder_problem(tmp_path, discover_trials(tmp_path))
+    assert re.search(
+        r"no video \(\.mp4, .*\) or angle table \(\.csv\) in it \(passed over: a file, clip\.m2ts, notes\.txt\); put "
+        r"the trials' files in it, or set raw_dir",
+        problem,
+    ), problem
     (tmp_path / "day 1").mkdir()  # videos sorted into folders: not read, and said so
     (tmp_path / "day 1" / "run1.mp4").write_bytes(b"")
-    with pytest.raises(
-        ConfigError,
-        match=r"passed over: clip\.m2ts, notes\.txt, day 1/\); .* \(the files in its folders are not read\)",
-    ):
-        discover_trials(tmp_path)
+    problem = raw_folder_problem(tmp_path, discover_trials(tmp_path))
+    assert re.search(r"notes\.txt, day 1/\); .* \(the files in its folders are not read\)", problem), problem
+    (tmp_path / "run1.mp4").write_bytes(b"")
+    assert raw_folder_problem(tmp_path, discover_trials(tmp_path)) is None
 
 
 def test_a_phones_camcorders_and_recorders_containers_are_videos_and_other_files_are_said_to_be_passed_over(

@@ -204,8 +204,12 @@ def test_frames_beside_frames_the_camera_dropped_are_judged_on_its_frame_clock(s
     x = 320 + 500 * np.sin(angle) + rng.normal(0, 0.05, t.size)
     y = -300 + 500 * np.cos(angle) + rng.normal(0, 0.05, t.size)
     usable = np.ones(t.size, bool)
-    assert np.array_equal(frame_slots(t + 0.003 * rng.uniform(-1, 1, t.size) / 60), slots[kept])
+    # a phone's stamps jitter (±2 ms at 60 fps): the clock is fitted to the steps' whole frames (a reviewer: on the
+    # median step alone, ±0.5 ms lost the slots of most clips)
+    for jitter_s in (0.0005, 0.002):
+        assert np.array_equal(frame_slots(t + rng.uniform(-jitter_s, jitter_s, t.size)), slots[kept])
     assert frame_slots(np.arange(100) / 60.0) is None  # no gap: the index is the clock
+    assert frame_slots(np.append(np.arange(100) / 60.0, 1e6 / 60)) is None  # a stray stamp far out: no clock
     assert flag_jumps(x, y, usable, TrackerSettings()).sum() >= 3  # the index's stencil across the gaps
     assert not flag_jumps(x, y, usable, TrackerSettings(), t).any()
     beside = int(np.flatnonzero(np.diff(t) > 1.5 / 60)[4]) + 1  # the first frame after a gap

@@ -186,3 +186,27 @@ def test_style_and_lint():
     lint = run(["--lint"], ROOT, check=False)
     found = {line.strip() for line in (lint.stdout + lint.stderr).splitlines() if line.strip().startswith("* ")}
     assert found <= {"* Specify a conda environment or container for each rule.:"}, found
+
+
+@pytest.mark.slow
+def test_a_plain_run_on_an_empty_raw_folder_stops_saying_so_and_a_calibration_still_plans(tmp_path):
+    """A fresh-eyes user's `--config raw_dir=data/rawx` and a folder of `.m4v` files (read as videos since) ended
+    "1 of 1 steps (100%) done", exit 0, the last report left standing; now the plain run stops naming the folder.
+    A camera's calibration needs no trial: planned as before (a reviewer)."""
+    from workflow_run import copy_project
+
+    work = copy_project(tmp_path / "p", raw_files=[])
+    (work / "data/raw/notes.txt").write_text("swing 3 was bumped\n")
+    for args in (["-n"], ["-n", "--config", "raw_dir=data/rawx"]):
+        proc = run(args, work, check=False)
+        out = proc.stdout + proc.stderr
+        assert proc.returncode != 0 and "set raw_dir to the folder that holds them" in out, out[-2000:]
+    empty = run(["-n"], work, check=False)
+    assert "data/raw: no video (.mp4" in empty.stdout + empty.stderr and "passed over: notes.txt" in empty.stdout
+    (work / "data/calibration").mkdir(parents=True)
+    (work / "data/calibration/tank_cam.mp4").write_bytes(b"")  # a dry run reads no video
+    config = yaml.safe_load((work / "config.yaml").read_text())
+    config["cameras"] = {"tank_cam": {"calibration_video": "data/calibration/tank_cam.mp4", "square_size_m": 0.025}}
+    (work / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+    planned = planned_jobs(run(["-n", "results/calibration/tank_cam.json"], work).stdout)
+    assert ("calibrate_camera", None) in planned

@@ -11,6 +11,7 @@ import ast
 import copy
 import hashlib
 import json
+import os
 import platform
 import re
 import subprocess
@@ -108,7 +109,7 @@ def data_paths(config: dict, configfiles=(), root: str | Path = ".") -> tuple[st
     ``--configfile``). Like :data:`NOT_CODE`, changes there do not make the code dirty (a fresh-eyes user's
     ``raw_dir: mydata``, a camera's clip in data/calibration/ and an untracked ``--configfile`` each refused a
     freeze, 2026-12-07)."""
-    root = Path(root).resolve()
+    root = os.path.abspath(root)
     given = [config.get("raw_dir"), config.get("truth_dir")]
     for setup in (config.get("cameras") or {}).values():
         given += [(setup or {}).get("calibration_video"), (setup or {}).get("plane_video")]
@@ -117,11 +118,11 @@ def data_paths(config: dict, configfiles=(), root: str | Path = ".") -> tuple[st
     for path in given:
         if not path:
             continue
-        try:
-            out.append((root / path).resolve().relative_to(root).as_posix())
-        except ValueError:  # outside the work tree: never in git's status
-            continue
-    return tuple(dict.fromkeys(p for p in out if p != "."))
+        # as git names it: the path itself, not where a link points (a raw folder linked in from a data disk)
+        relative = os.path.relpath(os.path.normpath(os.path.join(root, str(path))), root)
+        if relative != "." and not relative.startswith(".."):  # outside the work tree: never in git's status
+            out.append(Path(relative).as_posix())
+    return tuple(dict.fromkeys(out))
 
 
 def git_state(root: str | Path = ".", data: tuple[str, ...] = ()) -> dict:

@@ -12,9 +12,14 @@ from pendulum.groups import (  # noqa: E402
     group_trial_rigs,
     group_trials,
 )
-from pendulum.camera.raw_folder import discover_trials, passed_over  # noqa: E402
+from pendulum.camera.raw_folder import (  # noqa: E402
+    discover_trials,
+    passed_over,
+    raw_folder_problem,
+)
 from pendulum.trials import (  # noqa: E402
     GEOMETRY_KEYS,
+    ConfigError,
     RIG_KEYS,
     add_sidecar_rigs,
     kept_geometry_trials,

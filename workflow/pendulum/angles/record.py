@@ -187,7 +187,7 @@ def _starts_slowly(table: pd.DataFrame, first_deg: float, period_s: float | None
     n = max(3, int(np.searchsorted(t, t[0] + period_s / 12, side="right"))) if t.size else 0
     if t.size < 3:
         return True
-    slope = np.polyfit(t[:n] - t[0], theta[:n], 2 if n >= 4 else 1)[-2]  # dθ/dt at the first sample
+    slope = np.polyfit(t[:n] - t[0], theta[:n], 2)[-2]  # dθ/dt at the first sample (through 3 samples: exact)
     return abs(slope) < START_SPEED_SHARE * 2 * math.pi / period_s * abs(first_deg)
 
 

@@ -2,7 +2,7 @@
 
 A trial is named after its file (:func:`trial_name`); its sidecar is found beside it (:func:`_sidecar_of`); a file
 that is no trial and no sidecar is :func:`passed_over` (named in the run's last lines); a folder that is missing or
-holds no trial is refused (:func:`discover_trials`).
+holds no trial stops a plain run (:func:`raw_folder_problem`).
 """
 
 from __future__ import annotations
@@ -79,16 +79,13 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
 
     Hidden files (``.DS_Store``, macOS's ``._name.mp4`` copies) are not data and are passed over. Two files
     whose trial names differ only in case are refused (they would be one file on macOS and Windows), as is a
-    sidecar that belongs to no trial (it would be silently ignored), and a folder that is missing or holds no trial
-    (a run would build nothing and leave an earlier report standing); other files are :func:`passed_over`.
+    sidecar that belongs to no trial (it would be silently ignored); other files are :func:`passed_over`. A folder
+    that is missing or holds no trial gives none (:func:`raw_folder_problem` says why, where a run needs them).
     """
     raw_dir = Path(raw_dir)
     trials: dict[str, Trial] = {}
     if not raw_dir.is_dir():
-        raise ConfigError(
-            f"{raw_dir}: no such folder (config raw_dir, the folder of the trials' videos and angle tables); "
-            "make it and put the videos in it, or set raw_dir to the folder that holds them"
-        )
+        return trials
     by_case: dict[str, str] = {}
     used: set[Path] = set()
     for path in sorted(raw_dir.iterdir()):
@@ -125,17 +122,6 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
             "after it (data/raw/run1.yaml or data/raw/run1.mp4.yaml for data/raw/run1.mp4), or move it out of "
             "the raw folder"
         )
-    if not trials:  # a run would build nothing and say nothing, and an earlier report would stand as if new
-        folders = [f"{p.name}/" for p in sorted(raw_dir.iterdir()) if p.is_dir() and not p.name.startswith(".")]
-        others = [p.name for p in passed_over(raw_dir)] + folders
-        raise ConfigError(
-            f"{raw_dir}: no video ({', '.join(VIDEO_EXTENSIONS)}) or angle table ({', '.join(ANGLE_TABLE_EXTENSIONS)}) "
-            "in it"
-            + (f" (passed over: {', '.join(others[:5])}{', …' if len(others) > 5 else ''})" if others else "")
-            + "; put the trials' files in it"
-            + (" (the files in its folders are not read)" if folders else "")
-            + ", or set raw_dir to the folder that holds them"
-        )
     return trials
 
 
@@ -143,8 +129,36 @@ def passed_over(raw_dir: str | Path) -> list[Path]:
     """The files in ``raw_dir`` that are neither a trial (a video or an angle table) nor a sidecar, hidden files
     left out: a video in a container not read as one (its extension), or notes kept beside the videos."""
     known = VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS + SIDECAR_EXTENSIONS
+    if not Path(raw_dir).is_dir():
+        return []
     return [
         p
         for p in sorted(Path(raw_dir).iterdir())
         if p.is_file() and not p.name.startswith(".") and p.suffix.lower() not in known
     ]
+
+
+def raw_folder_problem(raw_dir: str | Path, trials: dict) -> str | None:
+    """Why a plain run would build nothing, or None where ``trials`` (:func:`discover_trials` of the folder, skipped
+    ones too) has any: the raw folder is missing or holds no trial (the run said "1 of 1 steps (100%) done" and
+    left an earlier report standing as if new: a fresh-eyes user, 2026-12-07). Asked by the default target only:
+    a camera's calibration needs no trial."""
+    if trials:
+        return None
+    raw_dir = Path(raw_dir)
+    if not raw_dir.is_dir():
+        kind = "a file, not a folder" if raw_dir.exists() else "no such folder"
+        return (
+            f"{raw_dir}: {kind} (config raw_dir, the folder of the trials' videos and angle tables); make it and put "
+            "the videos in it, or set raw_dir to the folder that holds them"
+        )
+    folders = [f"{p.name}/" for p in sorted(raw_dir.iterdir()) if p.is_dir() and not p.name.startswith(".")]
+    others = [p.name for p in passed_over(raw_dir)] + folders
+    return (
+        f"{raw_dir}: no video ({', '.join(VIDEO_EXTENSIONS)}) or angle table ({', '.join(ANGLE_TABLE_EXTENSIONS)}) "
+        "in it"
+        + (f" (passed over: {', '.join(others[:5])}{', …' if len(others) > 5 else ''})" if others else "")
+        + "; put the trials' files in it"
+        + (" (the files in its folders are not read)" if folders else "")
+        + ", or set raw_dir to the folder that holds them"
+    )

@@ -71,12 +71,13 @@ from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import AngleRecord, FitSettings
 
 
-def _fit_name(document: dict) -> str:
-    """Which fit a baseline warning is of: a trial's own, or its rig's joint fit (a trial's residual differs between
-    the two: a fresh-eyes user read demo_m05's 0.662° and 0.332° under one name, 2026-12-07)."""
-    if document.get("trial"):
-        return f"fit of {document['trial']}"
-    return f"joint fit of {(document.get('rig') or {}).get('name', 'its rig')}"
+def _fit_warning(document: dict, warning: str) -> str:
+    """A baseline fit's warning headed by the fit it is of: a trial's own, or its rig's joint fit (a trial's residual
+    differs between the two: a fresh-eyes user read demo_m05's 0.662° and 0.332° under one name, 2026-12-07)."""
+    trial = document.get("trial")
+    if trial:
+        return f"fit of {trial}: {warning.removeprefix(f'trial {trial}: ')}"
+    return f"joint fit of {(document.get('rig') or {}).get('name', 'its rig')}: {warning}"
 
 
 @dataclass(frozen=True)
@@ -126,7 +127,7 @@ class Discovery:
             ]
         values, nuisance, self.masks = start_values(records, rigs, baseline_fits)
         self.baseline_warnings = list(
-            dict.fromkeys(f"{_fit_name(doc)}: {w}" for doc in baseline_fits for w in doc.get("warnings", []))
+            dict.fromkeys(_fit_warning(doc, w) for doc in baseline_fits for w in doc.get("warnings", []))
         )
         problem = GroupProblem(records, rigs, self.baseline_terms, self.masks, self.settings.max_step_s)
         self._fits = {self.baseline_terms: problem.solve(problem.start(values, nuisance), self.settings)}

@@ -104,8 +104,16 @@ def frame_slots(time_s: np.ndarray | None) -> np.ndarray | None:
     period = float(np.median(steps))
     if not (period > 0 and np.all(np.isfinite(t)) and (steps > 1.5 * period).any()):
         return None
-    slots = np.rint((t - t[0]) / period)
-    if np.any(np.diff(slots) < 1) or np.max(np.abs(t - t[0] - slots * period)) > 0.25 * period:
+    # each step's whole frames, then the clock fitted to them (a median over steps that skip frames runs long, and
+    # its error grows along the clip: a phone's stamps jittered by ±0.5 ms lost their slots in most clips)
+    frames = np.rint(steps / period)
+    if np.any(frames < 1) or np.any(np.abs(steps - frames * period) > 0.25 * period):
+        return None
+    slots = np.concatenate([[0.0], np.cumsum(frames)])
+    if slots[-1] + 1 > 2 * t.size:  # over half the clock's frames missing: no clock (a stray stamp far out)
+        return None
+    start, period = np.polynomial.polynomial.polyfit(slots, t, 1)
+    if np.max(np.abs(t - start - slots * period)) > 0.25 * period:
         return None
     return slots.astype(np.intp)
 
