@@ -94,9 +94,10 @@ def _fill_gap_residuals(
 
 def frame_slots(time_s: np.ndarray | None) -> np.ndarray | None:
     """Each frame's slot on the clip's even frame clock, where its time stamps leave gaps of whole frames (a
-    phone's dropped frames, its true times kept: a gap over 1.5 median intervals): slot k at t₀ + k Δt, Δt the
-    median interval. None where there is no gap, or where the times do not fall on one clock (two frames in a
-    slot, or off their slot by over a quarter interval): the frame's index is its place then."""
+    phone's dropped frames, its true times kept: a gap over 1.5 median intervals): each step's whole frames on the
+    median interval, then slot k at t₀ + k Δt fitted to them. None where there is no gap, or where the times do not
+    fall on one clock (a step not near whole frames, a frame off its slot by over a quarter interval, over half the
+    clock's frames missing): the frame's index is its place then."""
     if time_s is None or len(time_s) < 3:
         return None
     t = np.asarray(time_s, float)
