@@ -418,3 +418,23 @@ def test_data_and_config_wherever_the_config_puts_them_leave_the_code_clean_and_
     assert sha256sum_check(work, folder / "raw_inputs.sha256").returncode == 0
     doc = json.loads((folder / "provenance.json").read_text())
     assert doc["dirty"] is False and doc["raw_inputs"]["also"] == ["truth", "data/calibration/lens.mp4"]
+
+
+def test_a_workflow_in_a_folder_of_a_larger_repository_is_judged_on_its_own_folder(tmp_path):
+    """git names changed files from the repository's top: a workflow kept in `sub/` of a larger repository had its
+    data there (`sub/data/raw/…`) counted as code changes, and another project's files too (a reviewer,
+    2026-12-07). Its own folder only, its paths as from it."""
+    from pendulum.provenance import git_state
+
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub/code.py").write_text("x = 1\n")
+    (tmp_path / "other.py").write_text("y = 1\n")
+    git(tmp_path, "init", "-q")
+    git(tmp_path, "add", "-A")
+    git(tmp_path, "commit", "-q", "-m", "two projects")
+    (tmp_path / "sub/data/raw").mkdir(parents=True)
+    (tmp_path / "sub/data/raw/a.mp4").write_text("video")
+    (tmp_path / "other.py").write_text("y = 2\n")  # the other project's change
+    assert git_state(tmp_path / "sub")["dirty"] is False
+    (tmp_path / "sub/code.py").write_text("x = 2\n")
+    assert git_state(tmp_path / "sub")["dirty_files"] == ["code.py"]

@@ -138,10 +138,15 @@ def git_state(root: str | Path = ".", data: tuple[str, ...] = ()) -> dict:
     if commit is None:
         return {"commit": None, "commit_time_utc": None, "dirty": None, "dirty_files": None, "repository": None}
     commit_time = _git(root, "log", "-1", "--format=%cd", "--date=format-local:%Y-%m-%dT%H:%M:%SZ")
-    status = _git(root, "-c", "core.quotepath=off", "status", "--porcelain", "--untracked-files=all") or ""
+    # the workflow's own folder, its paths as from it (git names them from the repository's top: a workflow kept in
+    # a folder of a larger repository was refused for its data there, and for the other projects' changes)
+    prefix = _git(root, "rev-parse", "--show-prefix") or ""
+    status = _git(root, "-c", "core.quotepath=off", "status", "--porcelain", "--untracked-files=all", "--", ".") or ""
     dirty_files = sorted(
         path
-        for path in (line[3:].split(" -> ")[-1].strip('"') for line in status.splitlines() if line.strip())
+        for path in (
+            line[3:].split(" -> ")[-1].strip('"').removeprefix(prefix) for line in status.splitlines() if line.strip()
+        )
         if not any(path == p or path.startswith(p + "/") for p in NOT_CODE + tuple(data))
     )
     return {
