@@ -47,8 +47,9 @@ rule all:
         lambda wildcards: default_targets(),  # asked for here alone (an empty raw folder stops it)
 
 
-# After Snakemake's own lines, where a user reads last: the raw folder's files that are no trial, the trials no variant fits, then the trials that failed
-# (one line each) or how many were ok and skipped, as the last job (check_trials) logged them in this run.
+# After Snakemake's own lines, where a user reads last: the raw folder's files that are no trial, the trials no
+# variant fits, then the trials that failed (one line each) or how many were ok and skipped, as the last job
+# (check_trials) logged them in this run.
 from pendulum.outcomes import print_outcome  # noqa: E402
 
 

@@ -11,8 +11,7 @@ FREEZE_REQUEST = {
     "allow_dirty": bool(config.get("freeze_allow_dirty", False)),
     "frozen_dir": "results/frozen",
     "code_root": workflow.basedir,
-    # the data and config wherever the config puts them: their changes are not the code's (provenance.data_paths)
-    "data": data_paths(config, workflow.configfiles, workflow.basedir),
+    "data": DATA_PATHS,  # their changes are not the code's (provenance.smk)
     # an earlier freeze of this tag whose folder is gone: refused, not taken as done (freeze.check_request)
     "record": FREEZE_BENCHMARK,
 }
@@ -55,7 +54,7 @@ rule freeze:
     log:
         f"logs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.log",
     benchmark:
-        f"benchmarks/jobs/freeze/{FREEZE_REQUEST['tag'] or 'untagged'}.tsv"  # = FREEZE_BENCHMARK
+        FREEZE_BENCHMARK
     threads: 1
     resources:
         mem_mb=500,

@@ -16,6 +16,9 @@ from pendulum.provenance import (
 )  # noqa: E402
 
 LIBRARY_DIR = Path(workflow.basedir) / "workflow" / "pendulum"
+# the user's data and configuration wherever the config puts them: their changes are not the code's (the report's
+# provenance, a freeze's dirty check)
+DATA_PATHS = data_paths(config, workflow.configfiles, workflow.basedir)
 SCRIPTS_DIR = Path(workflow.basedir) / "workflow" / "scripts"
 
 
@@ -81,9 +84,7 @@ def code_digest(script):
 
 def report_provenance():
     """Commit (time, dirty flag), configuration digest and package versions; nothing time-dependent."""
-    git = git_state(
-        workflow.basedir, data_paths(config, workflow.configfiles, workflow.basedir)
-    )
+    git = git_state(workflow.basedir, DATA_PATHS)
     return {
         "commit": git["commit"],
         "commit_time_utc": git["commit_time_utc"],

@@ -184,9 +184,9 @@ def _starts_slowly(table: pd.DataFrame, first_deg: float, period_s: float | None
         return True
     seen = table.dropna(subset=["theta_deg"])
     t, theta = seen.time_s.to_numpy(float), seen.theta_deg.to_numpy(float)
-    n = max(3, int(np.searchsorted(t, t[0] + period_s / 12, side="right"))) if t.size else 0
     if t.size < 3:
         return True
+    n = max(3, int(np.searchsorted(t, t[0] + period_s / 12, side="right")))
     slope = np.polyfit(t[:n] - t[0], theta[:n], 2)[-2]  # dθ/dt at the first sample (through 3 samples: exact)
     return abs(slope) < START_SPEED_SHARE * 2 * math.pi / period_s * abs(first_deg)
 
