@@ -8,7 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pendulum.angles.geometry import estimate_rig_geometry, off_rig_circle, pooled_pivot, trial_geometry
+from pendulum.angles.geometry import (
+    estimate_rig_geometry,
+    off_rig_circle,
+    pooled_pivot,
+    trial_geometry,
+    unlike_picture,
+)
 from pendulum.fit.checks import misfit_warning, rig_checks
 from pendulum.fit.uncertainty import jacobian_rank_warnings
 from pendulum.freeze import trial_outcomes
@@ -323,6 +329,27 @@ def test_a_track_from_a_moved_camera_is_left_out_of_the_pooled_pivot(seed):
     assert np.hypot(own["pivot_px"][0] - PIVOT[0] - 6, own["pivot_px"][1] - PIVOT[1] + 4) < 3.0
     rig, why = trial_geometry(tracks["good1"], geometry, vertical_deg=0.0)
     assert why is None and rig["pivot_px"] == geometry["pivot_px"]
+
+
+def test_a_cropped_copy_left_out_of_the_pooled_pivot_is_told_by_its_frames_size():
+    """A clip of the rig exported cropped (its pixels shifted by the crop's corner) lies off the rig's circle as a
+    moved camera's would: the reason names its frames' size against the others' (a reviewer's 480×270 crop was
+    called only "the camera moved"); a moved camera at the rig's size is told as before."""
+    tracks = {f"good{k}": arc_track(PIVOT, 520, a, seed=k) for k, a in enumerate((5, 20, 60))}
+    tracks["crop"] = arc_track((PIVOT[0] - 80, PIVOT[1] - 45), 520, 30, seed=9)
+    _, rejected = pooled_pivot(tracks)
+    assert set(rejected) == {"crop"}
+    kept = [k for k in tracks if k not in rejected]
+    pictures = {name: (1280, 720, 0.0) for name in tracks}
+    assert unlike_picture("crop", pictures, kept) is None  # same size: a camera that moved, nothing more to say
+    pictures["crop"] = (1120, 630, 0.0)
+    said = unlike_picture("crop", pictures, kept)
+    assert said.startswith("its frames are 1120×630 px where the rig's other trials' are 1280×720 px")
+    pictures["crop"] = (720, 1280, 90.0)
+    assert "720×1280 px, shown turned by 90°" in unlike_picture("crop", pictures, kept)
+    pictures.pop("good0")  # an older tracks file without its frames' size: judged by the others
+    assert "1280×720" in unlike_picture("crop", pictures, kept)
+    assert unlike_picture("crop", {"crop": (1120, 630, 0.0)}, kept) is None  # nothing to compare with
 
 
 def released_track(centre, radius, amplitude_deg, n, decay, seed):

@@ -7,7 +7,12 @@ import numpy as np
 import pandas as pd
 
 import _setup  # noqa: F401
-from pendulum.angles.geometry import MAX_ANGLE_SCALE_STDERR_PCT, estimate_rig_geometry
+from pendulum.angles.geometry import (
+    ELSEWHERE,
+    MAX_ANGLE_SCALE_STDERR_PCT,
+    estimate_rig_geometry,
+    unlike_picture,
+)
 from pendulum.camera.view import ImageToPlane, map_point, map_track, path_tilt
 from pendulum.io import script_logger, write_json
 from pendulum.status import is_failed, require_ok, run_stage
@@ -45,10 +50,12 @@ def work():
     if "calibration" in sm.input.keys():
         calibration = require_ok(read_json(sm.input.calibration), "calibration")
         log.info("rig %s: %s", rig, ImageToPlane(calibration).describe())
-    tracks, failed = {}, {}
+    tracks, failed, pictures = {}, {}, {}
     for path, summary_path in zip(sm.input.tracks, sm.input.summaries, strict=True):
         summary = read_json(summary_path)
         name = Path(path).stem
+        if summary.get("frame_px"):
+            pictures[name] = (*summary["frame_px"], summary.get("rotation_deg") or 0.0)
         if is_failed(summary):
             failed[name] = summary["error"]
             log.warning("%s: left out of the pooled geometry (tracking failed: %s)", name, summary["error"])
@@ -66,6 +73,10 @@ def work():
             "(and vertical_deg) in config or in the trials' sidecars"
         )
     geometry = estimate_rig_geometry(tracks, pivot_px=pivot, vertical_deg=sm.params.vertical_deg)
+    kept = [k for k in tracks if k not in geometry["rejected_trials"]]
+    for name in sorted(geometry["rejected_trials"]):
+        if note := unlike_picture(name, pictures, kept):  # told for what it is, not as a camera that moved
+            geometry["rejected_trials"][name] = geometry["rejected_trials"][name].replace(ELSEWHERE, note)
     for name, reason in geometry["rejected_trials"].items():
         log.warning("%s: left out of the pooled geometry: %s", name, reason)
     circle = geometry.get("circle")

@@ -106,6 +106,7 @@ def work():
             "n_frames": int(len(track)),
             "flags": {k: int(v) for k, v in sorted(flags.items())},
             "rotation_deg": float(frames.get("rotation_deg") or 0.0),  # the file's display rotation (frames as stored)
+            "frame_px": [frames["width_px"], frames["height_px"]] if frames.get("width_px") else None,  # as stored
             "method": method,  # marker or body, why, and what each tried gave
             "path": path,  # departure from one circle, a creeping pivot (corrected), what is left
             "timing": track.attrs.get("timing"),  # frames lost or repeated under even stamps, found from the motion

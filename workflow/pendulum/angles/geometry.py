@@ -215,6 +215,28 @@ ELSEWHERE = (
 )
 
 
+def unlike_picture(name: str, pictures: dict[str, tuple], kept) -> str | None:
+    """Why a trial left out of its rig's pivot has other pixels than the trials kept, or None: its frames'
+    ``(width, height, display rotation)`` in ``pictures`` differ from the most common of theirs (a cropped, scaled
+    or turned export of a clip: its path lies elsewhere in its own pixels, not on a camera that moved)."""
+    theirs = [pictures[k] for k in sorted(kept) if k != name and pictures.get(k)]
+    mine = pictures.get(name)
+    if not mine or not theirs:
+        return None
+    usual = max(sorted(set(theirs)), key=theirs.count)
+    if tuple(mine) == tuple(usual):
+        return None
+
+    def said(picture) -> str:
+        width, height, turn = picture
+        return f"{width}×{height} px" + (f", shown turned by {turn:g}°" if turn else "")
+
+    return (
+        f"its frames are {said(mine)} where the rig's other trials' are {said(usual)}: a cropped, scaled or "
+        "rotated copy of a clip has other pixels (export every trial of a rig alike, or give this one its own `rig`)"
+    )
+
+
 SHARED_GROUP_SEEDS = 12  # tracks tried as the seed of a group that shares one pivot (the widest arcs first)
 SHARED_GROUP_ROUNDS = 5  # refits of a group's circle, each taking in the tracks that lie on it
 
