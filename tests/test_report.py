@@ -17,7 +17,7 @@ import pytest
 
 from conftest import demo_trials
 from pendulum.report import notebook as R
-from pendulum.report.data import best_variant, nested_parent, variant_order
+from pendulum.report.data import best_variant, nested_parents, variant_order
 from pendulum.report.format import estimate_parts, fmt, format_estimate, photo_data_uri
 from workflow_run import digest, planned_wildcards, run
 
@@ -115,12 +115,21 @@ def test_joint_fits_of_different_samples_are_compared_on_the_trials_fitted_alike
     assert best_variant(table, "joint:other", ["t1"]) is None
 
 
-def test_each_variant_adds_one_term_to_its_nested_parent():
+def test_each_variant_adds_one_term_to_each_of_its_nested_parents():
     variants = {**VARIANTS, "friction": ["quadratic_drag", "linear_damping", "coulomb_friction"], "air": []}
     assert variant_order(variants) == ["air", "quadratic", "linear", "friction"]
-    assert nested_parent(variants, "friction") == "linear"
-    assert nested_parent(variants, "quadratic") == "air"
-    assert nested_parent(variants, "air") is None
+    assert nested_parents(variants, "friction") == ["linear"]
+    assert nested_parents(variants, "quadratic") == ["air"]
+    assert nested_parents(variants, "air") == []
+    # a reviewer's four variants: the full model has two parents, each one term short; both pairs are tests
+    variants = {
+        "quadratic": ["quadratic_drag"],
+        "qfric": ["quadratic_drag", "coulomb_friction"],
+        "nodrag": ["linear_damping", "coulomb_friction"],
+        "full": ["quadratic_drag", "linear_damping", "coulomb_friction"],
+    }
+    assert nested_parents(variants, "full") == ["nodrag", "qfric"]
+    assert nested_parents(variants, "qfric") == ["quadratic"] and nested_parents(variants, "nodrag") == []
 
 
 # ---------------------------------------------------------------------------
@@ -733,6 +742,36 @@ def test_a_term_that_trades_against_another_is_called_indistinguishable_not_unsu
     assert "a wider range of amplitudes would separate them" in verdict
     joint["warnings"] = [f"drag_area_m2 and {parameter} are -0.900 correlated: the record hardly separates them"]
     assert not documents.term_evidence_rows("rig", None)[0]["verdict"].startswith("indistinguishable")
+
+
+def test_every_pair_of_variants_one_term_apart_is_a_row_of_the_term_evidence(documents):
+    """A reviewer's variants quadratic, quadratic + friction, linear + friction and all three: the evidence table
+    showed only linear + friction → all three (not comparable: other samples) and never quadratic + friction → all
+    three, the one pair that tests linear damping."""
+    documents.variants = {
+        "quadratic": ["quadratic_drag"],
+        "qfric": ["quadratic_drag", "coulomb_friction"],
+        "nodrag": ["linear_damping", "coulomb_friction"],
+        "full": ["quadratic_drag", "linear_damping", "coulomb_friction"],
+    }
+    documents.order = variant_order(documents.variants)
+    fits = {"quadratic": (-100.0, 0.05, "a"), "qfric": (-300.0, 0.03, "a"), "nodrag": (-200, 0.04, "b")}
+    fits["full"] = (-900.0, 0.004, "a")
+    for variant, (aic, rms, samples) in fits.items():
+        documents.joint[(variant, "rig")] = {
+            "status": "ok",
+            "aic": aic,
+            "bic": aic + 10,
+            "rms_deg": rms,
+            "samples_digest": samples,
+            "parameters": {"linear_damping_nm_s": _entry(0.15, 0.01), "coulomb_torque_nm": _entry(0.02, 0.002)},
+            "warnings": [],
+        }
+    rows = {(r["parent"], r["variant"]): r for r in documents.term_evidence_rows("rig", None)}
+    assert set(rows) == {("quadratic", "qfric"), ("qfric", "full"), ("nodrag", "full")}
+    assert rows[("qfric", "full")]["term"] == "linear_damping"
+    assert rows[("qfric", "full")]["verdict"].startswith("supported: the RMS falls 7.5×")
+    assert rows[("nodrag", "full")]["verdict"].startswith("not comparable")
 
 
 def test_a_tie_between_variants_and_an_unresolved_coefficient_are_said_in_the_summary(documents):

@@ -42,9 +42,11 @@ floor the angle records imply (their ``noise_deg``: fifth-difference σ) *and* t
 white (Ljung–Box, p < 0.01). Two candidates whose fits differ by less than the
 threshold (n_eff ln(RSS_b/RSS_a)) are ``indistinguishable`` and neither is
 named; at a single swing frequency the history force is always reported with
-linear damping (its equivalent there), since what separates them on one rig is
-the memory of the release, which the fit does not model (it skips the release
-transient): another pendulum length separates them.
+linear damping (its equivalent there, with an added mass), since what else
+separates them on one rig is the tail of the fluid's memory of the start, which
+the fit models only under an assumption (at rest at the release, θ̇ growing
+linearly over the skipped transient): another pendulum length separates them.
+Linear damping rests on no such assumption and is named alone where it wins.
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ from pendulum.design.tolerances import input_words, largest_input, split_key
 from pendulum.model.effects import TERMS, term_for_parameter
 from pendulum.outcomes import MISFIT_MARK
 from pendulum.report.checks import MANY_TRIALS, misfits_together
-from pendulum.report.data import ReportData, failure_text, is_ok, nested_parent, problem_text, record_problems
+from pendulum.report.data import ReportData, failure_text, is_ok, nested_parents, problem_text, record_problems
 from pendulum.report.format import (
     COEFFICIENTS,
     TERM_LABELS,
@@ -213,9 +213,11 @@ class ComparisonSections(ReportData):
                 "is unchanged, so their higher AIC and BIC are only the penalty for their extra parameters, not "
                 "evidence for the chosen law: the variants tie, and the simplest is given."
             )
+        said = set()  # a term tested by two pairs of variants (each one term apart) is said once
         for e in self.term_evidence_rows(rig, best):
             rival = term_for_parameter(e["rival"][0]) if e.get("rival") else None
-            if rival and rival.name in self.variants[variant]:
+            if rival and rival.name in self.variants[variant] and (e["term"], rival.name) not in said:
+                said.add((e["term"], rival.name))
                 out += (
                     f" These records cannot tell {esc(TERM_LABELS.get(e['term'], e['term']))} from "
                     f'{esc(TERM_LABELS.get(rival.name, rival.name))} (<a href="#term-evidence-{esc(rig)}">the '
@@ -433,10 +435,8 @@ class ComparisonSections(ReportData):
     def term_evidence_rows(self, rig: str, best: dict | None) -> list[dict]:
         """Each added term: nested variant pair, ΔAIC, ΔBIC, RMS ratio, the joint coefficient, a verdict."""
         rows = []
-        for v in self.order:
-            parent = nested_parent(self.variants, v)
-            if parent is None:
-                continue
+        pairs = [(variant, parent) for variant in self.order for parent in nested_parents(self.variants, variant)]
+        for v, parent in pairs:
             child, base = self.joint.get((v, rig)), self.joint.get((parent, rig))
             if not (is_ok(child) and is_ok(base)):
                 continue

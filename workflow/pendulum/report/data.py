@@ -74,11 +74,12 @@ def variant_order(variants: dict) -> list[str]:
     return sorted(variants, key=lambda v: (len(variants[v]), v))
 
 
-def nested_parent(variants: dict, variant: str) -> str | None:
-    """The variant with exactly one term fewer whose terms all appear in ``variant`` (None if there is none)."""
+def nested_parents(variants: dict, variant: str) -> list[str]:
+    """The variants with exactly one term fewer whose terms all appear in ``variant``, simplest first: each pair
+    tests one term (quadratic + friction → all three tests linear damping, linear + friction → all three the
+    quadratic drag; the first alone hid the one a reviewer's variants were about)."""
     terms = set(variants[variant])
-    parents = [v for v in variant_order(variants) if set(variants[v]) < terms and len(terms - set(variants[v])) == 1]
-    return parents[0] if parents else None
+    return [v for v in variant_order(variants) if set(variants[v]) < terms and len(terms - set(variants[v])) == 1]
 
 
 def best_variant(summary: pd.DataFrame, fit_label: str, trials: list[str]) -> dict | None:

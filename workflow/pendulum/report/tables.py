@@ -282,8 +282,10 @@ class TableSections(ReportData):
             "RMS residual (fitted − measured angle over the fitted samples) per trial and model variant, in "
             "radians, degrees and metres of arc at the body (Lθ, here in mm). The record noise is the angle "
             "noise of the tracked record (σ from the fifth differences of the whole angle record, as in the "
-            "tracking table): a variant that captures the physics leaves an RMS close "
-            "to it. The fits' warnings quote the noise of the fitted samples only (runs of consecutive samples, a "
+            "tracking table): it sees the frame-to-frame noise, not the tracking's slow errors (a bias that "
+            "follows the body across the wall), so a variant that captures the physics leaves an RMS of one to a "
+            "few times it (the demo's ±5° swings: 3×), a variant that misses some far more. The fits' warnings "
+            "quote the noise of the fitted samples only (runs of consecutive samples, a "
             "gap breaks a run) and discovery a noise floor pooled over a group's trials, so they differ slightly."
             + self.dagger_note()
         )
