@@ -6,20 +6,28 @@ Renders are small (640×360) and made once per session. The acceptance figures
 """
 
 import json
+import logging
 import math
 import os
 from dataclasses import replace
 
 import cv2
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
 from conftest import DEMO_SPEC, ROOT
 from pendulum.angles.geometry import estimate_rig_geometry
 from pendulum.angles.record import angles_from_track
-from pendulum.camera.calibration import CalibrationError, Lens
-from pendulum.camera.view import calibrate_camera_setup, map_track, path_tilt
+from pendulum.camera.calibration import CalibrationError, Lens, board_points_m, calibrate_lens
+from pendulum.camera.view import (
+    calibrate_camera_setup,
+    calibration_warnings,
+    frames_unlike_calibration,
+    map_track,
+    path_tilt,
+)
 from pendulum.synthetic.experiment import load_specs, write_video
 from pendulum.synthetic.optics import Optics, render_lens_clip, render_plane_clip, render_trial_through, write_clip
 from pendulum.tracking.marker import track_video
@@ -234,3 +242,103 @@ def test_a_calibration_is_byte_identical_between_runs(optics_dir, barrel_calibra
     first = json.dumps(barrel_calibration, sort_keys=True)
     assert all(json.dumps(doc, sort_keys=True) == first for doc in again)
     assert cv2.getNumThreads() > 1 or os.cpu_count() == 1  # OpenCV's own thread count is given back
+
+
+def _board_views(n=32, seed=0, sag_m=0.0, spread=1.0, size=(640, 360)):
+    """Corners of a 9×6 board (25 mm squares) seen in ``n`` random poses through a barrel lens (f 400 px,
+    k1 −0.28; cv2.projectPoints, 0.1 px noise), bent by ``sag_m`` along its length, its centre within ``spread``
+    of the frame's half-width and half-height: {view: (54, 2) px}."""
+    rng = np.random.default_rng(seed)
+    obj = board_points_m(PATTERN, SQUARE_M).copy()
+    centre = obj.mean(axis=0)
+    obj[:, 2] = sag_m * (1 - ((obj[:, 0] - centre[0]) / (obj[:, 0].max() - centre[0])) ** 2)
+    camera = np.array([[400.0, 0, size[0] / 2], [0, 400.0, size[1] / 2], [0, 0, 1]])
+    lens = np.array([-0.28, 0.08, 0.001, -0.001, 0.0])
+    views, k = {}, 0
+    while len(views) < n:
+        k += 1
+        rvec = np.radians(rng.uniform(-35, 35, 3)) * [1, 1, 0.3]
+        z = rng.uniform(0.45, 0.7)
+        offset = np.array([rng.uniform(-1, 1) * 0.6 * z, rng.uniform(-1, 1) * 0.35 * z, z]) * [spread, spread, 1]
+        corners = cv2.projectPoints(obj, rvec, offset - cv2.Rodrigues(rvec)[0] @ centre, camera, lens)[0]
+        corners = corners.reshape(-1, 2) + rng.normal(0, 0.1, (len(obj), 2))
+        if (corners > 2).all() and (corners < np.array(size) - 2).all():
+            views[k] = corners
+    return views
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_bent_board_is_refused_and_a_board_kept_in_the_middle_is_warned_of(seed):
+    """A reviewer's GoPro clips (2026-12-07): a board sagging 19 mm calibrated at 1.95 px held out and gave angles
+    0.81× too small, a 7×4 pattern on a 9×6 board at 6.2 px and angles 45° off, both "ok" and unsaid; a board kept
+    in the middle of the frame fitted at 0.17 px there and was 11 px RMS off in the corners."""
+    good = calibrate_lens(_board_views(seed=seed), PATTERN, SQUARE_M, (640, 360), "lens.mp4")
+    held_out = good["models"][good["chosen_model"]]["held_out_rms_px"]
+    assert held_out < 0.3 and good["warnings"] == [] and good["board_coverage"]["share"] > 0.6
+    with pytest.raises(
+        CalibrationError, match=r"^bent.mp4: the lens model reprojects its \d+ held-out views [12]\.\d\d px RMS"
+    ):
+        calibrate_lens(_board_views(seed=seed, sag_m=0.019), PATTERN, SQUARE_M, (640, 360), "bent.mp4")
+    middle = calibrate_lens(_board_views(seed=seed, spread=0.25), PATTERN, SQUARE_M, (640, 360), "middle.mp4")
+    share = middle["board_coverage"]["share"]
+    assert share < 0.4 and middle["warnings"] == [
+        f"middle.mp4: the board reached only {100 * share:.0f} % of the frame over the clip's views: the lens model "
+        "is extrapolated beyond it (a board kept in the middle fits well there and can be pixels off in the corners); "
+        "move the board over the whole frame, corners and edges too"
+    ]
+    # a track in the frame's corners is measured through that extrapolation, and says so; one in the middle not
+    document = {**middle, "camera_setup": "g", "image_size_px": [640, 360]}
+    corner = pd.DataFrame({"x_px": np.linspace(5, 60, 50), "y_px": np.linspace(5, 40, 50), "flag": "ok"})
+    said = calibration_warnings("t", corner, [640, 360], document)
+    assert said[0].startswith("calibration: middle.mp4: the board reached only")
+    assert said[1].startswith("calibration: 100 % of the track lies where the lens clip's board never reached")
+    centre = corner.assign(x_px=corner.x_px + 290, y_px=corner.y_px + 150)
+    assert len(calibration_warnings("t", centre, [640, 360], document)) == 1
+
+
+def test_a_trial_filmed_at_another_size_than_its_calibration_is_refused():
+    """A reviewer's 1280×720 copy of a 640×360 trial, measured through its lens calibration: 6.7° RMS off, "ok"."""
+    document = {"camera_setup": "gopro", "image_size_px": [640, 360]}
+    track = pd.DataFrame({"x_px": [300.0], "y_px": [200.0], "flag": ["ok"]})
+    why = frames_unlike_calibration("t720", [1280, 720], document)
+    assert why.startswith(
+        "t720: its frames are 1280×720 px, but camera setup gopro was calibrated on frames of 640×360"
+    )
+    with pytest.raises(ValueError, match="t720: its frames are 1280×720 px"):
+        calibration_warnings("t720", track, [1280, 720], document)
+    assert frames_unlike_calibration("t", [640, 360], document) is None
+    assert frames_unlike_calibration("t", None, document) is None  # a tracks file from before frame_px
+
+
+@pytest.mark.slow
+def test_a_camera_clip_that_is_not_there_fails_its_calibration_naming_it_and_reruns_once_it_is(tmp_path):
+    """A reviewer's typo in a clip's name: on a fresh project Snakemake's MissingInputException stopped every trial;
+    now the calibration fails naming the file and the key (its rigs' trials fail with it, the others build), its
+    log is the one the status table points to, and the clip's arrival reruns it."""
+    from pendulum.status import UpstreamFailed, require_ok, run_stage
+    from workflow_run import copy_project, planned_wildcards, run
+
+    work = copy_project(tmp_path / "p", raw_files=[])
+    (work / "data" / "raw" / "a.mp4").write_bytes(b"")  # a dry run reads no video
+    config = yaml.safe_load((work / "config.yaml").read_text())
+    config["cameras"] = {"gone": {"calibration_video": "data/calibration/gone.mp4", "square_size_m": 0.025}}
+    config["rigs"]["paper_rig"]["camera"] = "gone"
+    (work / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+    assert "calibrate_camera" in [r for r, _ in planned_wildcards(run(["-n"], work).stdout)]  # planned, not refused
+    run(["-c1", "results/calibration/gone.json"], work)
+    document = json.loads((work / "results" / "calibration" / "gone.json").read_text())
+    assert document["status"] == "failed" and document["failed_stage"] == "calibration"
+    assert (
+        document["error"]
+        == "data/calibration/gone.mp4: no such file (cameras/gone/calibration_video in the configuration)"
+    )
+    assert document["log"] == "logs/calibration/gone.log"
+    with pytest.raises(UpstreamFailed) as caught:  # a trial's angles stage: the calibration's failure, its log
+        require_ok(document, "calibration")
+    written = []
+    run_stage("angles", logging.getLogger("t"), lambda: require_ok(document, "x"), written.append)
+    assert caught.value.log == written[0]["log"] == "logs/calibration/gone.log"
+    (work / "data" / "calibration").mkdir(parents=True)
+    (work / "data" / "calibration" / "gone.mp4").write_bytes(b"")
+    planned = [r for r, _ in planned_wildcards(run(["-n", "results/calibration/gone.json"], work).stdout)]
+    assert planned == ["calibrate_camera"]

@@ -97,7 +97,17 @@ def test_a_rig_with_a_camera_gets_its_calibration_table_and_swing_plane_note(tmp
         "900.6, 900.7",
         "yes, tilt 12°",
         "30 (7 held out)",
+        "—",  # a calibration from before the board's coverage was measured
     ]
+    covered = {
+        **CALIBRATION,
+        "board_coverage": {"share": 0.40278},
+        "warnings": ["lens.mp4: the board reached only 40 %"],
+    }
+    assert (
+        calibration_rows({"g": covered})[0][-1]
+        == '<td class="num fail">40 %; lens.mp4: the board reached only 40 %</td>'
+    )
     no_plane = {k: v for k, v in CALIBRATION.items() if k != "plane"}
     assert '<td class="num">no</td>' in calibration_rows({"c": no_plane})[0]
 

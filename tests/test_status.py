@@ -299,6 +299,18 @@ def test_trial_status_names_the_stage_where_the_failure_arose():
     assert failure_summary(table[table.status == "ok"]) is None
 
 
+def test_a_trial_failed_by_its_cameras_calibration_points_at_that_log():
+    """The status table's log column named the trial's angles log for a failure whose cause is in the camera's
+    calibration log (a reviewer, 2026-12-07)."""
+    cause = failed("calibration", "data/calibration/g.mp4: no such file (…)", log="logs/calibration/g.log")
+    row = trial_status(
+        "a", "data/raw/a.mp4", "rig", [("frames", "f.log", {"status": "ok"}), ("angles", "a.log", cause)]
+    )
+    assert row["stage"] == "calibration" and row["log"] == "logs/calibration/g.log"
+    row = trial_status("a", "data/raw/a.mp4", "rig", [("angles", "logs/angles/a.log", failed("angles", "bad"))])
+    assert row["log"] == "logs/angles/a.log"
+
+
 def arc_track(centre, radius, amplitude_deg, n=600, noise_px=0.2, seed=0):
     rng = np.random.default_rng(seed)
     angle = np.radians(amplitude_deg) * np.cos(np.linspace(0, 12 * np.pi, n)) * np.exp(-np.linspace(0, 1, n))

@@ -82,7 +82,7 @@ def trial_status(trial: str, source: str, rig: str, documents: list[tuple[str, s
                 "stage": named,
                 **measured,
                 "reason": document.get("error", ""),
-                "log": log_path,
+                "log": document.get("log") or log_path,  # a stage no trial owns (a camera's calibration) names its own
             }
     return {
         "trial": trial,

@@ -23,9 +23,9 @@ from pendulum.io import write_failure
 class UpstreamFailed(Exception):
     """An input of this stage is a failed document; this stage fails with the same cause."""
 
-    def __init__(self, stage: str, error: str):
+    def __init__(self, stage: str, error: str, log: str | None = None):
         super().__init__(f"{stage} failed: {error}")
-        self.stage, self.error = stage, error
+        self.stage, self.error, self.log = stage, error, log
 
 
 def describe(exc: BaseException) -> str:
@@ -52,7 +52,7 @@ def is_failed(document: dict) -> bool:
 def require_ok(document: dict, what: str) -> dict:
     """Raise UpstreamFailed if ``document`` (the JSON of an input called ``what``) is a failed one."""
     if is_failed(document):
-        raise UpstreamFailed(document.get("failed_stage", what), document.get("error", "failed"))
+        raise UpstreamFailed(document.get("failed_stage", what), document.get("error", "failed"), document.get("log"))
     return document
 
 
@@ -154,7 +154,7 @@ def run_stage(stage: str, log: logging.Logger, work: Callable[[], None], write_f
         return True
     except UpstreamFailed as exc:
         log.error("not run: its %s stage failed (why: results/status/trials.csv, or that stage's log)", exc.stage)
-        write_failed(failed(exc.stage, exc.error))
+        write_failed(failed(exc.stage, exc.error, **({"log": exc.log} if exc.log else {})))  # the origin's log
     except Exception as exc:
         if write_failure(exc) is not None:
             raise  # no room or no rights to write: not this trial's fault; the job fails and a rerun resumes

@@ -86,16 +86,21 @@ def camera_setup(wildcards):
         "pattern_inner_corners": list(setup.get("pattern_inner_corners", [9, 6])),
         "square_size_m": setup["square_size_m"],
         "plane_frame": int(setup.get("plane_frame", 0)),
+        "clips": {k: setup[k] for k in CAMERA_CLIPS if setup.get(k)},
     }
 
 
+CAMERA_CLIPS = ("calibration_video", "plane_video")
+
+
 def calibration_inputs(wildcards):
-    """The checkerboard clips of a camera setup (lens and/or swing plane)."""
+    """The checkerboard clips of a camera setup (lens and/or swing plane) that exist: a missing one fails the
+    calibration, and with it the trials of its rigs alone, naming the file (params ``clips``), where an input
+    would stop the whole run (a reviewer's typo in a clip's name); once it is there, the calibration reruns.
+    """
     setup = (config.get("cameras") or {}).get(wildcards.camera) or {}
     return {
-        key: setup[key]
-        for key in ("calibration_video", "plane_video")
-        if setup.get(key)
+        k: setup[k] for k in CAMERA_CLIPS if setup.get(k) and Path(setup[k]).is_file()
     }
 
 

@@ -15,7 +15,7 @@ from pendulum.angles.record import (
     vertical_turned_with_the_picture,
 )
 from pendulum.angles.swings import missing_period
-from pendulum.camera.view import ImageToPlane, map_point, map_track
+from pendulum.camera.view import ImageToPlane, calibration_warnings, map_point, map_track
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
 
@@ -49,7 +49,9 @@ def work():
         calibration = None
         if "calibration" in sm.input.keys():
             calibration = require_ok(read_json(sm.input.calibration), "calibration")
-        track = map_track(pd.read_csv(source), calibration)
+        in_image = pd.read_csv(source)
+        warnings += calibration_warnings(trial, in_image, track_summary.get("frame_px"), calibration)
+        track = map_track(in_image, calibration)
         pivot, vertical = map_point(settings["pivot_px"], calibration), settings["vertical_deg"]
         pivot_cov = None
         notes = [ImageToPlane(calibration).describe()] if calibration else []

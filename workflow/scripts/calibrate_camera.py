@@ -1,6 +1,7 @@
 """Snakemake adapter: lens model and swing-plane homography of one camera setup from its checkerboard clips."""
 
 import _setup  # noqa: F401
+from pendulum.camera.calibration import CalibrationError
 from pendulum.camera.view import calibrate_camera_setup
 from pendulum.io import script_logger, write_json
 from pendulum.status import run_stage
@@ -12,6 +13,9 @@ setup = sm.params.setup
 
 
 def work():
+    for key, clip in setup["clips"].items():
+        if key not in sm.input.keys():  # named in config, not there (inputs.smk leaves it out of the inputs)
+            raise CalibrationError(f"{clip}: no such file (cameras/{camera}/{key} in the configuration)")
     document = calibrate_camera_setup(
         camera,
         tuple(setup["pattern_inner_corners"]),
@@ -27,5 +31,8 @@ def work():
 
 
 run_stage(
-    "calibration", log, work, lambda document: write_json({"camera_setup": camera, **document}, sm.output.calibration)
+    "calibration",
+    log,
+    work,
+    lambda document: write_json({"camera_setup": camera, **document, "log": sm.log[0]}, sm.output.calibration),
 )

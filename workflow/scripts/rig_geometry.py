@@ -13,7 +13,7 @@ from pendulum.angles.geometry import (
     estimate_rig_geometry,
     unlike_picture,
 )
-from pendulum.camera.view import ImageToPlane, map_point, map_track, path_tilt
+from pendulum.camera.view import ImageToPlane, frames_unlike_calibration, map_point, map_track, path_tilt
 from pendulum.io import script_logger, write_json
 from pendulum.status import is_failed, require_ok, run_stage
 
@@ -59,6 +59,9 @@ def work():
         if is_failed(summary):
             failed[name] = summary["error"]
             log.warning("%s: left out of the pooled geometry (tracking failed: %s)", name, summary["error"])
+        elif unlike := frames_unlike_calibration(name, summary.get("frame_px"), calibration):
+            failed[name] = unlike  # its angles stage refuses it with the same words
+            log.warning("%s: left out of the pooled geometry: %s", name, unlike)
         else:
             tracks[name] = map_track(pd.read_csv(path), calibration)
     pivot = map_point(sm.params.pivot_px, calibration)

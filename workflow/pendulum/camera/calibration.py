@@ -32,6 +32,10 @@ MIN_VIEWS = 8
 UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
 MODELS = ("rational", "fisheye")
 RATIONAL_MARGIN = 0.05  # the rational model (8 coefficients) must beat the fisheye's (4) held-out error by 5 %
+MAX_HELD_OUT_RMS_PX = 1.0  # a lens reprojecting its held-out views worse than this is refused
+WARN_HELD_OUT_RMS_PX = 0.5  # ... and worse than this used with a warning (a good clip: 0.1–0.3 px)
+COVERAGE_GRID = (16, 9)  # cells of the frame over which the board's coverage is counted
+MIN_COVERAGE_SHARE = 0.5  # a lens clip whose boards reached less of the frame is used with a warning
 
 
 class CalibrationError(ValueError):
@@ -249,6 +253,11 @@ def calibrate_lens(views: dict, pattern: tuple[int, int], square_size_m: float, 
         raise CalibrationError(
             f"{source}: the checkerboard ({pattern[0]}×{pattern[1]} inner corners) was found in only {len(keys)} "
             f"frame(s); at least {MIN_VIEWS} views are needed: film the whole board, sharp, moved over the frame"
+            + (
+                "; or pattern_inner_corners is not the board's (its inner corners: the squares less one each way)"
+                if not keys
+                else ""
+            )
         )
     obj = board_points_m(pattern, square_size_m)
     held = [k for i, k in enumerate(keys) if i % HELD_OUT_EVERY == HELD_OUT_EVERY - 1]
@@ -267,8 +276,29 @@ def calibrate_lens(views: dict, pattern: tuple[int, int], square_size_m: float, 
             models[model] = {"held_out_rms_px": math.inf, "error": str(exc).strip().splitlines()[-1]}
     rational, fisheye = models["rational"]["held_out_rms_px"], models["fisheye"]["held_out_rms_px"]
     best = "rational" if rational < (1 - RATIONAL_MARGIN) * fisheye else "fisheye"
-    if not math.isfinite(models[best]["held_out_rms_px"]):
+    held_out_px = models[best]["held_out_rms_px"]
+    if not math.isfinite(held_out_px):
         raise CalibrationError(f"{source}: neither lens model could be calibrated ({models})")
+    if held_out_px > MAX_HELD_OUT_RMS_PX:  # a reviewer's bent board (1.95 px) gave angles 0.81× too small
+        raise CalibrationError(
+            f"{source}: the lens model reprojects its {len(held)} held-out views {held_out_px:.2f} px RMS off the "
+            f"board's corners (usable: under {MAX_HELD_OUT_RMS_PX:g} px; a good clip 0.1–0.3 px): a bent, moving or "
+            f"blurred board, or a pattern_inner_corners ({pattern[0]}×{pattern[1]}) that is not the board's (its "
+            "squares less one each way); the angles measured through it would be wrong, so none are"
+        )
+    warnings = []
+    if held_out_px > WARN_HELD_OUT_RMS_PX:
+        warnings.append(
+            f"{source}: the lens model reprojects its held-out views {held_out_px:.2f} px RMS off the board's "
+            f"corners (a good clip 0.1–0.3 px): a soft, moving or bent board? Angles measured through it may be off"
+        )
+    covered = board_coverage(views, size)
+    if covered["share"] < MIN_COVERAGE_SHARE:
+        warnings.append(
+            f"{source}: the board reached only {100 * covered['share']:.0f} % of the frame over the clip's views: "
+            "the lens model is extrapolated beyond it (a board kept in the middle fits well there and can be "
+            "pixels off in the corners); move the board over the whole frame, corners and edges too"
+        )
     try:
         rms, k, d = _calibrate(best, [obj] * len(keys), [views[f] for f in keys], size, fits[best][1])
         models[best]["all_views_rms_px"] = float(rms)
@@ -288,4 +318,44 @@ def calibrate_lens(views: dict, pattern: tuple[int, int], square_size_m: float, 
         ),
         "views": keys,
         "held_out_views": held,
+        "board_coverage": covered,
+        "warnings": warnings,
     }
+
+
+def board_coverage(views: dict, image_size_px) -> dict:
+    """Where the board was in the clip's views: the cells of a :data:`COVERAGE_GRID` over the frame that some
+    view's board (the hull of its corners) reaches, as rows of "#" (reached) and "." (not), and their share."""
+    cols, rows = COVERAGE_GRID
+    width, height = (int(v) for v in image_size_px)
+    mask = np.zeros((height, width), np.uint8)
+    for corners in views.values():
+        hull = cv2.convexHull(np.asarray(corners, np.float32).reshape(-1, 1, 2)).astype(np.int32)
+        cv2.fillConvexPoly(mask, hull, 1)
+    cells = [
+        "".join(
+            "#"
+            if mask[r * height // rows : (r + 1) * height // rows, c * width // cols : (c + 1) * width // cols].any()
+            else "."
+            for c in range(cols)
+        )
+        for r in range(rows)
+    ]
+    share = sum(row.count("#") for row in cells) / (cols * rows)
+    return {"share": share, "grid": [cols, rows], "cells": cells}
+
+
+def outside_coverage_share(x_px, y_px, document: dict) -> float | None:
+    """The share of image points (a track's usable centres) in cells of the frame the lens clip's board never
+    reached (:func:`board_coverage` in the calibration ``document``); None without a coverage map."""
+    covered = document.get("board_coverage")
+    size = document.get("image_size_px")
+    x, y = np.asarray(x_px, float), np.asarray(y_px, float)
+    good = np.isfinite(x) & np.isfinite(y)
+    if not covered or not size or not good.any():
+        return None
+    (cols, rows), (width, height) = covered["grid"], size
+    c = np.clip((x[good] * cols // width).astype(int), 0, cols - 1)
+    r = np.clip((y[good] * rows // height).astype(int), 0, rows - 1)
+    reached = np.array([[ch == "#" for ch in row] for row in covered["cells"]])
+    return float(np.mean(~reached[r, c]))

@@ -28,6 +28,7 @@ from pendulum.camera.calibration import (
     board_points_m,
     calibrate_lens,
     detect_views,
+    outside_coverage_share,
     single_threaded_opencv,
 )
 
@@ -255,10 +256,58 @@ def calibrate_camera_setup(
                 f"{plane_video}: no {pattern[0]}×{pattern[1]} checkerboard found in frame {plane_frame}; "
                 "choose a frame where the whole board is sharp and held in the swing plane (plane_frame)"
             )
+        lens_size = doc.get("image_size_px")
+        if lens_size and list(found["image_size_px"]) != list(lens_size):
+            raise CalibrationError(
+                f"{plane_video}: its frames are {_size(found['image_size_px'])}, the lens clip's "
+                f"({calibration_video}) {_size(lens_size)}: film both in the trials' video mode, at one zoom"
+            )
         corners = found["views"][plane_frame]
         ideal = corners if lens is None else lens.undistort_px(corners)
+        doc.setdefault("image_size_px", list(found["image_size_px"]))
         doc["plane"] = {"video": str(plane_video), "frame": int(plane_frame)}
         doc["plane"].update(plane_homography(ideal, pattern, square_size_m))
     if lens is None and plane_video is None:
         raise CalibrationError(f"camera setup {setup}: give calibration_video and/or plane_video")
     return doc
+
+
+def _size(size_px) -> str:
+    return f"{int(size_px[0])}×{int(size_px[1])} px"
+
+
+def frames_unlike_calibration(trial: str, frame_px, document: dict | None) -> str | None:
+    """Why a trial's frames cannot be measured through its camera setup's calibration, or None: they are another
+    size than the checkerboard clips' (another video mode, an upscaled or cropped copy). A lens model holds for
+    the pixels it was calibrated on: a reviewer's 1280×720 copy of a 640×360 trial came out 6.7° RMS off."""
+    size = (document or {}).get("image_size_px")
+    if not size or not frame_px or list(frame_px) == list(size):
+        return None
+    return (
+        f"{trial}: its frames are {_size(frame_px)}, but camera setup {document.get('camera_setup', '?')} was "
+        f"calibrated on frames of {_size(size)}: a calibration holds for one video mode and zoom; film the "
+        "checkerboard in the trial's mode, or give this trial a rig with a camera setup of its own"
+    )
+
+
+OUTSIDE_COVERAGE_WARN_SHARE = 0.1  # a track this much outside the lens clip's board coverage is warned about
+
+
+def calibration_warnings(trial: str, track, frame_px, document: dict | None) -> list[str]:
+    """What a trial measured through its camera setup's calibration should say: the calibration's own warnings,
+    and where its usable centres (image pixels) lie beyond the board's coverage (the lens model extrapolated).
+    Raises ValueError where its frames are not the calibration's size (:func:`frames_unlike_calibration`)."""
+    if not document:
+        return []
+    if why := frames_unlike_calibration(trial, frame_px, document):
+        raise ValueError(why)
+    said = [f"calibration: {w}" for w in document.get("warnings") or []]
+    ok = track[track.flag == "ok"] if "flag" in track else track
+    outside = outside_coverage_share(ok.x_px.to_numpy(float), ok.y_px.to_numpy(float), document)
+    if outside is not None and outside > OUTSIDE_COVERAGE_WARN_SHARE:
+        said.append(
+            f"calibration: {100 * outside:.0f} % of the track lies where the lens clip's board never reached "
+            f"(camera setup {document.get('camera_setup', '?')}): the lens model is extrapolated there; film the "
+            "board over that part of the frame too"
+        )
+    return said

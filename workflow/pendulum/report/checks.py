@@ -201,7 +201,7 @@ def calibration_rows(calibration: dict) -> list[list[str]]:
     rows = []
     for setup, doc in sorted(calibration.items()):
         if not is_ok(doc):
-            rows.append([td(esc(setup)), td(esc(failure_text(doc)), "na fail", span=6)])
+            rows.append([td(esc(setup)), td(esc(failure_text(doc)), "na fail", span=7)])
             continue
         models = doc.get("models") or {}
         held_out = [
@@ -222,9 +222,20 @@ def calibration_rows(calibration: dict) -> list[list[str]]:
                     (f"{len(views)}" + (f" ({len(held)} held out)" if held else "")) if views else "—",
                     "num" if views else "na",
                 ),
+                coverage_cell(doc),
             ]
         )
     return rows
+
+
+def coverage_cell(doc: dict) -> str:
+    """The share of the frame the lens clip's board reached, with the calibration's warnings (red where any)."""
+    share = (doc.get("board_coverage") or {}).get("share")
+    warnings = doc.get("warnings") or []
+    if share is None and not warnings:
+        return td("—", "na")
+    text = (f"{100 * share:.0f} %" if share is not None else "") + "".join(f"; {w}" for w in warnings)
+    return td(esc(text.removeprefix("; ")), "num fail" if warnings else "num")
 
 
 MANY_TRIALS = 3  # more trials than this: the summary says their like findings together
@@ -319,13 +330,17 @@ class CheckSections(ReportData):
             "focal length f<sub>x</sub>, f<sub>y</sub> (px)",
             "plane board",
             "views used",
+            "frame the board reached",
         ]
         caption = self.table_caption(
             "Camera calibration (results/calibration/&lt;setup&gt;.json): the lens model chosen by the RMS "
             "reprojection error of checkerboard views held out of the fit (the rational model only when more than "
             "5 % below the fisheye's), the focal length of the chosen model, and whether a board held in the swing "
             "plane gave the plane's homography (its tilt against the image plane). Views used: checkerboard views "
-            "found in the lens clip (in brackets, how many of them were held out for the choice)."
+            "found in the lens clip (in brackets, how many of them were held out for the choice). The frame the board "
+            "reached: the share of a 16 × 9 grid over the frame that some view's board covered (the lens model is "
+            "extrapolated beyond it), and what the calibration warns of. A lens clip whose held-out views are over "
+            "1 px RMS off is refused; over 0.5 px, or a board that reached under half the frame, is warned about."
         )
         return table_html(header, calibration_rows(self.calibration), caption=caption, table_id="calibration-table")
 
