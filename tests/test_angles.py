@@ -351,7 +351,12 @@ def test_a_swing_seen_in_perspective_carries_a_second_harmonic_that_is_measured(
     ellipse = _seen_in_perspective(theta, length_m=0.76, camera_m=1.5, ellipse_deg=3.0, period_s=period)
     found = second_harmonic(times, ellipse + noise, period, 0.01)
     assert found["present"] and abs(found["quadrature_deg"]) > 3 * abs(found["in_phase_deg"]), found
-    assert "an elliptical swing" in found["verdict"]
+    assert "an elliptical swing" in found["verdict"] and "or calibrate the view" in found["verdict"]
+    # measured through a swing-plane board already (a reviewer's GoPro trial was told to calibrate the view)
+    from pendulum.angles.harmonics import verdict
+
+    calibrated = verdict(found, plane_calibrated="gopro")
+    assert "calibrate the view" not in calibrated and "though the view is calibrated (camera setup gopro)" in calibrated
 
 
 def test_a_record_too_short_for_a_period_says_so_where_the_period_would_be(tmp_path, monkeypatch):

@@ -7,6 +7,7 @@ import pandas as pd
 
 import _setup  # noqa: F401
 from pendulum.angles.geometry import estimate_rig_geometry, trial_geometry
+from pendulum.angles.harmonics import verdict
 from pendulum.angles.record import (
     angles_from_track,
     angles_from_tracker_csv,
@@ -32,7 +33,7 @@ def read_json(path):
 
 
 def work():
-    track_summary, path = None, None
+    track_summary, path, plane_calibrated = None, None, None
     warnings = []  # about the angle measurement (shown in the report's tracking-quality notes)
     if "table" in sm.input.keys():
         source = sm.input.table
@@ -51,6 +52,7 @@ def work():
             calibration = require_ok(read_json(sm.input.calibration), "calibration")
         in_image = pd.read_csv(source)
         warnings += calibration_warnings(trial, in_image, track_summary.get("frame_px"), calibration)
+        plane_calibrated = calibration.get("camera_setup") if calibration and calibration.get("plane") else None
         track = map_track(in_image, calibration)
         pivot, vertical = map_point(settings["pivot_px"], calibration), settings["vertical_deg"]
         pivot_cov = None
@@ -109,6 +111,8 @@ def work():
         log.warning("trial %s: %s", trial, warning)
         warnings.append(warning)
     if (info.second_harmonic or {}).get("present"):
+        if plane_calibrated:  # the view is calibrated already: the verdict does not ask for it
+            info.second_harmonic["verdict"] = verdict(info.second_harmonic, plane_calibrated)
         warning = info.second_harmonic["verdict"]
         log.warning("trial %s: %s", trial, warning)
         warnings.append(warning)

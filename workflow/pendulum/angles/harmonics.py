@@ -108,8 +108,9 @@ def second_harmonic(time_s, theta_rad, period_s: float | None, noise_deg: float)
     return out
 
 
-def verdict(found: dict) -> str:
-    """One sentence: the harmonic, what makes one, what the body's distance does, what to film."""
+def verdict(found: dict, plane_calibrated: str | None = None) -> str:
+    """One sentence: the harmonic, what makes one, what the body's distance does, what to film (``plane_calibrated``:
+    the camera setup whose swing-plane board mapped the record, where calibrating the view is done already)."""
     c, s = found["in_phase_deg"], found["quadrature_deg"]
     moves = 100 * math.hypot(found["distance_change_in_phase"], found["distance_change_quadrature"])
     kinds = []
@@ -123,6 +124,11 @@ def verdict(found: dict) -> str:
         "which a planar swing seen square-on does not have: perspective makes one where the body's distance from "
         f"the camera changes with the swing, here by about {moves:.2g} % of that distance — "
         + " or ".join(kinds)
-        + "; the fits carry it (film square-on to the swing plane, from farther away, or calibrate the view: "
-        "docs/footage.md)"
+        + (
+            "; the fits carry it (film square-on to the swing plane, from farther away, or calibrate the view: "
+            "docs/footage.md)"
+            if plane_calibrated is None
+            else f"; the fits carry it, though the view is calibrated (camera setup {plane_calibrated}): the swing's "
+            "own, or a board in the plane clip that was not in the swing plane"
+        )
     )
