@@ -76,7 +76,7 @@ from pendulum.fit.uncertainty import (
     unmeasured_warning,
 )
 from pendulum.model.effects import ADDED_MASS, TERMS, lower_bound, unit_of
-from pendulum.model.physics import PendulumModel, SimulationDiverged, keulegan_carpenter_number, simulate
+from pendulum.model.physics import PendulumModel, SimulationDiverged, fastest_swing, simulate
 
 NUISANCE = ("theta0_rad", "omega0_rad_s", "rest_offset_rad")
 # From this many trials a fit's steps are solved on its sparse Jacobian (LSMR), not by an SVD of the dense one (rows ×
@@ -452,9 +452,8 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
     for k, rec in enumerate(records):
         mdl = problem.models[k]
         dense_t = np.arange(rec.time_s[0], rec.time_s[-1], 0.01)
-        _, omega = simulate(mdl, phys, nuis[k][0], nuis[k][1], dense_t, max_step_s=settings.max_step_s)
-        period = 2 * math.pi * math.sqrt(float(mdl.inertia_kg_m2(phys)) / mdl.rig.restoring_torque_nm)
-        peak_speed = float(np.abs(omega).max()) * mdl.rig.length_m
+        theta_sim, omega = simulate(mdl, phys, nuis[k][0], nuis[k][1], dense_t, max_step_s=settings.max_step_s)
+        peak_speed, period, kc = fastest_swing(mdl, phys, dense_t, theta_sim, omega, rec.characteristic_length_m)
         r = res_parts[k]
         warnings += misfit_warning(rec, r)
         checks = record_checks(rec, problem.masks[k], r, float(nuis[k][2]))
@@ -474,7 +473,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             "residual_lag1_autocorrelation": lag1_autocorrelation(r),
             "peak_speed_m_s": peak_speed,
             "period_s": period,
-            "keulegan_carpenter_number": keulegan_carpenter_number(peak_speed, period, rec.characteristic_length_m),
+            "keulegan_carpenter_number": kc,
             "start_values": starts[k],
             "release_skip_s": rec.release_skip_s,
             "dropped_samples": rec.dropped,

@@ -415,6 +415,27 @@ def keulegan_carpenter_number(peak_speed_m_s: float, period_s: float, length_sca
     return peak_speed_m_s * period_s / length_scale_m
 
 
+def fastest_swing(model, params, time_s, theta_rad, omega_rad_s, length_scale_m) -> tuple[float, float, float]:
+    """Of a simulated record's fastest (first) swing: U_max = L max|θ̇|, its cycle's period T (the small-swing T₀
+    where it makes fewer than three crossings) and KC = U_max T / D."""
+    speed = float(np.abs(omega_rad_s).max()) * model.rig.length_m
+    period = first_cycle_period_s(time_s, theta_rad) or small_angle_period_s(model, params)
+    return speed, period, keulegan_carpenter_number(speed, period, length_scale_m)
+
+
+def first_cycle_period_s(time_s: np.ndarray, theta_rad: np.ndarray) -> float | None:
+    """The first whole cycle's period of a simulated swing: from its first crossing of the vertical to its third
+    (linear interpolation); None with fewer than three. A 75° release swings 11 % slower than small swings: the
+    Keulegan–Carpenter number of its fastest swing took the small-swing period (a reviewer, 2026-12-07)."""
+    sign = np.signbit(theta_rad)
+    at = np.flatnonzero(sign[1:] != sign[:-1])
+    if at.size < 3:
+        return None
+    a, b = theta_rad[at], theta_rad[at + 1]
+    crossings = time_s[at] + (time_s[at + 1] - time_s[at]) * a / (a - b)
+    return float(crossings[2] - crossings[0])
+
+
 def small_angle_period_s(model: PendulumModel, params: dict) -> float:
     """T₀ = 2π √(I / ((mg − B) L))."""
     return 2 * math.pi * math.sqrt(float(model.inertia_kg_m2(params)) / model.rig.restoring_torque_nm)

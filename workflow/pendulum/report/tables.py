@@ -439,7 +439,8 @@ class TableSections(ReportData):
             "and, where the variant has them, linear damping c and bearing friction torque τ<sub>f</sub>: "
             "estimate and 95 % interval per trial and variant, and the joint fit of each rig (shared "
             "coefficients, statistical part widened by the consistency scale factor S). KC: Keulegan–Carpenter "
-            "number U<sub>max</sub>T/D of the trial's first fitted swing, from the variant's fitted curve (so it "
+            "number U<sub>max</sub>T/D of the trial's first fitted swing (T that cycle's period, longer than the "
+            "small-swing one for a wide release), from the variant's fitted curve (so it "
             "differs a little between variants, and more where a variant misses the record); joint: the range. "
             + ("Rows ‘truth’: the synthetic trials' true values. " if self.truth else "")
             + "“at bound” marks a coefficient that ended on its lower bound: the data prefer an unphysical "
