@@ -99,6 +99,16 @@ def test_a_rig_with_a_camera_gets_its_calibration_table_and_swing_plane_note(tmp
         "30 (7 held out)",
         "—",  # a calibration from before the board's coverage was measured
     ]
+    square_on = {**CALIBRATION, "plane": {"plane_tilt_deg": 3.0, "square_on_tilt_deg": 3.4}}
+    assert (
+        "yes, square-on (tilt 3.0°: a square-on board&#x27;s corner noise reads up to 3.4°)"
+        in calibration_rows({"g": square_on})[0][5]
+    )
+    turned = {**CALIBRATION, "plane": {"plane_tilt_deg": 11.5886, "square_on_tilt_deg": 2.3}}
+    assert (
+        "yes, tilt 12° (a square-on board&#x27;s corner noise reads up to 2.3°)"
+        in calibration_rows({"g": turned})[0][5]
+    )
     covered = {
         **CALIBRATION,
         "board_coverage": {"share": 0.40278},

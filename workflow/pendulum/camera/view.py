@@ -72,13 +72,31 @@ def plane_homography(corners_ideal_px, pattern: tuple[int, int], square_size_m: 
     h = to_plane @ np.linalg.inv(h_img_from_board)
     h /= h[2, 2]
     residual = _apply_h(h_img_from_board, board) - img  # the board's corners as the homography images them
-    image_tilt_deg = _tilt_of_homography(jac / px_per_m)
+    corner_rms_px = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
     return {
         "homography": h.tolist(),
         "px_per_m": px_per_m,
-        "corner_rms_px": float(np.sqrt(np.mean(np.sum(residual**2, axis=1)))),
-        "plane_tilt_deg": image_tilt_deg,
+        "corner_rms_px": corner_rms_px,
+        "plane_tilt_deg": _tilt_of_homography(jac / px_per_m),
+        "square_on_tilt_deg": _square_on_tilt_deg(board, px_per_m, max(corner_rms_px, 0.05)),
     }
+
+
+def _square_on_tilt_deg(board_m: np.ndarray, px_per_m: float, noise_px: float, draws: int = 200) -> float:
+    """The tilt (95th percentile) that a board held exactly square-on reads with corners ``noise_px`` off: a tilt
+    is never below 0, so noise alone reads one (a reviewer's square-on board: 3.0°, its corners 0.1 px off)."""
+    rng = np.random.default_rng(0)
+    tilts = []
+    for _ in range(draws):
+        seen = board_m * px_per_m + rng.normal(0.0, noise_px / math.sqrt(2), board_m.shape)
+        h, _ = cv2.findHomography(board_m, seen, 0)
+        centre = board_m.mean(axis=0)
+        here = _apply_h(h, centre[None])[0]
+        jac = np.column_stack(
+            [(_apply_h(h, (centre + [1e-4, 0])[None])[0] - here), (_apply_h(h, (centre + [0, 1e-4])[None])[0] - here)]
+        ) / (1e-4 * px_per_m)
+        tilts.append(_tilt_of_homography(jac))
+    return float(np.percentile(tilts, 95))
 
 
 def _tilt_of_homography(jac_normalised: np.ndarray) -> float:

@@ -217,7 +217,7 @@ def calibration_rows(calibration: dict) -> list[list[str]]:
                 td(esc(doc.get("chosen_model") or "none (ideal lens)")),
                 *held_out,
                 td(esc(", ".join(fmt(f, 4) for f in focal)) if focal else "—", "num" if focal else "na"),
-                td(esc(f"yes, tilt {fmt(plane.get('plane_tilt_deg'), 2)}°") if plane else "no", "num"),
+                td(esc(plane_words(plane)) if plane else "no", "num"),
                 td(
                     (f"{len(views)}" + (f" ({len(held)} held out)" if held else "")) if views else "—",
                     "num" if views else "na",
@@ -226,6 +226,16 @@ def calibration_rows(calibration: dict) -> list[list[str]]:
             ]
         )
     return rows
+
+
+def plane_words(plane: dict) -> str:
+    """The plane board's tilt, and whether a square-on board's corner noise alone reads as much."""
+    tilt, noise = plane.get("plane_tilt_deg"), plane.get("square_on_tilt_deg")
+    if not is_finite(noise):  # a calibration from before the noise was measured
+        return f"yes, tilt {fmt(tilt, 2)}°"
+    if is_finite(tilt) and float(tilt) <= float(noise):
+        return f"yes, square-on (tilt {fmt(tilt, 2)}°: a square-on board's corner noise reads up to {fmt(noise, 2)}°)"
+    return f"yes, tilt {fmt(tilt, 2)}° (a square-on board's corner noise reads up to {fmt(noise, 2)}°)"
 
 
 def coverage_cell(doc: dict) -> str:
