@@ -523,9 +523,9 @@ def track_body(
             )
     if held and scene.rest_place_clear:
         table.attrs["body"]["warning"] = (
-            f"the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} "
-            "mid-swing than at the ends of its swing, with the scene there clear (the same from the swing's ends): "
-            "its contrast changes with the wall behind it, and its positions there may be biased by up to a few pixels"
+            f"the body's silhouette is {abs(100 * (1 - ratio)):.0f} % {'smaller' if ratio < 1 else 'larger'} mid-swing "
+            "than at its swing's ends, the scene there clear (the same from the ends): its contrast changes with the "
+            "wall behind it (or a wide-angle lens shrinks it at the edges); its positions may be biased a few pixels"
         )
         return table
     if held:  # not a refusal of the clip: its colour may do (method.py)
