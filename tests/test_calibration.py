@@ -366,3 +366,16 @@ def test_a_square_on_plane_board_reads_its_corner_noise_not_a_tilt():
         found = plane_homography(seen, PATTERN, SQUARE_M)
         turned += found["plane_tilt_deg"] > found["square_on_tilt_deg"] and abs(found["plane_tilt_deg"] - 12) < 2
     assert within >= 15 and turned == 20, (within, turned)
+
+
+def test_a_point_is_in_the_coverage_cell_the_grid_slices_it_into():
+    """At 550×310 (not a multiple of 16 × 9) a point on a cell's first pixel column was counted in the cell before
+    it (a reviewer: x = 34 outside where the board covered pixels 34–60)."""
+    from pendulum.camera.calibration import board_coverage, outside_coverage_share
+
+    square = np.array([[36.0, 36.0], [60.0, 36.0], [60.0, 60.0], [36.0, 60.0]])
+    covered = board_coverage({0: square}, (550, 310))
+    assert covered["cells"][1][1] == "#" and covered["cells"][1][0] == "." and covered["cells"][0][1] == "."
+    document = {"board_coverage": covered, "image_size_px": [550, 310]}
+    assert outside_coverage_share([34.0, 34.9, 67.9], [34.4, 40.0, 67.9], document) == 0.0  # cell (1, 1): 34–67
+    assert outside_coverage_share([33.9, 68.0], [40.0, 40.0], document) == 1.0

@@ -359,6 +359,17 @@ def test_a_cropped_copy_left_out_of_the_pooled_pivot_is_told_by_its_frames_size(
     assert said.startswith("its frames are 1120×630 px where the rig's other trials' are 1280×720 px")
     pictures["crop"] = (720, 1280, 90.0)
     assert "720×1280 px, shown turned by 90°" in unlike_picture("crop", pictures, kept)
+    pictures["crop"] = (1280, 720, 90.0)  # the rotation flag alone: a camera turned (a phone held upright)
+    assert unlike_picture("crop", pictures, kept) is None
+    pictures["crop"] = (1120, 630, 0.0)
+    # the trial's own angles say it too, not "the camera moved" (a reviewer found it only in the geometry JSON)
+    geometry = estimate_rig_geometry({k: tracks[k] for k in kept}, vertical_deg=0.0)
+    geometry["unlike_picture"] = {"crop": unlike_picture("crop", pictures, kept)}
+    said = off_rig_circle(tracks["crop"], geometry, "crop")
+    assert "its frames are 1120×630 px" in said and "the camera moved" not in said
+    assert "the camera moved" in off_rig_circle(tracks["crop"], geometry)  # a trial not named: as before
+    _, why = trial_geometry(tracks["crop"], geometry, vertical_deg=0.0, name="crop")
+    assert "its frames are 1120×630 px" in why
     pictures.pop("good0")  # an older tracks file without its frames' size: judged by the others
     assert "1280×720" in unlike_picture("crop", pictures, kept)
     assert unlike_picture("crop", {"crop": (1120, 630, 0.0)}, kept) is None  # nothing to compare with

@@ -44,6 +44,7 @@ rule freeze:
             all_targets()
             + [doc for name in sorted(TRIALS) for _, doc, _ in trial_documents(name)]
             + [f"results/geometry/{rig}.json" for rig in RIGS_NEEDING_GEOMETRY]
+            + [f"results/calibration/{camera}.json" for camera in used_cameras()]
             + (list(rules.report.output) if rules.has("report") else []),
             excluded=NOT_FROZEN,
         ),

@@ -18,12 +18,7 @@ def report_files():
     variants = sorted(config["variants"])
     rigs = sorted(RIG_TRIALS)
     # camera setups of rigs with video trials (calibration.smk); no key without cameras
-    cameras = {
-        config["rigs"][rig].get("camera")
-        for rig, names in RIG_TRIALS.items()
-        if any(TRIALS[n].kind == "video" for n in names)
-    } - {None}
-    calibration = {c: f"results/calibration/{c}.json" for c in sorted(cameras)}
+    calibration = {c: f"results/calibration/{c}.json" for c in used_cameras()}
     return {
         **({"calibration": calibration} if calibration else {}),
         "summary": "results/fits/summary.csv",
@@ -120,3 +115,13 @@ def report_rigs():
         }
         for rig in sorted(RIG_TRIALS)
     }
+
+
+def used_cameras():
+    """The camera setups of rigs with video trials, sorted (their calibrations are the report's, and frozen)."""
+    cameras = {
+        config["rigs"][rig].get("camera")
+        for rig, names in RIG_TRIALS.items()
+        if any(TRIALS[n].kind == "video" for n in names)
+    }
+    return sorted(cameras - {None})

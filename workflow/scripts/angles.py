@@ -61,7 +61,7 @@ def work():
             geometry = require_ok(read_json(sm.input.geometry), "geometry")
             warnings += [f"rig geometry: {w}" for w in geometry.get("warnings", [])]
             if pivot is None:
-                used, own = trial_geometry(track, geometry, vertical)
+                used, own = trial_geometry(track, geometry, vertical, trial)
                 pivot, pivot_cov, vertical = used["pivot_px"], used["pivot_covariance_px2"], used["vertical_deg"]
                 for warning in [own, *used["warnings"]] if own else []:
                     log.warning("trial %s: %s", trial, warning)

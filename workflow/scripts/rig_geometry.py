@@ -50,7 +50,7 @@ def work():
     if "calibration" in sm.input.keys():
         calibration = require_ok(read_json(sm.input.calibration), "calibration")
         log.info("rig %s: %s", rig, ImageToPlane(calibration).describe())
-    tracks, failed, pictures = {}, {}, {}
+    tracks, failed, pictures, refused = {}, {}, {}, {}
     for path, summary_path in zip(sm.input.tracks, sm.input.summaries, strict=True):
         summary = read_json(summary_path)
         name = Path(path).stem
@@ -60,16 +60,18 @@ def work():
             failed[name] = summary["error"]
             log.warning("%s: left out of the pooled geometry (tracking failed: %s)", name, summary["error"])
         elif unlike := frames_unlike_calibration(name, summary.get("frame_px"), calibration):
-            failed[name] = unlike  # its angles stage refuses it with the same words
-            log.warning("%s: left out of the pooled geometry: %s", name, unlike)
+            refused[name] = unlike  # its angles stage refuses it with the same words
+            log.warning("left out of the pooled geometry: %s", unlike)
         else:
             tracks[name] = map_track(pd.read_csv(path), calibration)
     pivot = map_point(sm.params.pivot_px, calibration)
     if not tracks and pivot is None:
-        if failed:  # nothing to measure on this rig: the trials' own errors say why (results/status/trials.csv)
+        if failed or refused:  # nothing to measure on this rig: the trials' own errors say why (trials.csv)
+            why = [f"the tracks of {', '.join(sorted(failed))} failed"] if failed else []
+            why += [f"{', '.join(sorted(refused))}: frames not of the camera setup's size"] if refused else []
             raise ValueError(
-                f"rig {rig}: no usable track to estimate the pivot from: the tracks of {', '.join(sorted(failed))} "
-                "failed (their errors are in results/status/trials.csv and the report)"
+                f"rig {rig}: no usable track to estimate the pivot from: {'; '.join(why)} (their errors are in "
+                "results/status/trials.csv and the report)"
             )
         raise ValueError(
             f"rig {rig}: no usable track to estimate the pivot from (no trial of the rig is pooled); give pivot_px "
@@ -77,9 +79,11 @@ def work():
         )
     geometry = estimate_rig_geometry(tracks, pivot_px=pivot, vertical_deg=sm.params.vertical_deg)
     kept = [k for k in tracks if k not in geometry["rejected_trials"]]
+    geometry["unlike_picture"] = {}  # a trial's angles say it in place of a moved camera (off_rig_circle)
     for name in sorted(geometry["rejected_trials"]):
         if note := unlike_picture(name, pictures, kept):  # told for what it is, not as a camera that moved
             geometry["rejected_trials"][name] = geometry["rejected_trials"][name].replace(ELSEWHERE, note)
+            geometry["unlike_picture"][name] = note
     for name, reason in geometry["rejected_trials"].items():
         log.warning("%s: left out of the pooled geometry: %s", name, reason)
     circle = geometry.get("circle")
@@ -114,7 +118,8 @@ def work():
     log.info("rig %s: %s", rig, geometry)
     inputs = sorted(Path(p).stem for p in sm.input.tracks)
     write_json(
-        {"rig": rig, "status": "ok", "input_trials": inputs, **geometry, "failed_trials": failed}, sm.output.geometry
+        {"rig": rig, "status": "ok", "input_trials": inputs, **geometry, "failed_trials": {**failed, **refused}},
+        sm.output.geometry,
     )
 
 

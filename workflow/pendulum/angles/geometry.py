@@ -217,14 +217,15 @@ ELSEWHERE = (
 
 def unlike_picture(name: str, pictures: dict[str, tuple], kept) -> str | None:
     """Why a trial left out of its rig's pivot has other pixels than the trials kept, or None: its frames'
-    ``(width, height, display rotation)`` in ``pictures`` differ from the most common of theirs (a cropped, scaled
-    or turned export of a clip: its path lies elsewhere in its own pixels, not on a camera that moved)."""
+    ``(width, height, display rotation)`` in ``pictures`` are of another size than the most common of theirs (a
+    cropped, scaled or turned export of a clip: its path lies elsewhere in its own pixels, not on a camera that
+    moved). A display rotation alone is a camera turned (a phone held upright): its frames are used as stored."""
     theirs = [pictures[k] for k in sorted(kept) if k != name and pictures.get(k)]
     mine = pictures.get(name)
     if not mine or not theirs:
         return None
     usual = max(sorted(set(theirs)), key=theirs.count)
-    if tuple(mine) == tuple(usual):
+    if tuple(mine[:2]) == tuple(usual[:2]):
         return None
 
     def said(picture) -> str:
@@ -334,9 +335,10 @@ def _own_bias_covariance(track: pd.DataFrame, own: CircleFit) -> np.ndarray:
     return track_bias_covariance(own.radius_px, own.arc_span_deg, vertical_deg)
 
 
-def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
+def off_rig_circle(track: pd.DataFrame, geometry: dict, name: str | None = None) -> str | None:
     """Why a track cannot use its rig's pooled pivot (its path is off the rig's circle, or the rig's trials
-    share none), or None."""
+    share none), or None; for trial ``name`` whose frames are another size than the rig's (``unlike_picture`` in
+    the geometry document) that is said in place of a moved camera."""
     if geometry.get("shared") is False:
         return "its rig's trials do not share one pivot"
     circle = geometry.get("circle")
@@ -345,16 +347,17 @@ def off_rig_circle(track: pd.DataFrame, geometry: dict) -> str | None:
     off = _radial_rms_px(track, CircleFit(**circle))
     limit = max(OUTLIER_TRACK_FACTOR * circle["rms_px"], OUTLIER_TRACK_FLOOR_PX)
     if off > limit:
-        return f"the tracked path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): {ELSEWHERE}"
+        why = (geometry.get("unlike_picture") or {}).get(name, ELSEWHERE)
+        return f"the tracked path is {off:.2f} px RMS off the rig's pivot circle (limit {limit:.2f} px): {why}"
     return None
 
 
-def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None) -> tuple[dict, str | None]:
+def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None, name=None) -> tuple[dict, str | None]:
     """The pivot and vertical one trial's angles use: its rig's pooled ones (``geometry``), or, where its path is
     off the rig's circle (:func:`off_rig_circle`), its own (:func:`estimate_rig_geometry` of this track alone;
-    ``vertical_deg`` given is kept). Returns ``{pivot_px, pivot_covariance_px2, vertical_deg, warnings}`` and
-    why its own was used (None when the rig's)."""
-    problem = off_rig_circle(track, geometry)
+    ``vertical_deg`` given is kept; ``name``: the trial's, for its reason). Returns ``{pivot_px,
+    pivot_covariance_px2, vertical_deg, warnings}`` and why its own was used (None when the rig's)."""
+    problem = off_rig_circle(track, geometry, name)
     if problem is None:
         vertical = vertical_deg if vertical_deg is not None else geometry["vertical_deg"]
         return {

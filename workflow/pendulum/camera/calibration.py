@@ -355,7 +355,8 @@ def outside_coverage_share(x_px, y_px, document: dict) -> float | None:
     if not covered or not size or not good.any():
         return None
     (cols, rows), (width, height) = covered["grid"], size
-    c = np.clip((x[good] * cols // width).astype(int), 0, cols - 1)
-    r = np.clip((y[good] * rows // height).astype(int), 0, rows - 1)
+    # the cells' pixel edges as board_coverage slices them (k · size // cells)
+    c = np.clip(np.searchsorted([k * width // cols for k in range(cols + 1)], x[good], "right") - 1, 0, cols - 1)
+    r = np.clip(np.searchsorted([k * height // rows for k in range(rows + 1)], y[good], "right") - 1, 0, rows - 1)
     reached = np.array([[ch == "#" for ch in row] for row in covered["cells"]])
     return float(np.mean(~reached[r, c]))
