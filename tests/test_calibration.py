@@ -324,7 +324,10 @@ def test_a_camera_clip_that_is_not_there_fails_its_calibration_naming_it_and_rer
     config["cameras"] = {"gone": {"calibration_video": "data/calibration/gone.mp4", "square_size_m": 0.025}}
     config["rigs"]["paper_rig"]["camera"] = "gone"
     (work / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
-    assert "calibrate_camera" in [r for r, _ in planned_wildcards(run(["-n"], work).stdout)]  # planned, not refused
+    planned = run(["-n"], work)
+    assert "calibrate_camera" in [r for r, _ in planned_wildcards(planned.stdout)]  # planned, not refused, and said
+    said = "Camera setup gone: data/calibration/gone.mp4 (cameras/gone/calibration_video) is not there"
+    assert said in planned.stderr + planned.stdout
     run(["-c1", "results/calibration/gone.json"], work)
     document = json.loads((work / "results" / "calibration" / "gone.json").read_text())
     assert document["status"] == "failed" and document["failed_stage"] == "calibration"

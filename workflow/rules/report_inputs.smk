@@ -125,3 +125,20 @@ def used_cameras():
         if any(TRIALS[n].kind == "video" for n in names)
     }
     return sorted(cameras - {None})
+
+
+def say_missing_camera_clips():
+    """Said while the DAG is built, so a dry run says it too: the run fails those trials alone
+    (calibrate_camera.py)."""
+    for camera in used_cameras():
+        for key in CAMERA_CLIPS:
+            clip = config["cameras"][camera].get(key)
+            if clip and not Path(clip).is_file():
+                print(
+                    f"Camera setup {camera}: {clip} (cameras/{camera}/{key}) is not there: its calibration will "
+                    "fail, and the trials of its rigs with it",
+                    file=sys.stderr,
+                )
+
+
+say_missing_camera_clips()
