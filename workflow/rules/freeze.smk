@@ -19,7 +19,7 @@ FREEZE_REQUEST = {
 FREEZE_INPUTS = [config.get("truth_dir")] + [
     setup.get(key)
     for setup in (config.get("cameras") or {}).values()
-    for key in ("calibration_video", "plane_video")
+    for key in CAMERA_CLIPS
 ]
 # Not frozen: frame images (bulky; the contact sheets stay) and the run's all-ok flag
 # (a frozen folder may hold failed trials: results/status/trials.csv says which and why).

@@ -50,16 +50,7 @@ def plane_homography(corners_ideal_px, pattern: tuple[int, int], square_size_m: 
     img = np.asarray(corners_ideal_px, float).reshape(-1, 2)
     h_img_from_board, _ = cv2.findHomography(board, img, 0)
     centre_board = board.mean(axis=0)
-
-    def image_of(p):
-        v = h_img_from_board @ np.array([p[0], p[1], 1.0])
-        return v[:2] / v[2]
-
-    eps = 1e-4
-    c_img = image_of(centre_board)
-    jac = np.column_stack(
-        [(image_of(centre_board + [eps, 0]) - c_img) / eps, (image_of(centre_board + [0, eps]) - c_img) / eps]
-    )  # d image / d board (px per m)
+    c_img, jac = _image_and_jacobian(h_img_from_board, centre_board)  # d image / d board (px per m)
     px_per_m = math.sqrt(abs(np.linalg.det(jac)))
     mirrored = np.linalg.det(jac) < 0
     flip = np.diag([1.0, -1.0]) if mirrored else np.eye(2)
@@ -86,17 +77,19 @@ def _square_on_tilt_deg(board_m: np.ndarray, px_per_m: float, noise_px: float, d
     """The tilt (95th percentile) that a board held exactly square-on reads with corners ``noise_px`` off: a tilt
     is never below 0, so noise alone reads one (a reviewer's square-on board: 3.0°, its corners 0.1 px off)."""
     rng = np.random.default_rng(0)
-    tilts = []
+    centre, tilts = board_m.mean(axis=0), []
     for _ in range(draws):
         seen = board_m * px_per_m + rng.normal(0.0, noise_px / math.sqrt(2), board_m.shape)
         h, _ = cv2.findHomography(board_m, seen, 0)
-        centre = board_m.mean(axis=0)
-        here = _apply_h(h, centre[None])[0]
-        jac = np.column_stack(
-            [(_apply_h(h, (centre + [1e-4, 0])[None])[0] - here), (_apply_h(h, (centre + [0, 1e-4])[None])[0] - here)]
-        ) / (1e-4 * px_per_m)
-        tilts.append(_tilt_of_homography(jac))
+        tilts.append(_tilt_of_homography(_image_and_jacobian(h, centre)[1] / px_per_m))
     return float(np.percentile(tilts, 95))
+
+
+def _image_and_jacobian(h: np.ndarray, point, eps: float = 1e-4) -> tuple[np.ndarray, np.ndarray]:
+    """The image of ``point`` through the homography ``h`` and its Jacobian there (forward differences)."""
+    here = _apply_h(h, np.asarray(point, float)[None])[0]
+    steps = _apply_h(h, np.asarray(point, float) + np.diag([eps, eps]))
+    return here, (steps - here).T / eps
 
 
 def _tilt_of_homography(jac_normalised: np.ndarray) -> float:
