@@ -12,28 +12,43 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares, nnls
 
-from pendulum.angles.swings import noise_level, swing_centre_rad, turning_points
+from pendulum.angles.swings import noise_level, swing_centre_rad, swing_extrema
 from pendulum.fit.records import AngleRecord
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import PendulumModel
 
 
-def extrema(t, theta):
-    """Times and signed values of the swing extrema, refined by a parabola through 5 samples."""
+def extrema(t, theta, noise_rad: float = 0.0):
+    """Times, signed values and indices of the swing extrema (:func:`~pendulum.angles.swings.swing_extrema`: one
+    per swing, however noisy its flat peak), each refined by a parabola through 2k + 1 samples about it: k = 2, or
+    wider where the angle comes back from the peak by less than :data:`PEAK_DROP_SIGMAS` × ``noise_rad`` within k
+    samples (a slow swing sampled fast: its peak is flat within the noise, and 5 samples place it anywhere on it)."""
     smooth = pd.Series(theta).rolling(3, center=True, min_periods=1).mean().to_numpy()
-    idx = turning_points(smooth, min_separation=3)
-    times, values = [], []
-    for i in idx:
-        if i < 2 or i > t.size - 3:
+    times, values, kept = [], [], []
+    for i in swing_extrema(theta):
+        k = 2
+        while (
+            k < MAX_PEAK_HALF_WIDTH
+            and i - 2 * k >= 0
+            and i + 2 * k < t.size
+            and min(abs(smooth[i] - smooth[i - k]), abs(smooth[i] - smooth[i + k])) < PEAK_DROP_SIGMAS * noise_rad
+        ):
+            k *= 2
+        if i < k or i > t.size - k - 1:
             continue
-        tt, yy = t[i - 2 : i + 3] - t[i], theta[i - 2 : i + 3]
+        tt, yy = t[i - k : i + k + 1] - t[i], theta[i - k : i + k + 1]
         a, b, c = np.polyfit(tt, yy, 2)
         if a == 0 or abs(-b / (2 * a)) > 2 * (tt[-1] - tt[0]):
             continue
         tv = -b / (2 * a)
         times.append(t[i] + tv)
         values.append(c - b * b / (4 * a))
-    return np.array(times), np.array(values)
+        kept.append(i)
+    return np.array(times), np.array(values), np.array(kept, int)
+
+
+PEAK_DROP_SIGMAS = 4.0  # a peak's refining window reaches where the swing has come back by this many noise σ
+MAX_PEAK_HALF_WIDTH = 64  # ... at most this many samples each side
 
 
 def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
@@ -221,7 +236,7 @@ def _half_cycle_pairs(t, x, min_amplitude_rad):
     t, x = np.asarray(t, float)[good], np.asarray(x, float)[good]
     if t.size < 5:
         return (np.array([]),) * 4
-    ext_t, ext_v = extrema(t, x)
+    ext_t, ext_v, _ = extrema(t, x, noise_level(x))
     keep = np.abs(ext_v) > min_amplitude_rad
     ext_t, ext_v = ext_t[keep], ext_v[keep]
     pairs = np.flatnonzero(np.sign(ext_v[1:]) != np.sign(ext_v[:-1])) if ext_v.size > 1 else np.array([], int)

@@ -26,9 +26,11 @@ What a Tracker (Open Source Physics) user does by hand, made precise for real fo
    the prediction (a part of it, not a light blinking beside it); where that is over MAX_AREA_RATIO of the body (a
    hand, a second bob it meets), the prediction goes on from the body's own centre in it (``body_parts.own_centre``).
    The first frame's body is the heaviest moving object above a quarter of its own contrast (its part at its
-   thickest point), or the one at ``start_px``; its size, contrast and silhouette split are the first frame's,
-   or, where that differs from the median-sized body of :data:`TYPICAL_SAMPLES` samples spread over the clip by
-   more than :data:`TYPICAL_AREA_RATIO` (a hand holding it) or touches the border, that sample's. Where the
+   thickest point; one that is no compact body or spans the frame's width and moves in place in most samples, a
+   tank's wavy water surface, is set aside: ``body_parts.in_place_set_aside``), or the one at
+   ``start_px``; its size, contrast and silhouette split are the first frame's, or, where that differs from the
+   median-sized body of samples spread over the clip by more than :data:`~.body_parts.TYPICAL_AREA_RATIO` (a hand
+   holding it) or touches the border, that sample's. Where the
    body's contrast in a frame is below :data:`FAINT_CONTRAST` of C (before a darker band of wall), it is found
    again above ¼ of its own contrast there. A one-sided body's I − B (where over its noise) is divided by the
    wall's gain (``body_scene.wall_gain``: under 1 where the body keeps less than 0.8 of its contrast before the
@@ -72,6 +74,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import cv2
 import numpy as np
@@ -82,18 +85,21 @@ from pendulum.tracking.body_parts import (
     CONTRAST_FRACTION,
     MAX_AREA_RATIO,
     MIN_AREA_RATIO,
+    MIN_SOLIDITY,
     NOISE_SIGMAS,
+    TYPICAL_AREA_RATIO,
     Seen,
     body_close_size,
     body_component,
     body_core,
-    body_measure,
     body_reach,
+    first_and_usual,
+    in_place_set_aside,
     open_size,
     own_centre,
     silhouette_cut,
+    solidity,
     start_missed,
-    touches_border,
 )
 from pendulum.tracking.body_scene import (
     STRONG_FRACTION,
@@ -136,7 +142,6 @@ FAINT_CONTRAST = 0.6  # a body below this share of its first contrast is found a
 AREA_SIGMAS, MIN_AREA_CHANGE = 6.0, 0.10  # a fault: the covered area changes by 6 σ and this fraction in ~1 s
 MOVING_PX = 0.3  # the body moves (px per frame): its area there is its own (MAX_AREA_RATIO, MIN_AREA_RATIO)
 MERGE_S = 0.2  # a merge with a shadow or a hand comes and goes over this long (s): ``checks.grown_runs``
-TYPICAL_SAMPLES, TYPICAL_AREA_RATIO = 9, 1.2  # samples spread over the clip for the body's usual size; its range
 CENTROID_SIGMAS = 6.0
 MIN_CENTROID_DISAGREEMENT = 0.015  # ... and this share of the body's radius (0.3 px at 20 px), at least 0.3 px
 CLEAR_REST_PLACE = 0.2  # the scene from the swing's ends changes < this share of the body's area: it held none
@@ -144,7 +149,6 @@ REST_PLACE_REPAIRS = 2  # scenes taken again from the swing's ends before a body
 MIN_MID_SWING_AREA_RATIO = 0.9  # below (or above its inverse): the scene holds the body (rest_place_area_ratio)
 FILLED_CLEAN_RATIO = 0.96  # mid_swing_area_ratio of a clean scene: 0.96–1.02; beyond, with a fill behind: a warning
 WIDE_SWING_RADII = 6.0  # a path this many body radii across hides no place of the scene in most frames
-MIN_SOLIDITY = 0.3  # a body fills more of its convex hull (even a slender vehicle: > 0.9; a tank's caustics 0.09)
 UNSEEN_FILL_SHARE = 0.8 * CONTRAST_FRACTION  # a scene filled in behind the body: off by less than the silhouette cut
 
 
@@ -173,6 +177,7 @@ class BodyScene:
     # medians of the body and of the wall behind it as the clip usually shows it (the first frame, or a sample where a
     # hand holds it there), and of the wall behind its swing (wall_gain)
     first_grey: tuple | None = None
+    set_aside: list = field(default_factory=list)  # moving objects in place taken for no body (x_px, y_px, hull_fill)
 
     def to_dict(self) -> dict:
         return {
@@ -188,7 +193,7 @@ class BodyScene:
             "one_sided": self.one_sided,
             "rest_place_clear": self.rest_place_clear,
             "reach_px": None if self.reach_px is None else round(self.reach_px, 2),
-        }
+        } | ({"set_aside": self.set_aside} if self.set_aside else {})
 
 
 def find_body(
@@ -253,36 +258,21 @@ def find_body(
     near = None if start_px is None else (float(start_px[0]), float(start_px[1]))
     close_px = close_size(background.shape)
 
-    def measured(polarity: str) -> tuple[Seen | None, Seen | None]:
-        """The body in the first frame, and as most of the clip shows it: of samples spread over the clip, the
-        body in full view of median area, where the first frame's is out of view in part or not of its size
-        (within :data:`TYPICAL_AREA_RATIO`: a hand holding it before the release)."""
-        first = body_measure(one_sided(images[0] - background, polarity), threshold, close_px, near, view is None)
-        if first is None or first.component is None or near is not None:
-            return first, first
-        seen = []
-        for k in range(1, len(images), max(1, (len(images) - 1) // TYPICAL_SAMPLES)):
-            rows, cols = excluded.extent(k)
-            if not rows.size:  # nothing moving in this sample
-                continue
-            margin = 2 * close_px + 8  # the sample's moving objects, cut out with a margin (a 1080p frame is large)
-            y0, y1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, background.shape[0])
-            x0, x1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, background.shape[1])
-            diff = one_sided(images[k][y0:y1, x0:x1] - background[y0:y1, x0:x1], polarity)
-            body = body_measure(diff, threshold, close_px, None, view is None)
-            if body is None or body.component is None:
-                continue
-            if not touches_border(body.component, (y0, y1, x0, x1), background.shape):  # in full view
-                seen.append(body._replace(sample=k, window=(y0, y1, x0, x1)))
-        if not seen:
-            return first, first
-        typical = sorted(seen, key=lambda s: int(s.component.sum()))[len(seen) // 2]
-        ratio = first.component.sum() / typical.component.sum()
-        if touches_border(first.component) or not 1 / TYPICAL_AREA_RATIO <= ratio <= TYPICAL_AREA_RATIO:
-            return first, typical
-        return first, first
+    def measured(polarity: str, aside=None) -> tuple[Seen | None, Seen | None]:
+        return first_and_usual(images, background, excluded, polarity, threshold, close_px, near, view is None, aside)
 
     first, whole = measured(polarity)
+    aside, set_aside = None, []
+    if near is None:  # a mover in place that is no body (a tank's water surface): set aside
+        first, whole, aside, set_aside = in_place_set_aside(
+            first, whole, partial(measured, polarity), excluded, close_px
+        )
+    if first is None and set_aside:
+        where = f"({set_aside[0]['x_px']:.0f}, {set_aside[0]['y_px']:.0f}) px"
+        raise BodyError(
+            f"{path}: the only moving object in the first frame, near {where}, moves in place in most samples and is "
+            "no body (a tank's water surface, light rippling off water): give start_px at the body's centre, if any"
+        )
     if first is None:
         raise BodyError(
             f"{path}: no moving body in the first frame (nothing differs from the static scene by more than "
@@ -290,20 +280,21 @@ def find_body(
         )
     if first.component is None:
         raise BodyError(f"{path}: the moving object in the first frame is thinner than a body (a thread or rod only)")
-    hull = cv2.convexHull(cv2.findNonZero(first.component.astype(np.uint8)))  # its area over its hull's: solidity
+    hull = cv2.convexHull(cv2.findNonZero(first.component.astype(np.uint8)))
     if near is not None and track is None and (missed := start_missed(first.component, hull, near)):  # the user's
         raise BodyError(f"{path}: {missed}")
-    if (solid := first.component.sum() / max(cv2.contourArea(hull), 1.0)) < MIN_SOLIDITY:  # not a body: its colour?
+    if (solid := solidity(first.component)) < MIN_SOLIDITY:  # not a body: its colour?
         raise VideoError(
-            f"{path}: the heaviest moving object in the first frame is no compact body (it fills {100 * solid:.0f} % "
-            "of its outline's convex hull): the still scene moves (light rippling off water, caustics on a tank's "
-            "wall, a flickering or moving light); light the scene evenly, or give start_px at a marker dot"
+            f"{path}: the heaviest moving object in the first frame, near ({first.x:.0f}, {first.y:.0f}) px, is no "
+            f"compact body (it fills {100 * solid:.0f} % of its outline's convex hull): the still scene moves (a "
+            "tank's water surface, light rippling off water, caustics on a tank's wall, a flickering or moving light); "
+            "light the scene evenly, or give start_px at the body's centre (or a marker dot's) in the first frame"
         )
     # the side of the scene the body lies on, voted by its own pixels in the first frame (not a rod's or a second
     # pendulum's) above a quarter of its contrast
     side = body_polarity([images[0]], background, [first.component], silhouette_cut(sigma, first.contrast))
     if polarity == "both" and side in ("dark", "bright"):  # a one-sided body: measured by its own side throughout
-        first_side, whole_side = measured(side)
+        first_side, whole_side = measured(side, aside)
         found = first_side is not None and first_side.component is not None and whole_side.component is not None
         # the same body (its centre and most of its area), not a shadow or another object
         if found and math.dist(first_side[:2], first[:2]) <= max(2, first.inner_radius_px / 2):
@@ -323,6 +314,7 @@ def find_body(
         polarity=polarity,
         one_sided=side,  # the vote above a quarter of the body's contrast, not its soft shadow nor the noise
         reach_px=body_reach(whole.component),
+        set_aside=set_aside,
         first_grey=_greys(images[whole.sample], background, whole, excluded),
         # the swing's ends saw its rest place, and their scene differs from the median's there by less than a
         # ghost of the body would (its contrast over CLEAR_REST_PLACE of its area): the median held no body

@@ -15,12 +15,14 @@ from pendulum.tracking.body_scene import (
     MIN_BODY_AREA_PX,
     STRONG_FRACTION,
     components,
+    one_sided,
     silhouette_fraction,
     soft_centroid,
 )
 
 REACH_SLACK, REACH_MARGIN_PX = 1.3, 4.0  # a part joined to the body lies within this × its reach (+ this) of it
 MAX_AREA_RATIO, MIN_AREA_RATIO = 1.5, 0.5  # the body with something else, or a part of it: its area's range
+TYPICAL_SAMPLES, TYPICAL_AREA_RATIO = 9, 1.2  # samples spread over the clip for the body's usual size; its range
 
 
 SOFT_EDGE_RATIO = 1 / 3  # a component whose edge is this much softer than a heavy one's beside it: its shadow
@@ -102,6 +104,12 @@ def soft_components(diff: np.ndarray, labels: np.ndarray, stats: np.ndarray, mas
         )
 
     return {i for i in ids if any(beside_sharper(i, j) for j in heavy)}
+
+
+def solidity(component: np.ndarray) -> float:
+    """A silhouette's area over its convex hull's (a body: over 0.3; a wavy water line, caustics' web: under)."""
+    hull = cv2.convexHull(cv2.findNonZero(component.astype(np.uint8)))
+    return float(component.sum() / max(cv2.contourArea(hull), 1.0))
 
 
 def body_reach(component: np.ndarray) -> float:
@@ -298,3 +306,67 @@ def body_measure(diff: np.ndarray, threshold: float, close_px: int, near, shadow
     fraction = silhouette_fraction(diff[opened])
     x, y, _, _, _ = soft_centroid(diff, opened, fraction)
     return Seen(x, y, contrast, fraction, opened, inner)
+
+
+def first_and_usual(
+    images, background, excluded, polarity: str, threshold: float, close_px: int, near, shadows_apart, aside=None
+) -> tuple[Seen | None, Seen | None]:
+    """The body in the first of ``images`` (:func:`body_measure` of I − B on the side ``polarity`` names), and as most
+    of the clip shows it: of :data:`TYPICAL_SAMPLES` samples spread over the clip (each cut out around its moving
+    pixels, ``excluded``: :class:`~pendulum.tracking.scene_stack.EnlargedMasks`), the body in full view of median
+    area, where the first frame's is out of view in part or not of its size (within :data:`TYPICAL_AREA_RATIO`: a
+    hand holding it before the release). ``aside``: pixels left out of every difference (a moving object set aside
+    as no body)."""
+
+    def diff(k, y0=0, y1=None, x0=0, x1=None):
+        d = one_sided(images[k][y0:y1, x0:x1] - background[y0:y1, x0:x1], polarity)
+        return d if aside is None else np.where(aside[y0:y1, x0:x1], np.float32(0), d)
+
+    first = body_measure(diff(0), threshold, close_px, near, shadows_apart)
+    if first is None or first.component is None or near is not None:
+        return first, first
+    seen = []
+    for k in range(1, len(images), max(1, (len(images) - 1) // TYPICAL_SAMPLES)):
+        rows, cols = excluded.extent(k)
+        if not rows.size:  # nothing moving in this sample
+            continue
+        margin = 2 * close_px + 8  # the sample's moving objects, cut out with a margin (a 1080p frame is large)
+        y0, y1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, background.shape[0])
+        x0, x1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, background.shape[1])
+        body = body_measure(diff(k, y0, y1, x0, x1), threshold, close_px, None, shadows_apart)
+        if body is None or body.component is None:
+            continue
+        if not touches_border(body.component, (y0, y1, x0, x1), background.shape):  # in full view
+            seen.append(body._replace(sample=k, window=(y0, y1, x0, x1)))
+    if not seen:
+        return first, first
+    typical = sorted(seen, key=lambda s: int(s.component.sum()))[len(seen) // 2]
+    ratio = first.component.sum() / typical.component.sum()
+    if touches_border(first.component) or not 1 / TYPICAL_AREA_RATIO <= ratio <= TYPICAL_AREA_RATIO:
+        return first, typical
+    return first, first
+
+
+MIN_SOLIDITY = 0.3  # a body fills more of its convex hull (even a slender vehicle: > 0.9; a tank's caustics 0.09)
+IN_PLACE_SHARE, MAX_SET_ASIDE = 0.8, 3  # a mover that is no body, moving in this share of the samples: set aside
+
+
+def in_place_set_aside(first: Seen, whole: Seen, measured, excluded, close_px: int):
+    """``(first, whole, aside, set_aside)``: where the first frame's heaviest moving object is no body (under
+    :data:`MIN_SOLIDITY` of its hull, or across the frame's width) and moves in place (in :data:`IN_PLACE_SHARE` of
+    the samples' moving pixels, ``excluded``: a tank's wavy water surface, a rippling light), it is set aside (its
+    place, grown by a closing width each side, left out of every difference) and the body sought again by
+    ``measured(polarity, aside)``; a swinging body leaves its place. ``set_aside``: where each was and how much of
+    its hull it filled; ``aside`` the pixels left out (None: none)."""
+    aside, set_aside = None, []
+    while first is not None and first.component is not None and len(set_aside) < MAX_SET_ASIDE:
+        solid, cols = solidity(first.component), np.flatnonzero(first.component.any(axis=0))
+        if solid >= MIN_SOLIDITY and not (cols[0] == 0 and cols[-1] == first.component.shape[1] - 1):
+            break  # a compact body, or one that does not span the frame's width as a water surface does
+        if float(np.median(excluded.count_over_samples()[first.component])) < IN_PLACE_SHARE * len(excluded):
+            break
+        set_aside.append({"x_px": round(first.x, 1), "y_px": round(first.y, 1), "hull_fill": round(solid, 3)})
+        grown = cv2.dilate(first.component.astype(np.uint8), np.ones((2 * close_px + 1,) * 2, np.uint8)) > 0
+        aside = grown if aside is None else aside | grown
+        first, whole = measured(aside)
+    return first, whole, aside, set_aside
