@@ -32,7 +32,7 @@ from pendulum.synthetic.scene import draw_disk
 from pendulum.synthetic.specs import Camera, Occlusions, TrialSpec
 from pendulum.tracking.marker import track_video
 from pendulum.tracking.settings import TrackerSettings
-from pendulum.trials import ConfigError, trial_settings, validate_config
+from pendulum.trials import ConfigError, settings_of_trials, trial_settings, validate_config
 
 RIG = {"mass_kg": 2.0, "length_m": 0.3, "frontal_area_m2": 0.012, "displaced_volume_m3": 0.0005}
 TRUTH = {"added_mass_kg": 0.6, "drag_area_m2": 0.01, "linear_damping_nm_s": 0.02, "friction_torque_nm": 0.005}
@@ -460,6 +460,21 @@ def test_angle_table_with_unsorted_times_is_sorted(tmp_path):
     assert "rows were not in time order; sorted by t_s" in info.notes
 
 
+def test_an_angle_table_holding_two_records_one_after_the_other_is_refused(tmp_path):
+    """A logger restarted mid-file (a reviewer's lab table, 2026-12-07): the second record's times the first's
+    again. On the same times it was refused as "… rows repeat an earlier time …; export t_s with more decimals";
+    on times between the first's it would have been sorted into one record of two interleaved swings. Now named."""
+    first, second = swing_table(), swing_table().assign(theta_deg=lambda d: 0.7 * d.theta_deg)
+    for name, times in (("aligned", second.t_s), ("between", second.t_s + 0.5 * second.t_s.diff().median())):
+        (path := tmp_path / f"{name}.csv").write_text(pd.concat([first, second.assign(t_s=times)]).to_csv(index=False))
+        with pytest.raises(
+            InputError,
+            match=rf"{name}\.csv: t_s goes back at data row 301 \(from .* s to .* s\), and "
+            r"\d+ rows before it and after it cover the same times: two records in one file",
+        ):
+            csv_angles(path)
+
+
 def test_angle_table_with_repeated_times(tmp_path):
     table = swing_table()
     repeats = pd.concat([table, table.iloc[100:110]])  # exact repeats: dropped
@@ -551,6 +566,34 @@ def test_sidecar_that_is_not_text(tmp_path):
     (tmp_path / "trial.yaml").write_bytes(b"\xff\xfe\x00\x01binary")
     with pytest.raises(ConfigError, match=r"trial\.yaml: not a text file"):
         discover_trials(tmp_path)
+
+
+def test_every_bad_sidecar_is_named_at_once(tmp_path):
+    """A lab with hundreds of trials fixed its bad sidecars one run at a time: the run stopped at the first (a
+    reviewer's 88 trials, 2026-12-07: a second bad sidecar was never named). Now every one, a line each, and a
+    rig's name given in another case or with a typo gets the rig it probably means."""
+    config = copy.deepcopy(CONFIG)
+    config["rigs"]["rig_b"] = dict(config["rigs"]["paper_rig"])
+    texts = {"a": "lenght_m: 0.5\n", "b": "mass_kg: heavy\n", "c": "rig: rig_B\n", "d": "rig: rigb\n"}
+    for name, text in texts.items():
+        (tmp_path / f"{name}.csv").write_text("t_s,theta_deg\n0,1\n")
+        (tmp_path / f"{name}.yaml").write_text(text)
+    (tmp_path / "e.yaml").write_text("rig: rig_b\n")  # belongs to no trial
+    with pytest.raises(ConfigError) as raised:
+        discover_trials(tmp_path)
+    lines = str(raised.value).splitlines()
+    assert lines[0] == "3 sidecars have problems:" and len(lines) == 4, lines
+    assert "a.yaml: unknown key 'lenght_m'" in lines[1] and "b.yaml: mass_kg is 'heavy'" in lines[2], lines
+    assert "e.yaml: a sidecar of no trial" in lines[3], lines
+    for name in ("a", "b", "e"):
+        (tmp_path / f"{name}.yaml").unlink()
+    with pytest.raises(ConfigError) as raised:
+        settings_of_trials(config, discover_trials(tmp_path))
+    lines = str(raised.value).splitlines()
+    assert lines[0] == "2 sidecars have problems:" and len(lines) == 3, lines
+    assert "c.yaml: rig 'rig_B' is not one of rigs" in lines[1], lines
+    assert "; did you mean 'rig_b'? Or define it" in lines[1], lines
+    assert "d.yaml: rig 'rigb'" in lines[2] and "; did you mean 'rig_b'? Or define it" in lines[2], lines
 
 
 # --- the configuration (validated when the workflow is parsed) --------------------------------------------

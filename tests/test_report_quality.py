@@ -198,6 +198,24 @@ def test_table2_marks_the_trial_and_greys_its_rms(garbage):
     assert "1 trial(s) rest on unreliable records" in html and "<b>t10</b>: fitted rest angle −12.0°" in html
 
 
+def test_table2_marks_a_fit_that_leaves_more_than_its_nested_parent(tmp_path):
+    """A lab's trial (a reviewer's 85, 2026-12-07): its three-term fit left 0.573° where the two-term one left
+    0.094°, and Table 2 said the model missed a systematic effect; a variant with one term more can always do at
+    least as well (the extra term 0), so that fit stopped short of its best. Marked ◊ and named in the caption;
+    a richer fit within 1 % of its parent is not."""
+    report = _report(tmp_path, garbage=False)
+    assert "◊" not in report.rms_table()  # both variants leave the same RMS
+    fit = report.fits[("linear", "t20")]
+    fit.update(rms_deg=0.573, rms_rad=0.573 / 57.29577951308232, rms_arc_m=0.76 * 0.573 / 57.29577951308232)
+    html = report.rms_table()
+    row = _row(html, trial="t20")
+    assert row.count("◊") == 3 and "stopped short of its best fit: quadratic, one term fewer, leaves 0.0060°" in row
+    assert "◊" not in _row(html, trial="t10")
+    assert "its coefficients are not that model's best: t20: linear (quadratic leaves 0.0060°)" in html
+    fit.update(rms_rad=1.005 * report.fits[("quadratic", "t20")]["rms_rad"])
+    assert "◊" not in report.rms_table()
+
+
 def test_the_summary_box_counts_the_unreliable_fits_and_keeps_them_out_of_the_medians(garbage):
     box = garbage.summary_box()
     assert "1 of 2 fits" not in box and "2 of 4 fits rest on unreliable records</span>" in box

@@ -319,12 +319,33 @@ def rig_trials(config: dict, trials: dict[str, Trial]) -> dict[str, list[str]]:
 def rig_name(config: dict, trial: Trial) -> str:
     name = trial.sidecar.get("rig", config["default_rig"])
     if name not in config["rigs"]:
+        rigs = sorted(config["rigs"])
+        close = [r for r in rigs if r.lower() == str(name).lower()] or difflib.get_close_matches(str(name), rigs, 1)
         raise ConfigError(
-            f"{trial.sidecar_path}: rig {name!r} is not one of rigs {sorted(config['rigs'])} (config.yaml's, and those "
-            f"the sidecars define); define it there, or give its "
+            f"{trial.sidecar_path}: rig {name!r} is not one of rigs {rigs} (config.yaml's, and those the sidecars "
+            f"define); {f'did you mean {close[0]!r}? Or ' if close else ''}define it there, or give its "
             f"{', '.join(REQUIRED_RIG_KEYS)} in this sidecar"
         )
     return name
+
+
+def settings_of_trials(config: dict, trials: dict[str, Trial]) -> dict[str, dict]:
+    """Each trial's :func:`trial_settings`, by name; every bad sidecar named at once (one :class:`ConfigError`, a
+    line each), not the first of hundreds per run."""
+    settings, problems = {}, []
+    for name in sorted(trials):
+        try:
+            settings[name] = trial_settings(config, trials[name])
+        except ConfigError as exc:
+            problems.append(str(exc))
+    if problems:
+        raise ConfigError(all_problems(problems, "sidecars"))
+    return settings
+
+
+def all_problems(problems: list[str], what: str) -> str:
+    """One message for several problems, a line each (one alone: itself)."""
+    return problems[0] if len(problems) == 1 else f"{len(problems)} {what} have problems:\n" + "\n".join(problems)
 
 
 def add_sidecar_rigs(config: dict, trials: dict[str, Trial]) -> list[str]:

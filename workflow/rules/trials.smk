@@ -28,7 +28,7 @@ from pendulum.trials import (  # noqa: E402
     rig_name,
     rig_trials,
     split_skipped,
-    trial_settings,
+    settings_of_trials,
     validate_config,
 )
 
@@ -50,7 +50,7 @@ SIDECAR_RIGS = add_sidecar_rigs(config, FOUND)
 VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
 # each trial's merged settings (config, rig, sidecar; a bad sidecar stops the run here) and each rig's
 # trials, computed once: the input functions and params of a thousand trials' jobs read them
-SETTINGS = {name: trial_settings(config, TRIALS[name]) for name in sorted(TRIALS)}
+SETTINGS = settings_of_trials(config, TRIALS)  # every bad sidecar named at once
 RIG_TRIALS = rig_trials(config, TRIALS)
 # body → its rigs with trials (config `bodies`)
 BODIES = body_groups(config, RIG_TRIALS)

@@ -338,6 +338,27 @@ def _numeric(table: pd.DataFrame, column: str, source: str) -> np.ndarray:
     return values.to_numpy(float)
 
 
+SECOND_RECORD_ROWS = 10  # rows on each side of a step back in time, at the same times: a second record
+
+
+def _second_record(t: np.ndarray, deg: np.ndarray) -> tuple[int, int] | None:
+    """(row, rows on the fewer side) of a step back in time where the rows before and after it, each in time order
+    but for a few, cover the same times in at least :data:`SECOND_RECORD_ROWS` rows each, with other angles (two
+    records one after the other in one file); None where sorting by time makes one record (rows out of order, a
+    block of rows repeated)."""
+    steps = np.diff(t)
+    if (steps < 0).sum() > 3:  # shuffled rows, not two records
+        return None
+    k = int(np.argmin(steps)) + 1
+    before, after = t[:k], t[k:]
+    low, high = max(before.min(), after.min()), min(before.max(), after.max())
+    inside = (after >= low) & (after <= high)
+    fewer = min(int(((before >= low) & (before <= high)).sum()), int(inside.sum()))
+    copies = set(zip(before.tolist(), deg[:k].tolist(), strict=True))
+    copied = sum((x, y) in copies for x, y in zip(after[inside].tolist(), deg[k:][inside].tolist(), strict=True))
+    return (k, fewer) if high > low and fewer >= SECOND_RECORD_ROWS and copied < fewer / 2 else None
+
+
 def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_m: float, source: str):
     """Angle record of an angle export (columns ``t_s``, ``theta_deg``, as Tracker writes).
 
@@ -346,7 +367,8 @@ def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_
     of time order are sorted; exact repeats are dropped; a later row at a time
     already used is flagged ``duplicate``. Raises :class:`InputError` (naming
     ``source``) for missing columns, text in a number column, angles beyond
-    ±180°, times repeated in more than 10 % of the rows, or no swing.
+    ±180°, times repeated in more than 10 % of the rows, two records one after the
+    other (:func:`_second_record`), or no swing.
     """
     missing = set(ANGLE_TABLE_COLUMNS) - set(table.columns)
     if missing:
@@ -369,6 +391,13 @@ def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_
             f"{source}: theta_deg reaches {deg[beyond][0]:g}°, beyond ±180°; is the column an angle in degrees?"
         )
     if np.any(np.diff(t) < 0):
+        if (restart := _second_record(t, deg)) is not None:
+            k, overlap = restart
+            raise InputError(
+                f"{source}: t_s goes back at data row {k + 1} (from {t[k - 1]:g} s to {t[k]:g} s), and {overlap} rows "
+                "before it and after it cover the same times: two records in one file (a logger restarted)? Keep one "
+                "record per file"
+            )
         notes.append("rows were not in time order; sorted by t_s")
         order = np.argsort(t, kind="stable")
         t, deg = t[order], deg[order]

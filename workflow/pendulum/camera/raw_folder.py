@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 
 from pendulum.camera.video import VIDEO_EXTENSIONS
-from pendulum.trials import ConfigError, Trial, read_sidecar
+from pendulum.trials import ConfigError, Trial, all_problems, read_sidecar
 
 ANGLE_TABLE_EXTENSIONS = (".csv",)
 NOT_IN_A_NAME = re.compile(r"[^A-Za-z0-9_.+-]+")  # spaces, brackets, accents, …: each run becomes one _
@@ -61,13 +61,17 @@ def trial_name(stem: str) -> str:
     return name
 
 
-def _sidecar_of(path: Path, name: str) -> Path | None:
-    """The trial's sidecar: its file's name with .yaml (or .yml) for its extension or after it (``run1.yaml`` or
-    ``run1.mp4.yaml``), or its trial name with .yaml (or .yml); two of them refused naming both."""
+def _sidecars_of(path: Path, name: str) -> list[Path]:
+    """The trial's sidecars: its file's name with .yaml (or .yml) for its extension or after it (``run1.yaml`` or
+    ``run1.mp4.yaml``), or its trial name with .yaml (or .yml); one at most is right (:func:`_sidecar_of`)."""
     candidates = [path.with_suffix(ext) for ext in SIDECAR_EXTENSIONS]
     candidates += [path.with_name(path.name + ext) for ext in SIDECAR_EXTENSIONS]
     candidates += [path.with_name(name + ext) for ext in SIDECAR_EXTENSIONS if name != path.stem]
-    found = [c for c in dict.fromkeys(candidates) if c.is_file()]
+    return [c for c in dict.fromkeys(candidates) if c.is_file()]
+
+
+def _sidecar_of(path: Path, name: str, found: list[Path]) -> Path | None:
+    """The trial's sidecar of those :func:`_sidecars_of` found; two of them refused naming both."""
     if len(found) > 1:
         raise ConfigError(f"{found[0]} and {found[1]} are both sidecars of {path} (trial {name!r}); keep one of them")
     return found[0] if found else None
@@ -88,6 +92,7 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         return trials
     by_case: dict[str, str] = {}
     used: set[Path] = set()
+    problems: list[str] = []
     for path in sorted(raw_dir.iterdir()):
         suffix = path.suffix.lower()
         if path.name.startswith(".") or not path.is_file() or suffix not in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS:
@@ -105,23 +110,27 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         by_case[name.lower()] = name
         kind = "video" if suffix in VIDEO_EXTENSIONS else "angles"
         trial = Trial(name, kind, str(path))
-        sidecar = _sidecar_of(path, name)
-        if sidecar is not None:
-            trial.sidecar, trial.sidecar_path = read_sidecar(sidecar), str(sidecar)
-            used.add(sidecar)
+        found = _sidecars_of(path, name)
+        used.update(found)
+        try:  # every bad sidecar named at once
+            if (sidecar := _sidecar_of(path, name, found)) is not None:
+                trial.sidecar, trial.sidecar_path = read_sidecar(sidecar), str(sidecar)
+        except ConfigError as exc:
+            problems.append(str(exc))
         trials[name] = trial
     stray = [
         p
         for p in sorted(raw_dir.iterdir())
         if p.suffix.lower() in SIDECAR_EXTENSIONS and p.is_file() and not p.name.startswith(".") and p not in used
     ]
-    if stray:
-        raise ConfigError(
-            f"{stray[0]}: a sidecar of no trial (no video or angle table named {stray[0].stem} or with that trial "
-            "name), so it would be ignored; name it after its video, with .yaml for the video's extension or "
-            "after it (data/raw/run1.yaml or data/raw/run1.mp4.yaml for data/raw/run1.mp4), or move it out of "
-            "the raw folder"
-        )
+    problems += [
+        f"{path}: a sidecar of no trial (no video or angle table named {path.stem} or with that trial name), so it "
+        "would be ignored; name it after its video, with .yaml for the video's extension or after it "
+        "(data/raw/run1.yaml or data/raw/run1.mp4.yaml for data/raw/run1.mp4), or move it out of the raw folder"
+        for path in stray
+    ]
+    if problems:
+        raise ConfigError(all_problems(problems, "sidecars"))
     return trials
 
 

@@ -74,6 +74,9 @@ def variant_order(variants: dict) -> list[str]:
     return sorted(variants, key=lambda v: (len(variants[v]), v))
 
 
+NESTED_RMS_SLACK = 1.01  # a fit that leaves over this × the RMS of a variant with one term fewer stopped short
+
+
 def nested_parents(variants: dict, variant: str) -> list[str]:
     """The variants with exactly one term fewer whose terms all appear in ``variant``, simplest first: each pair
     tests one term (quadratic + friction → all three tests linear damping, linear + friction → all three the
@@ -278,6 +281,21 @@ class ReportData:
             if problems:
                 return problems
         return []
+
+    def short_of_best(self, trial: str) -> dict[str, tuple[str, float]]:
+        """Variant → (nested parent, its RMS °) where this trial's fit of the variant leaves a larger RMS than the
+        fit of a variant with one term fewer (:func:`nested_parents`) on the same samples: the parent's solution is
+        one of its own (the extra term 0), so its fit stopped short of its best (a local minimum), not the model."""
+        out = {}
+        for v in self.order:
+            fit = self.fits.get((v, trial))
+            for parent in nested_parents(self.variants, v) if is_ok(fit) else []:
+                other = self.fits.get((parent, trial))
+                if is_ok(other) and other.get("samples_digest") == fit.get("samples_digest"):
+                    if fit["rms_rad"] > NESTED_RMS_SLACK * other["rms_rad"]:
+                        out[v] = (parent, other["rms_deg"])
+                        break
+        return out
 
     def unreliable_fits(self, trials: list[str]) -> tuple[list[tuple[str, str]], int]:
         """The (variant, trial) per-trial fits of ``trials`` on unreliable records, and how many fits succeeded."""

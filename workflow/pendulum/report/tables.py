@@ -268,8 +268,9 @@ class TableSections(ReportData):
             problems = self.trial_problems(trial)
             badge = f" {garbage_badge(problems[0])}" if problems else ""
             row = [td(esc(trial) + badge), td(self.angle_label(trial), "num"), td(esc(fmt(noise, 2)), "num")]
+            short = self.short_of_best(trial)
             for v in order:
-                row += self._rms_cells(self.fits.get((v, trial)), "failed")
+                row += self._rms_cells(self.fits.get((v, trial)), "failed", short.get(v))
             rows.append(row)
             attrs.append({"data-trial": trial, **({"data-reliable": "false"} if problems else {})})
         for rig in self.rig_names:
@@ -288,17 +289,34 @@ class TableSections(ReportData):
             "quote the noise of the fitted samples only (runs of consecutive samples, a "
             "gap breaks a run) and discovery a noise floor pooled over a group's trials, so they differ slightly."
             + self.dagger_note()
+            + self.short_note()
         )
         return table_html(header, rows, caption=caption, table_id="table2", row_attrs=attrs, note=self.garbage_note())
 
-    def _rms_cells(self, fit: dict | None, missing: str) -> list[str]:
-        """Three RMS cells (rad, °, arc mm) of one fit; grey with the problem as tooltip on an unreliable record."""
+    def short_note(self) -> str:
+        """Table 2's note on fits marked ◊, naming them, when there is one."""
+        found = [(t, v, p) for t in self.trial_order() for v, p in self.short_of_best(t).items()]
+        if not found:
+            return ""
+        named = "; ".join(f"{esc(t)}: {esc(v)} ({esc(p[0])} leaves {fmt(p[1], 2)}°)" for t, v, p in found)
+        return (
+            " ◊ A fit that leaves more than a variant with one term fewer on the same samples stopped short of its "
+            "best (that variant's solution is one of its own, the extra term 0): a local minimum, not the model's "
+            f"failing; its coefficients are not that model's best: {named}."
+        )
+
+    def _rms_cells(self, fit: dict | None, missing: str, short: tuple | None = None) -> list[str]:
+        """Three RMS cells (rad, °, arc mm) of one fit; grey with the problem as tooltip on an unreliable record;
+        marked ◊ where ``short`` (:meth:`short_of_best`: the nested parent and its RMS) fits better."""
         if not is_ok(fit):
             if missing == "failed":
                 return [td("failed", "na fail", span=3, title=failure_text(fit))]
             return [td(missing, "na", span=3)]
         values = (fit["rms_rad"], fit["rms_deg"], 1000 * fit["rms_arc_m"])
         problems = record_problems(fit)
+        if not problems and short is not None:
+            title = f"stopped short of its best fit: {short[0]}, one term fewer, leaves {fmt(short[1], 2)}°"
+            return [td(esc(fmt(x, 2)) + "◊", "num", title=title) for x in values]
         if not problems:
             return [td(esc(fmt(x, 2)), "num") for x in values]
         return [
