@@ -220,6 +220,30 @@ def documents(tmp_path):
     return R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS)
 
 
+def test_many_trials_records_are_folded_by_rig(documents, monkeypatch):
+    """A lab's 88 trials (a reviewer, 2026-12-07) gave 33,000 px of record figures, one per trial; beyond
+    RECORDS_SHOWN trials with figures each rig's are folded in a <details> naming the rig and its count."""
+    import numpy as np
+
+    from pendulum.report import figures
+
+    t = np.arange(0.0, 10.0, 1 / 30)
+    theta = np.radians(20.0) * np.exp(-0.1 * t) * np.cos(2 * np.pi * t / 1.75)
+    curve = pd.DataFrame(
+        {"time_s": t, "theta_measured_rad": theta, "theta_fitted_rad": theta, "residual_rad": 0.0 * t, "flag": "fitted"}
+    )
+    for v in VARIANTS:
+        documents._tables[("curve", v, "t20")] = curve
+        documents.fits[(v, "t20")].setdefault("trials", {}).setdefault("t20", {})["fit_start_s"] = 0.0
+        documents.fits[(v, "t20")].setdefault("keulegan_carpenter_number", 6.0)
+    shown = documents.trial_figures()
+    assert shown.count("<figure") == 1 and "<details" not in shown
+    monkeypatch.setattr(figures, "RECORDS_SHOWN", 0)
+    folded = documents.trial_figures()
+    assert folded.count("<figure") == 1 and folded.startswith("<p>1 trials' records, folded by rig")
+    assert "<details><summary>Rig <b>rig</b>: the records of 1 trials</summary><figure" in folded
+
+
 def test_table3_has_a_row_per_trial_and_variant_and_says_why_a_fit_is_missing(documents):
     html = documents.coefficient_table()
     for trial in ("t20", "bad"):

@@ -88,6 +88,9 @@ MPL_STYLE = {
 }
 
 
+RECORDS_SHOWN = 12  # more trials' record figures than this: folded by rig
+
+
 class FigureSections(ReportData):
     """Per-trial fits and residuals, coefficients against release and KC, extinction curve and local C_d."""
 
@@ -95,7 +98,7 @@ class FigureSections(ReportData):
         """Per trial: measured θ(t) with each variant's fit, and each variant's residual beneath."""
         import matplotlib
 
-        out = []
+        out = []  # (rig, figure)
         for trial in self.trial_order():
             curves = {v: self.curve(v, trial) for v in self.order if is_ok(self.fits.get((v, trial)))}
             curves = {v: c for v, c in curves.items() if not c.empty}
@@ -159,8 +162,17 @@ class FigureSections(ReportData):
                 "θ(t); grey band: release transient, not fitted. Below: residual (fitted − measured) of each "
                 "variant on its own scale — structure that repeats with the swing is physics the variant misses."
             )
-            out.append(figure_html(png, caption, alt=f"measured and fitted angle of {trial}"))
-        return "".join(out) or "<p>No fitted curves to show.</p>"
+            alt = f"measured and fitted angle of {trial}"
+            out.append((self.trials[trial]["rig"], figure_html(png, caption, alt=alt)))
+        if len(out) <= RECORDS_SHOWN:
+            return "".join(html for _, html in out) or "<p>No fitted curves to show.</p>"
+        # many trials (a lab's hundred: 33,000 px of figures): each rig's folded, its count and rig named
+        rigs = list(dict.fromkeys(rig for rig, _ in out))
+        return f"<p>{len(out)} trials' records, folded by rig: open one to see them.</p>" + "".join(
+            f"<details><summary>Rig <b>{esc(rig)}</b>: the records of {sum(r == rig for r, _ in out)} trials"
+            f"</summary>{''.join(html for r, html in out if r == rig)}</details>"
+            for rig in rigs
+        )
 
     def consistency_figure(self) -> str:
         """Each coefficient against release angle and against KC, per variant, joint fit as a band."""
