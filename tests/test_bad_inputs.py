@@ -278,6 +278,16 @@ def test_marker_out_of_the_frame_most_of_the_time(folder):
         track_video(folder / "edge_most.mp4", SMALL)
 
 
+def test_a_detected_spot_mostly_out_of_view_may_be_no_marker():
+    """A tank's wavy water surface gave detection a spot on it that the marker pass then found in no frame; the
+    message said only that the marker was out of view (a reviewer's tank clips, 2026-12-07)."""
+    from pendulum.tracking.marker import unusable_reason
+
+    given, detected = (unusable_reason({"ok": 3, "edge": 10, "lost": 167}, 180, None, d) for d in (False, True))
+    assert given.endswith("out of view (outside the frame or behind something) in most frames"), given
+    assert detected.endswith("frames, or detection's spot is no marker (a ripple, a bubble, a part of the body)")
+
+
 @pytest.fixture(scope="module")
 def reflection(folder):
     """A static spot as bright as the marker (a lamp's reflection) beside the bottom of the swing."""

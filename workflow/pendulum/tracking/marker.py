@@ -517,12 +517,13 @@ def track_video(
         progress(f"{path}: tracked {n_frames} frames ({rate:.0f} frames/s); flags {counts}")
     usable_fraction = counts.get("ok", 0) / max(len(table), 1)
     if usable_fraction < settings.min_usable_fraction:
-        raise VideoError(f"{path}: {unusable_reason(counts, len(table), video_report)}")
+        raise VideoError(f"{path}: {unusable_reason(counts, len(table), video_report, found_by == 'detection')}")
     return table
 
 
-def unusable_reason(counts: dict, n_frames: int, video_report: dict | None = None) -> str:
-    """Why a track with too few usable frames cannot give a record (for the error message)."""
+def unusable_reason(counts: dict, n_frames: int, video_report: dict | None = None, detected: bool = False) -> str:
+    """Why a track with too few usable frames cannot give a record (for the error message); ``detected``: the
+    marker is detection's spot, which may be no marker at all."""
     ok = counts.get("ok", 0)
     out = counts.get("edge", 0) + counts.get("lost", 0)
     hidden = counts.get("occluded", 0) + counts.get("glare", 0)
@@ -530,7 +531,9 @@ def unusable_reason(counts: dict, n_frames: int, video_report: dict | None = Non
     if damaged >= max(out - damaged, hidden):
         cause = f"{damaged} frames are damaged in the file; copy it again"
     elif out >= hidden:
-        cause = "the marker is out of view (outside the frame or behind something) in most frames"
+        cause = "the marker is out of view (outside the frame or behind something) in most frames" + (
+            ", or detection's spot is no marker (a ripple, a bubble, a part of the body)" if detected else ""
+        )
     else:
         cause = (
             "in most frames the marker stands out from its surround much less (occluded) or more (glare) than "
