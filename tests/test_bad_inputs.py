@@ -483,6 +483,14 @@ def test_an_angle_table_holding_two_records_one_after_the_other_is_refused(tmp_p
             r"\d+ rows before it and after it cover the same times: two records in one file",
         ):
             csv_angles(path)
+    # one record's even rows then its odd ones, and 30 rows tracked again and appended: one record, sorted (a
+    # reviewer's cases, refused by the first version of the check)
+    even_odd = pd.concat([first.iloc[::2], first.iloc[1::2]])
+    again = pd.concat([first, first.iloc[100:130].assign(theta_deg=lambda d: d.theta_deg + 0.03)])
+    for name, table in (("even_odd", even_odd), ("again", again)):
+        (path := tmp_path / f"{name}.csv").write_text(table.to_csv(index=False))
+        out, info = csv_angles(path)
+        assert "rows were not in time order; sorted by t_s" in info.notes and (out.flag == "ok").sum() == 300, name
 
 
 def test_angle_table_with_repeated_times(tmp_path):
@@ -597,13 +605,17 @@ def test_every_bad_sidecar_is_named_at_once(tmp_path):
     assert "e.yaml: a sidecar of no trial" in lines[3], lines
     for name in ("a", "b", "e"):
         (tmp_path / f"{name}.yaml").unlink()
+    config["rigs"]["tank_2024"] = dict(config["rigs"]["paper_rig"])
+    (tmp_path / "g.csv").write_text("t_s,theta_deg\n0,1\n")
+    (tmp_path / "g.yaml").write_text("rig: tank_2025\n")  # another year's rig: no suggestion
     with pytest.raises(ConfigError) as raised:
         settings_of_trials(config, discover_trials(tmp_path))
     lines = str(raised.value).splitlines()
-    assert lines[0] == "2 sidecars have problems:" and len(lines) == 3, lines
+    assert lines[0] == "3 sidecars have problems:" and len(lines) == 4, lines
     assert "c.yaml: rig 'rig_B' is not one of rigs" in lines[1], lines
     assert "; did you mean 'rig_b'? Or define it" in lines[1], lines
     assert "d.yaml: rig 'rigb'" in lines[2] and "; did you mean 'rig_b'? Or define it" in lines[2], lines
+    assert "g.yaml: rig 'tank_2025'" in lines[3] and "did you mean" not in lines[3], lines
 
 
 # --- the configuration (validated when the workflow is parsed) --------------------------------------------

@@ -230,7 +230,13 @@ def test_many_trials_records_are_folded_by_rig(documents, monkeypatch):
     t = np.arange(0.0, 10.0, 1 / 30)
     theta = np.radians(20.0) * np.exp(-0.1 * t) * np.cos(2 * np.pi * t / 1.75)
     curve = pd.DataFrame(
-        {"time_s": t, "theta_measured_rad": theta, "theta_fitted_rad": theta, "residual_rad": 0.0 * t, "flag": "fitted"}
+        {
+            "time_s": t,
+            "theta_measured_rad": theta,
+            "theta_fitted_rad": theta,
+            "residual_rad": 1e-4 * np.sin(t),
+            "flag": "fitted",
+        }
     )
     for v in VARIANTS:
         documents._tables[("curve", v, "t20")] = curve

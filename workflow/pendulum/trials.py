@@ -320,7 +320,10 @@ def rig_name(config: dict, trial: Trial) -> str:
     name = trial.sidecar.get("rig", config["default_rig"])
     if name not in config["rigs"]:
         rigs = sorted(config["rigs"])
-        close = [r for r in rigs if r.lower() == str(name).lower()] or difflib.get_close_matches(str(name), rigs, 1)
+        digits = re.findall(r"\d+", str(name))  # not another year's or number's rig
+        close = [r for r in rigs if r.lower() == str(name).lower()] or [
+            r for r in difflib.get_close_matches(str(name), rigs, 1) if re.findall(r"\d+", r) == digits
+        ]
         raise ConfigError(
             f"{trial.sidecar_path}: rig {name!r} is not one of rigs {rigs} (config.yaml's, and those the sidecars "
             f"define); {f'did you mean {close[0]!r}? Or ' if close else ''}define it there, or give its "

@@ -94,6 +94,8 @@ def work():
         log.warning("%s: %s", video, said)
     if said := break_sentence(timing):  # found and not put right
         warnings.append(f"{said}, which biases a fit; not corrected")
+    for aside in (track.attrs.get("body") or {}).get("set_aside") or []:  # a tank's water surface, moving in place
+        log.info("%s: set aside as no body, moving in place in most samples: %s", video, aside)
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     write_csv(track, sm.output.track)

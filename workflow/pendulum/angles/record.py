@@ -21,6 +21,7 @@ from pendulum.angles.harmonics import second_harmonic
 from pendulum.angles.swings import (
     crossing_period,
     detect_release,
+    noise_level,
     release_by_hand,
     rest_start_index,
     sample_noise_rad,
@@ -339,13 +340,15 @@ def _numeric(table: pd.DataFrame, column: str, source: str) -> np.ndarray:
 
 
 SECOND_RECORD_ROWS = 10  # rows on each side of a step back in time, at the same times: a second record
+JAGGED_RATIO = 3.0  # ... whose angles, sorted in with the first's, make a record this much noisier than either
 
 
 def _second_record(t: np.ndarray, deg: np.ndarray) -> tuple[int, int] | None:
     """(row, rows on the fewer side) of a step back in time where the rows before and after it, each in time order
-    but for a few, cover the same times in at least :data:`SECOND_RECORD_ROWS` rows each, with other angles (two
-    records one after the other in one file); None where sorting by time makes one record (rows out of order, a
-    block of rows repeated)."""
+    but for a few, cover the same times in at least :data:`SECOND_RECORD_ROWS` rows each, with other angles, and
+    sorted together make a jagged record (:data:`JAGGED_RATIO`: two records one after the other in one file); None
+    where sorting by time makes one record (rows out of order, a block of rows repeated or tracked again, a record's
+    even rows then its odd ones)."""
     steps = np.diff(t)
     if (steps < 0).sum() > 3:  # shuffled rows, not two records
         return None
@@ -356,7 +359,11 @@ def _second_record(t: np.ndarray, deg: np.ndarray) -> tuple[int, int] | None:
     fewer = min(int(((before >= low) & (before <= high)).sum()), int(inside.sum()))
     copies = set(zip(before.tolist(), deg[:k].tolist(), strict=True))
     copied = sum((x, y) in copies for x, y in zip(after[inside].tolist(), deg[k:][inside].tolist(), strict=True))
-    return (k, fewer) if high > low and fewer >= SECOND_RECORD_ROWS and copied < fewer / 2 else None
+    if not (high > low and fewer >= SECOND_RECORD_ROWS and copied < fewer / 2):
+        return None
+    # two records interleave when sorted, another angle at each time: jagged; two parts of one record merge smoothly
+    merged = noise_level(deg[np.argsort(t, kind="stable")])
+    return (k, fewer) if merged > JAGGED_RATIO * max(noise_level(deg[:k]), noise_level(deg[k:]), 1e-9) else None
 
 
 def angles_from_tracker_csv(table: pd.DataFrame, *, vertical_deg: float, length_m: float, source: str):

@@ -22,10 +22,13 @@ def extrema(t, theta, noise_rad: float = 0.0):
     """Times, signed values and indices of the swing extrema (:func:`~pendulum.angles.swings.swing_extrema`: one
     per swing, however noisy its flat peak), each refined by a parabola through 2k + 1 samples about it: k = 2, or
     wider where the angle comes back from the peak by less than :data:`PEAK_DROP_SIGMAS` × ``noise_rad`` within k
-    samples (a slow swing sampled fast: its peak is flat within the noise, and 5 samples place it anywhere on it)."""
+    samples (a slow swing sampled fast: its peak is flat within the noise, and 5 samples place it anywhere on it).
+    A peak clipped flat (3 of its 5 samples at one value: a sensor's or a frame edge's limit) gives none."""
     smooth = pd.Series(theta).rolling(3, center=True, min_periods=1).mean().to_numpy()
     times, values, kept = [], [], []
     for i in swing_extrema(theta):
+        if np.count_nonzero(theta[max(i - 2, 0) : i + 3] == theta[i]) >= 3:  # a clipped, flat peak: no extremum
+            continue
         k = 2
         while (
             k < MAX_PEAK_HALF_WIDTH

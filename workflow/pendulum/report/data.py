@@ -289,7 +289,7 @@ class ReportData:
         out = {}
         for v in self.order:
             fit = self.fits.get((v, trial))
-            for parent in nested_parents(self.variants, v) if is_ok(fit) else []:
+            for parent in nested_parents(self.variants, v) if is_ok(fit) and not record_problems(fit) else []:
                 other = self.fits.get((parent, trial))
                 if is_ok(other) and other.get("samples_digest") == fit.get("samples_digest"):
                     if fit["rms_rad"] > NESTED_RMS_SLACK * other["rms_rad"]:

@@ -356,9 +356,11 @@ def in_place_set_aside(first: Seen, whole: Seen, measured, excluded, close_px: i
     :data:`MIN_SOLIDITY` of its hull, or across the frame's width) and moves in place (in :data:`IN_PLACE_SHARE` of
     the samples' moving pixels, ``excluded``: a tank's wavy water surface, a rippling light), it is set aside (its
     place, grown by a closing width each side, left out of every difference) and the body sought again by
-    ``measured(polarity, aside)``; a swinging body leaves its place. ``set_aside``: where each was and how much of
-    its hull it filled; ``aside`` the pixels left out (None: none)."""
-    aside, set_aside = None, []
+    ``measured(aside)``; a swinging body leaves its place. Not where the body then found lies within an object set
+    aside's convex hull (or a closing width of it: a part of that object, e.g. a thread inside a hoop-like body that
+    swings little). ``set_aside``: where each was and how much of its hull it filled; ``aside`` the pixels left out
+    (None: none)."""
+    found, aside, set_aside, hulls = (first, whole), None, [], []
     while first is not None and first.component is not None and len(set_aside) < MAX_SET_ASIDE:
         solid, cols = solidity(first.component), np.flatnonzero(first.component.any(axis=0))
         if solid >= MIN_SOLIDITY and not (cols[0] == 0 and cols[-1] == first.component.shape[1] - 1):
@@ -366,7 +368,12 @@ def in_place_set_aside(first: Seen, whole: Seen, measured, excluded, close_px: i
         if float(np.median(excluded.count_over_samples()[first.component])) < IN_PLACE_SHARE * len(excluded):
             break
         set_aside.append({"x_px": round(first.x, 1), "y_px": round(first.y, 1), "hull_fill": round(solid, 3)})
+        hulls.append(cv2.convexHull(cv2.findNonZero(first.component.astype(np.uint8))).astype(np.float32))
         grown = cv2.dilate(first.component.astype(np.uint8), np.ones((2 * close_px + 1,) * 2, np.uint8)) > 0
         aside = grown if aside is None else aside | grown
         first, whole = measured(aside)
+    # what is found within an object set aside (a thread inside a hoop-like body that swings little) is part of it:
+    # nothing set aside, the first object refused as before
+    if first is not None and any(cv2.pointPolygonTest(h, (first.x, first.y), True) > -close_px for h in hulls):
+        return *found, None, []
     return first, whole, aside, set_aside
