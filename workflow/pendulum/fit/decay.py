@@ -19,13 +19,13 @@ from pendulum.model.physics import PendulumModel
 
 
 def extrema(t, theta, noise_rad: float = 0.0):
-    """Times, signed values and indices of the swing extrema (:func:`~pendulum.angles.swings.swing_extrema`: one
+    """Times and signed values of the swing extrema (:func:`~pendulum.angles.swings.swing_extrema`: one
     per swing, however noisy its flat peak), each refined by a parabola through 2k + 1 samples about it: k = 2, or
     wider where the angle comes back from the peak by less than :data:`PEAK_DROP_SIGMAS` × ``noise_rad`` within k
     samples (a slow swing sampled fast: its peak is flat within the noise, and 5 samples place it anywhere on it).
     A peak clipped flat (3 of its 5 samples at one value: a sensor's or a frame edge's limit) gives none."""
     smooth = pd.Series(theta).rolling(3, center=True, min_periods=1).mean().to_numpy()
-    times, values, kept = [], [], []
+    times, values = [], []
     for i in swing_extrema(theta):
         if np.count_nonzero(theta[max(i - 2, 0) : i + 3] == theta[i]) >= 3:  # a clipped, flat peak: no extremum
             continue
@@ -46,8 +46,7 @@ def extrema(t, theta, noise_rad: float = 0.0):
         tv = -b / (2 * a)
         times.append(t[i] + tv)
         values.append(c - b * b / (4 * a))
-        kept.append(i)
-    return np.array(times), np.array(values), np.array(kept, int)
+    return np.array(times), np.array(values)
 
 
 PEAK_DROP_SIGMAS = 4.0  # a peak's refining window reaches where the swing has come back by this many noise σ
@@ -239,7 +238,7 @@ def _half_cycle_pairs(t, x, min_amplitude_rad):
     t, x = np.asarray(t, float)[good], np.asarray(x, float)[good]
     if t.size < 5:
         return (np.array([]),) * 4
-    ext_t, ext_v, _ = extrema(t, x, noise_level(x))
+    ext_t, ext_v = extrema(t, x, noise_level(x))
     keep = np.abs(ext_v) > min_amplitude_rad
     ext_t, ext_v = ext_t[keep], ext_v[keep]
     pairs = np.flatnonzero(np.sign(ext_v[1:]) != np.sign(ext_v[:-1])) if ext_v.size > 1 else np.array([], int)
