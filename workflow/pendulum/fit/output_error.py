@@ -285,6 +285,8 @@ def _fit_trials(records: list[AngleRecord], terms, settings: FitSettings) -> dic
         if smooth_swing(record) and rig_period_problem(record, start["period_s"], lower_added_mass_kg):
             found = crossing_period(record.time_s, record.theta_rad)  # as swung: the angles JSON's period_s
             swing_period_s = found[0] if found else None
+            if swing_period_s and swing_period_s >= 0.98 * fastest_period_s(record, lower_added_mass_kg):
+                continue  # its zero crossings give a period the rig allows: the extrema's period is the wrong one
             mismatched.append(rig_period_problem(record, start["period_s"], lower_added_mass_kg, swing_period_s))
             periods.append(
                 {
