@@ -17,13 +17,21 @@ from pendulum.report.data import ReportData, is_ok, record_problems, true_value
 from pendulum.report.format import MARKERS, PLAIN_SYMBOLS, esc, figure_html, fmt, is_finite
 
 FIGURE_DPI = 110
+PNG_COLOURS = 256  # a figure's palette (figure_png)
 
 
 def figure_png(fig) -> bytes:
-    """A matplotlib figure as PNG bytes (no software or date stamp: identical bytes for identical input)."""
+    """A matplotlib figure as PNG bytes of 256 colours (Pillow's fast octree: a third of the bytes of the full
+    colour image, which a lab's 85 trials made 15.6 MB of a report; lines and text look the same), no software or
+    date stamp: identical bytes for identical input."""
+    from PIL import Image
+
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=FIGURE_DPI, metadata={"Software": None})
-    return buffer.getvalue()
+    image = Image.open(io.BytesIO(buffer.getvalue())).convert("RGB")
+    out = io.BytesIO()
+    image.quantize(PNG_COLOURS, method=Image.Quantize.FASTOCTREE).save(out, format="PNG")
+    return out.getvalue()
 
 
 def log_ticks(axis) -> None:
