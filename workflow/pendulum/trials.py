@@ -304,15 +304,11 @@ def read_sidecar(path: str | Path) -> dict:
     return doc
 
 
-def rig_trials(config: dict, trials: dict[str, Trial]) -> dict[str, list[str]]:
-    """Trial names of each rig (every trial, video or angle table).
-
-    Called when the workflow is parsed: it also checks every trial's merged
-    settings (a sidecar's rig values), so a bad sidecar stops the run before any job.
-    """
+def rig_trials(settings: dict[str, dict]) -> dict[str, list[str]]:
+    """Trial names of each rig (every trial, video or angle table), from their :func:`settings_of_trials`."""
     by_rig: dict[str, list[str]] = {}
-    for name in sorted(trials):
-        by_rig.setdefault(trial_settings(config, trials[name])["rig_name"], []).append(name)
+    for name in sorted(settings):
+        by_rig.setdefault(settings[name]["rig_name"], []).append(name)
     return by_rig
 
 

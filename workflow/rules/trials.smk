@@ -51,7 +51,7 @@ VIDEO_TRIALS = sorted(n for n, t in TRIALS.items() if t.kind == "video")
 # each trial's merged settings (config, rig, sidecar; a bad sidecar stops the run here) and each rig's
 # trials, computed once: the input functions and params of a thousand trials' jobs read them
 SETTINGS = settings_of_trials(config, TRIALS)  # every bad sidecar named at once
-RIG_TRIALS = rig_trials(config, TRIALS)
+RIG_TRIALS = rig_trials(SETTINGS)
 # body → its rigs with trials (config `bodies`)
 BODIES = body_groups(config, RIG_TRIALS)
 RIGS_NEEDING_GEOMETRY = sorted(
