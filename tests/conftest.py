@@ -15,6 +15,18 @@ DEMO_RAW = ROOT / "data" / "raw"
 DEMO_TRUTH = ROOT / "data" / "truth"
 
 
+def shared_file(relative: str) -> Path:
+    """``../shared/<relative>`` (the real clips and Tracker exports beside the project); the test is skipped when it
+    is not there, and fails under CI (``.ci/run`` sets ``CI``), whose clone has ``../shared`` beside it."""
+    path = SHARED / relative
+    if not path.exists():
+        message = f"{path} not found (../shared beside the project)"
+        if os.environ.get("CI"):
+            pytest.fail(message + "; CI runs with ../shared beside its clone")
+        pytest.skip(message)
+    return path
+
+
 class SnakemakeFiles(dict):
     """Stands for Snakemake's named input/output lists: attribute access and ``keys()``."""
 

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from conftest import DEMO_RAW, DEMO_TRUTH, SHARED, demo_trials
+from conftest import DEMO_RAW, DEMO_TRUTH, demo_trials, shared_file
 from pendulum.angles.geometry import estimate_rig_geometry, fit_circle
 from pendulum.angles.record import angles_from_track, angles_from_tracker_csv
 from pendulum.angles.swings import detect_release
@@ -119,7 +119,7 @@ def test_a_short_arc_is_short_whichever_way_the_camera_is_turned(turned_deg):
 
 @pytest.mark.parametrize("name,amplitude_deg", [("wooden_bob", 56.0), ("steel_bob", 4.0)])
 def test_real_tracker_exports_enter_at_the_angles_stage(name, amplitude_deg):
-    path = SHARED / "data" / "real-air-pendulum" / f"{name}.csv"
+    path = shared_file(f"data/real-air-pendulum/{name}.csv")
     raw = pd.read_csv(path)
     table, info = angles_from_tracker_csv(raw, vertical_deg=0.0, length_m=0.315 + 0.03805 / 2, source=str(path))
     assert not info.release_detected  # the exports start after the release
@@ -371,7 +371,7 @@ def test_a_record_too_short_for_a_period_says_so_where_the_period_would_be(tmp_p
     from pendulum.angles.swings import crossing_period
 
     monkeypatch.syspath_prepend(str(ROOT / "workflow" / "scripts"))
-    raw = pd.read_csv(SHARED / "data" / "real-air-pendulum" / "wooden_bob.csv")
+    raw = pd.read_csv(shared_file("data/real-air-pendulum/wooden_bob.csv"))
     documents = {}
     for label, rows in (("whole", raw), ("short", raw[raw.iloc[:, 0] <= raw.iloc[0, 0] + 2.0])):
         source = tmp_path / f"{label}.csv"

@@ -12,7 +12,7 @@ import pytest
 import yaml
 from scipy import stats
 
-from conftest import DEMO_TRUTH, SHARED, demo_trials
+from conftest import DEMO_TRUTH, demo_trials, shared_file
 from paper_rig import PAPER_RIG
 from pendulum.angles.record import angles_from_tracker_csv
 from pendulum.discovery.diagnosis import critical_value, mixture_p_value
@@ -187,7 +187,7 @@ def air_record(name, diameter_m, mass_kg):
         "fluid_density_kg_m3": 1.2,
         "characteristic_length_m": diameter_m,
     }
-    source = SHARED / f"data/real-air-pendulum/{name}.csv"
+    source = shared_file(f"data/real-air-pendulum/{name}.csv")
     table, info = angles_from_tracker_csv(pd.read_csv(source), vertical_deg=0.0, length_m=rig["length_m"], source=name)
     return table, info, rig
 
@@ -201,8 +201,6 @@ def test_discovery_runs_to_the_end_on_the_real_wooden_bob(lower_kg):
     a negative added mass allowed (a calibration swing in air) the baseline's RMS is 0.66°; Coulomb friction, linear
     damping and the history force each lower it to 0.63° (Λ ≈ 44 against a threshold of 7.4) but cannot be told
     apart over this narrow range of amplitudes, so none is named."""
-    if not SHARED.is_dir():
-        pytest.skip("no ../shared/data")
     table, info, rig = air_record("wooden_bob", 0.03805, 0.015)
     settings = FitSettings(added_mass_lower_kg=lower_kg)
     record = load_record(table, "wooden_bob", rig, settings, tolerances={}, angle_info=info.to_dict())

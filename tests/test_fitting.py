@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import SHARED
+from conftest import shared_file
 from paper_rig import PAPER_RIG, VARIANTS, truth_for
 from pendulum.fit.output_error import fit_trials
 from pendulum.fit.records import FitSettings, load_record
@@ -78,7 +78,7 @@ def real_record(name, diameter_m, mass_kg, settings):
     from pendulum.angles.record import angles_from_tracker_csv
 
     rig = air_rig(diameter_m, mass_kg)
-    raw = pd.read_csv(SHARED / "data/real-air-pendulum" / f"{name}.csv")
+    raw = pd.read_csv(shared_file(f"data/real-air-pendulum/{name}.csv"))
     table, _ = angles_from_tracker_csv(raw, vertical_deg=0.0, length_m=rig["length_m"], source=name)
     return load_record(table, name, rig, settings)
 

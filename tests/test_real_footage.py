@@ -19,13 +19,12 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import ROOT, SHARED, FakeSnakemake
+from conftest import ROOT, SHARED, FakeSnakemake, shared_file
 from paper_rig import APPLE_IN_AIR
 
 pytestmark = pytest.mark.slow
-REAL = SHARED / "data" / "real-video"
-APPLE = REAL / "redapple_480p.mov"
-STAR = REAL / "star_480p.mov"
+APPLE_FILE, STAR_FILE = "data/real-video/redapple_480p.mov", "data/real-video/star_480p.mov"
+APPLE, STAR = SHARED / APPLE_FILE, SHARED / STAR_FILE
 APPLE_PERIOD_S = 2.078  # measured independently (the clip's README)
 
 
@@ -51,8 +50,7 @@ def zero_crossing_period(time_s: np.ndarray, theta: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def apple():
-    if not APPLE.is_file():
-        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    shared_file(APPLE_FILE)
     from pendulum.angles.geometry import estimate_rig_geometry
     from pendulum.angles.record import angles_from_track
     from pendulum.tracking.method import track_trial
@@ -291,8 +289,7 @@ def test_a_white_dot_on_the_apple_leaves_the_body_it_is_on_unbiased(tmp_path):
     weighted by their share of apple), 2 px at the swing's ends (0.2° on its arm). The hole is now filled (a
     marking: under a tenth of the body): 99.85 % ok, 0.20 px (the clip without the dot, tracked alike: 0.20 px,
     its silhouette's centroid not quite that centre)."""
-    if not APPLE.is_file():
-        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    shared_file(APPLE_FILE)
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import make
 
@@ -316,8 +313,7 @@ def test_two_pendulums_whose_bobs_meet_keep_each_its_own_track(tmp_path):
     the track went on with the right one for 1.8 s, 96.4 % of its frames ``ok``, its period within 0.2 %: a
     wrong record that passed the study's bar (a reviewer's variant). The body's own centre, the thickest point of
     the pair nearest the prediction, now carries it: 97.7 % ``ok``, every ``ok`` position on the left apple."""
-    if not APPLE.is_file():
-        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    shared_file(APPLE_FILE)
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import APPLE_START_PX, make
 
@@ -337,8 +333,7 @@ def test_spinning_star_is_refused_by_the_tracks_job_with_its_track_shown(tmp_pat
     """The frames and tracks jobs' own scripts on the star: a failed tracks document whose error leads with what it
     is not (a rigid pendulum) and says why, and a sheet with the whole reason above the track it was measured from
     (until 2026-12-02 the sheet was the reason alone, cut after six lines)."""
-    if not STAR.is_file():
-        pytest.skip(f"{STAR} not found")
+    shared_file(STAR_FILE)
     import json
     import runpy
 
@@ -425,8 +420,7 @@ def test_a_knocked_camera_that_turned_is_found_from_the_swings_centre_and_its_tu
     this clip's own 0.4 px departure, where 5 are asked, so a creep took it in, and the turn stayed in θ: 0.49° RMS
     off the clip's own record, 0.95° at worst. The swing's centre in the picture steps at the knock (a turning camera
     moves gravity's direction there): the knock is sought where it stepped, and its turn taken out of θ."""
-    if not APPLE.is_file():
-        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    shared_file(APPLE_FILE)
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import judge
 
@@ -443,8 +437,7 @@ def test_a_two_tone_ball_turning_on_its_string_is_measured_by_its_outlines_centr
     study's soft dark band, in colour. Its blue half's centroid wandered by up to 4 px as it turned: the path 4.1 px
     RMS off any circle, refused as "not a rigid pendulum" (the study's θ 0.59° RMS off the clip's own record). Its
     outline's centre: within 0.5 px RMS of the ball's drawn centre (measured 0.27 px), the path a pendulum's."""
-    if not APPLE.is_file():
-        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    shared_file(APPLE_FILE)
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import ball_centres, make
 
@@ -471,8 +464,7 @@ def test_a_body_held_by_hand_before_a_darker_band_is_measured_against_the_wall_b
     body's grey and the wall behind it are taken from a sample that shows it as the clip usually does (the first
     frame's silhouette is the apple with the hand), so the band is scaled out as without the hand. Before: no wall
     gain where a hand held the first frame (1,215 of the 1,296 frames not held ok, 93.7 %); measured 1,290 (99.5 %)."""
-    if not APPLE.is_file():
-        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    shared_file(APPLE_FILE)
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import APPLE_FPS, _hand_release, _shadow_band
 
@@ -504,8 +496,7 @@ SHARED_LUMA = pytest.mark.xdist_group("two_tone_before_band")
 def test_the_apple_filmed_other_ways(variant, tmp_path):
     """The same period (within 0.3 %) and record noise (≤ 0.03°) as the clip itself; the frames with the body partly
     out of view flagged ``edge``; the vertical found, or said not to be found. 50 of the study's 51 variants pass."""
-    if not APPLE.is_file():
-        pytest.skip(f"{APPLE} not found (../shared beside the project)")
+    shared_file(APPLE_FILE)
     sys.path.insert(0, str(ROOT / "tests" / "benchmarks"))
     from real_variants import judge
 

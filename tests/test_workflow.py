@@ -95,11 +95,11 @@ def test_curve_cycles_and_joint_files_for_every_trial_variant_and_rig(project):
 
 def test_tracker_angle_table_enters_at_the_angles_stage(tmp_path, project):
     """... under a lab's file name (spaces, brackets) and with numbers as people write them (1.5e-2, 1E-5)."""
-    from conftest import SHARED
+    from conftest import shared_file
 
     work = tmp_path / "p"
     shutil.copytree(project, work, ignore=shutil.ignore_patterns(".snakemake", "logs"))
-    shutil.copy(SHARED / "data/real-air-pendulum/wooden_bob.csv", work / "data/raw/wooden bob (run 1).csv")
+    shutil.copy(shared_file("data/real-air-pendulum/wooden_bob.csv"), work / "data/raw/wooden bob (run 1).csv")
     # YAML 1.1 (PyYAML) reads 1.5e-2 as a float but 15e-3 and 1E-5 as text: both are numbers here
     (work / "data/raw/wooden bob (run 1).yaml").write_text("rig: air_wooden\nkinematic_viscosity_m2_s: 15e-6\n")
     config = yaml.safe_load((work / "config.yaml").read_text())
