@@ -190,6 +190,79 @@ def test_rotation_metadata_is_reported_and_frames_used_as_stored(tmp_path):
     assert first.shape == (96, 128) and np.abs(first[20:40, 12:28] - limited_range(200)).max() < 3
 
 
+def disk_scene(width, height, centre, radius, level=200):
+    """A grey scene with a bright disk, in square pixels."""
+    yy, xx = np.mgrid[0:height, 0:width]
+    image = np.full((height, width), 60, np.uint8)
+    image[(xx - centre[0]) ** 2 + (yy - centre[1]) ** 2 <= radius**2] = level
+    return image
+
+
+def write_streams(path, streams, n=6, rate=30):
+    """One container with a video stream per ``(frames, sample_aspect_ratio)`` of ``streams`` (H.264, in order)."""
+    with av.open(str(path), mode="w") as container:
+        added = []
+        for frames, ratio in streams:
+            stream = container.add_stream("libx264", rate=rate)
+            stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], "yuv420p"
+            stream.options = {"crf": "12", "preset": "veryfast", "threads": "1"}
+            if ratio is not None:
+                stream.codec_context.sample_aspect_ratio = ratio
+            added.append(stream)
+        for i in range(n):
+            for stream, (frames, _) in zip(added, streams, strict=True):
+                frame = av.VideoFrame.from_ndarray(frames[i % len(frames)], format="gray").reformat(format="yuv420p")
+                frame.pts = i
+                for packet in stream.encode(frame):
+                    container.mux(packet)
+        for stream in added:
+            for packet in stream.encode():
+                container.mux(packet)
+
+
+def bright_centre(image):
+    """Centre and half-extents (x, y) of the pixels above mid-grey."""
+    ys, xs = np.nonzero(image > 130)
+    return xs.mean(), ys.mean(), (xs.max() - xs.min() + 1) / 2, (ys.max() - ys.min() + 1) / 2
+
+
+def test_non_square_pixels_are_resampled_to_square_ones_before_anything_is_measured(tmp_path):
+    """A 4:3 anamorphic file (stored 96×96, shown 128×96: HDV, DV, an anamorphic export): its frames are measured as
+    a player shows them. The disk at (80, 48), radius 16, in the picture is found there and round; in the stored
+    pixels it was at x = 60 and 12 px wide (a reviewer's anamorphic apple: pivot fitted 200 px off, angles 33 % too
+    large, nothing said). The summary states the ratio and the resampling."""
+    shown = disk_scene(128, 96, (80, 48), 16)
+    stored = cv2.resize(shown, (96, 96), interpolation=cv2.INTER_AREA)
+    write_streams(tmp_path / "anamorphic.mp4", [([stored], Fraction(4, 3))])
+    info, _ = frame_timeline(tmp_path / "anamorphic.mp4")
+    assert (info.width_px, info.height_px, info.sample_aspect_ratio) == (128, 96, "4:3")
+    assert any("not square (sample aspect ratio 4:3, stored 96×96)" in w and "128×96" in w for w in info.warnings)
+    for _, _, image in iter_luma(tmp_path / "anamorphic.mp4"):
+        assert image.shape == (96, 128)
+        x, y, half_w, half_h = bright_centre(image)
+        assert abs(x - 80) < 0.5 and abs(y - 48) < 0.5 and abs(half_w - half_h) <= 1.0, (x, y, half_w, half_h)
+    write_streams(tmp_path / "square.mp4", [([shown], None)])
+    info, _ = frame_timeline(tmp_path / "square.mp4")
+    assert info.sample_aspect_ratio is None and not info.warnings
+
+
+def test_the_recording_is_measured_not_a_thumbnail_stored_before_it(tmp_path):
+    """A file whose first video stream is a 64×48 preview and second the 128×96 recording: the recording is decoded
+    (before, the preview was tracked and nothing said), and the summary names the stream left out."""
+    preview = disk_scene(64, 48, (20, 24), 6)
+    recording = disk_scene(128, 96, (80, 48), 16)
+    write_streams(tmp_path / "two.mp4", [([preview], None), ([recording], None)])
+    info, _ = frame_timeline(tmp_path / "two.mp4")
+    assert (info.width_px, info.height_px, info.n_packets) == (128, 96, 6)
+    assert any(
+        "holds 2 video streams; stream 1, 128×96 px" in w and "stream 0, 64×48 left out" in w for w in info.warnings
+    )
+    images = [image for _, _, image in iter_luma(tmp_path / "two.mp4")]
+    assert len(images) == 6 and all(image.shape == (96, 128) for image in images)
+    x, y, _, _ = bright_centre(images[0])
+    assert abs(x - 80) < 0.5 and abs(y - 48) < 0.5
+
+
 def test_a_picture_stored_on_its_side_turns_the_vertical_given_with_it():
     """A phone held upright stores its picture on its side and says by how much players must turn it: where the
     swing hangs ±90° from the vertical given (0°, config's), the vertical is taken turned with the picture,

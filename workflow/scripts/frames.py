@@ -45,6 +45,7 @@ def work():
         "rotation_deg": info.rotation_deg,
         "pixel_format": info.pixel_format,
         "bit_depth": info.bit_depth,
+        **({"sample_aspect_ratio": info.sample_aspect_ratio} if info.sample_aspect_ratio else {}),
         "warnings": list(info.warnings),
     }
     log.info(

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from pendulum.camera.streams import main_stream, square_width, squared
+
 HELD_OUT_EVERY = 4  # view k is held out when k % 4 == 3
 MAX_VIEWS = 40  # views used for a calibration (evenly spread over the clip)
 MIN_VIEWS = 8
@@ -93,9 +95,11 @@ def _grey_frames(path):
 
     try:
         with av.open(str(path)) as container:
-            for index, frame in enumerate(container.decode(container.streams.video[0])):
-                yield index, frame.to_ndarray(format="gray")
-    except (av.error.FFmpegError, IndexError) as exc:
+            stream = main_stream(container)  # the trials' own: the recording, in square pixels
+            width = square_width(stream)
+            for index, frame in enumerate(container.decode(stream)):
+                yield index, squared(frame, width).to_ndarray(format="gray")
+    except (av.error.FFmpegError, ValueError) as exc:  # ValueError: no video stream
         raise CalibrationError(f"{path}: not a readable video ({exc})") from exc
 
 
@@ -107,7 +111,9 @@ def _frame_count(path) -> int:
     except av.error.FFmpegError as exc:
         raise CalibrationError(f"{path}: not a readable video ({exc})") from exc
     with container:
-        stream = container.streams.video[0]
+        if not container.streams.video:
+            raise CalibrationError(f"{path}: not a readable video (no video stream)")
+        stream = main_stream(container)
         if stream.frames:
             return int(stream.frames)
         rate = float(stream.average_rate or stream.guessed_rate or 30)

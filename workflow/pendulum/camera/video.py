@@ -19,6 +19,14 @@ import numpy as np
 import pandas as pd
 
 from pendulum.camera.stamps import read_clock, regular_times
+from pendulum.camera.streams import (
+    main_stream,
+    non_square_sentence,
+    other_streams_sentence,
+    sample_aspect_ratio,
+    square_width,
+    squared,
+)
 
 # the containers a lab's cameras write: phones (.mov, .mp4, .m4v, .3gp), action cameras (.mp4), camcorders (.mts),
 # screen and webcam recorders (.mkv, .webm), older cameras (.avi); any of them decoded by FFmpeg (PyAV)
@@ -46,6 +54,7 @@ class VideoInfo:
     rotation_deg: float = 0.0  # display rotation the file states (frames are used as stored)
     pixel_format: str = ""
     bit_depth: int = 8
+    sample_aspect_ratio: str | None = None  # "4:3": pixels not square, frames resampled to square ones (streams)
 
 
 ISO_BOXES = (b"ftyp", b"moov", b"mdat", b"free", b"skip", b"wide", b"pnot")  # first box of an MP4/MOV file
@@ -163,7 +172,7 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
     """
     container = _open(path)
     try:
-        stream = container.streams.video[0]
+        stream = main_stream(container)
         rate = stream.average_rate or stream.guessed_rate
         if not rate:
             raise VideoError(f"{path}: the video stream states no frame rate")
@@ -171,7 +180,7 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         stated_rates = [float(r) for r in (rate, stream.base_rate, stream.guessed_rate) if r]
         tb = stream.time_base
         rows, discarded = [], 0
-        warnings = []
+        warnings = [w for w in (other_streams_sentence(path, container, stream),) if w]
         first: dict = {}
         try:
             for packet in container.demux(stream):
@@ -201,6 +210,10 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
                 "file; the rest of the recording is missing"
             )
         width, height = int(stream.codec_context.width), int(stream.codec_context.height)
+        ratio = sample_aspect_ratio(stream)
+        if (square := square_width(stream)) is not None:
+            warnings.append(non_square_sentence(path, stream, square))
+            width = square
     finally:
         container.close()
     table = pd.DataFrame(rows, columns=["pts", "keyframe", "packet_bytes"]).sort_values("pts", kind="stable")
@@ -246,6 +259,7 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         rotation_deg=facts["rotation_deg"],
         pixel_format=facts["pixel_format"],
         bit_depth=facts["bit_depth"],
+        sample_aspect_ratio=None if ratio == 1 else f"{ratio.numerator}:{ratio.denominator}",
     )
     return info, table.reset_index(drop=True)
 
@@ -279,7 +293,9 @@ def _decoder_threads(threads: int | None) -> int | None:
 
 
 def _decoded_frames(path, container, stream, counts: dict, stop: threading.Event) -> Iterator:
-    """``(frame, damaged)`` in presentation order; failed packets counted and skipped (see :func:`iter_luma`)."""
+    """``(frame, damaged)`` in presentation order, in square pixels (:mod:`pendulum.camera.streams`); failed packets
+    counted and skipped (see :func:`iter_luma`)."""
+    width = square_width(stream)
     broken = False  # a packet failed: frames are unreliable until the next key frame
     packets = container.demux(stream)
     n_frames = 0
@@ -304,7 +320,7 @@ def _decoded_frames(path, container, stream, counts: dict, stop: threading.Event
             if frame.key_frame and not corrupt:
                 broken = False
             n_frames += 1
-            yield frame, broken or corrupt
+            yield squared(frame, width), broken or corrupt
 
 
 def _decode_ahead(frames: Iterator, stop: threading.Event, ahead: int) -> Iterator:
@@ -383,7 +399,7 @@ def iter_luma(
     stop = threading.Event()
     decoded = None
     try:
-        stream = container.streams.video[0]
+        stream = main_stream(container)
         stream.thread_type = "AUTO"  # frame and slice threads
         if threads is not None:
             stream.codec_context.thread_count = threads
@@ -427,9 +443,10 @@ def _keyframe_lumas(path: Path, wanted_pts: set, origin_pts: int) -> list[tuple[
     container = _open(path)
     found = []
     try:
-        stream = container.streams.video[0]
+        stream = main_stream(container)
         stream.codec_context.skip_frame = "NONKEY"
         tb = float(stream.time_base)
+        width = square_width(stream)
         for packet in container.demux(stream):
             try:
                 frames = packet.decode()
@@ -437,6 +454,7 @@ def _keyframe_lumas(path: Path, wanted_pts: set, origin_pts: int) -> list[tuple[
                 continue
             for frame in frames:
                 if frame.pts in wanted_pts:
+                    frame = squared(frame, width)
                     fmt = frame.format.name
                     planar = fmt in ("gray", "gray8") or fmt.startswith(("yuv", "yuvj", "nv12"))
                     y = luma(frame) if planar else frame.to_ndarray(format="gray")

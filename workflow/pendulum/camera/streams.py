@@ -1,0 +1,81 @@
+"""The video stream a clip is measured from, and its pixels made square.
+
+A file may hold several video streams (a camera's preview or thumbnail beside the recording, a cover image): the
+recording is the stream with the most pixels, an attached picture (a cover) never. A stream whose pixels are not
+square (a sample aspect ratio other than 1: HDV's 1440×1080 shown as 1920×1080, DV, an anamorphic export) is
+resampled to square pixels, as a player shows it, before anything is measured: in its stored pixels a swing's
+horizontal offsets are scaled by 1/SAR, and tan θ with them (at 4:3 an angle of 24° reads 18.5°; at 3:4, 31°).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+
+def _attached_picture(stream) -> bool:
+    import av
+
+    return bool(int(stream.disposition) & int(av.stream.Disposition.attached_pic))
+
+
+def _default(stream) -> bool:
+    import av
+
+    return bool(int(stream.disposition) & int(av.stream.Disposition.default))
+
+
+def main_stream(container):
+    """The container's recording: of its video streams that are no attached picture, the one with the most pixels
+    (on a tie the default stream, then the first)."""
+    streams = [s for s in container.streams.video if not _attached_picture(s)] or list(container.streams.video)
+    return max(streams, key=lambda s: (s.codec_context.width * s.codec_context.height, _default(s), -s.index))
+
+
+def other_streams_sentence(path, container, stream) -> str | None:
+    """A warning naming the video streams left out beside ``stream`` (None when it is the only one)."""
+    others = [s for s in container.streams.video if s.index != stream.index]
+    if not others:
+        return None
+    listed = ", ".join(
+        f"stream {s.index}, {s.codec_context.width}×{s.codec_context.height}"
+        + (" (an attached picture)" if _attached_picture(s) else "")
+        for s in others
+    )
+    return (
+        f"{path}: holds {len(others) + 1} video streams; stream {stream.index}, "
+        f"{stream.codec_context.width}×{stream.codec_context.height} px, the one with the most pixels, is measured "
+        f"({listed} left out)"
+    )
+
+
+def sample_aspect_ratio(stream) -> Fraction:
+    """The stream's pixel shape, width over height (the container's value, else the codec's; 1 when neither says)."""
+    for value in (stream.sample_aspect_ratio, stream.codec_context.sample_aspect_ratio):
+        if value:  # None or 0/1: not stated
+            return Fraction(value)
+    return Fraction(1)
+
+
+def square_width(stream) -> int | None:
+    """The width in pixels at which the stream's pixels are square (even, for the chroma planes); None when they
+    are square already."""
+    ratio = sample_aspect_ratio(stream)
+    width = stream.codec_context.width
+    square = 2 * round(width * ratio / 2)
+    return None if ratio == 1 or square == width else int(square)
+
+
+def squared(frame, width: int | None):
+    """A decoded frame resampled to ``width`` (:func:`square_width`), its height and pixel format kept."""
+    return frame if width is None else frame.reformat(width=width, height=frame.height)
+
+
+def non_square_sentence(path, stream, width: int) -> str:
+    """The warning that the frames were resampled to square pixels."""
+    ratio = sample_aspect_ratio(stream)
+    return (
+        f"{path}: its pixels are not square (sample aspect ratio {ratio.numerator}:{ratio.denominator}, stored "
+        f"{stream.codec_context.width}×{stream.codec_context.height}): its frames are resampled to {width}×"
+        f"{stream.codec_context.height} square pixels, as a player shows them, before anything is measured "
+        "(tracks, pivot_px and start_px are in those pixels)"
+    )
