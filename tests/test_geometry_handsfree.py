@@ -368,7 +368,7 @@ def test_a_camera_upside_down_with_the_vertical_given_as_zero_is_refused_with_wh
     from pendulum.angles.record import InputError, angles_from_track
 
     track = swing_track(20.0, vertical_deg=179.6, pivot=(320.0, 240.0), arm=150.0, decay_s=30.0, seed=5)
-    with pytest.raises(InputError, match=r"upside down.*vertical_deg to null"):
+    with pytest.raises(InputError, match=r"upside down.*vertical_deg: null in its rig.s entry in config.yaml"):
         angles_from_track(track, pivot_px=[320.0, 240.0], vertical_deg=0.0, length_m=0.76, source="t")
     sideways = swing_track(20.0, vertical_deg=-90.0, pivot=(320.0, 240.0), arm=150.0, decay_s=30.0, seed=5)
     with pytest.raises(InputError, match=r"hangs -(8|9)\d°"):

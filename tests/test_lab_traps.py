@@ -80,10 +80,20 @@ def test_hidden_files_are_not_trials_and_names_differing_in_case_are_refused(tmp
     (tmp_path / "._run 9.mp4").write_bytes(b"\x00\x05\x16\x07")  # macOS's AppleDouble copy on a USB stick
     (tmp_path / ".DS_Store").write_bytes(b"")
     assert sorted(discover_trials(tmp_path)) == ["run_9"]
+    assert passed_over(tmp_path) == []  # the AppleDouble copy and .DS_Store are no one's data
+    (tmp_path / ".run 10.mp4").write_bytes(b"")  # a video hidden by its name: passed over, but named at the end
+    assert sorted(discover_trials(tmp_path)) == ["run_9"] and passed_over(tmp_path) == [tmp_path / ".run 10.mp4"]
     (tmp_path / "Run 9.mov").write_bytes(b"")
-    with pytest.raises(ConfigError, match=r"both give trial .*differ only in case.*rename one of them"):
+    (tmp_path / "clip.mkv").write_bytes(b"")
+    (tmp_path / "clip.m4v").write_bytes(b"")
+    with pytest.raises(ConfigError) as error:  # every clash at once (a helper renamed files over three runs)
         discover_trials(tmp_path)
-    (tmp_path / "Run 9.mov").unlink()
+    lines = str(error.value).splitlines()
+    assert lines[0] == "2 files of the raw folder have problems:" and len(lines) == 3, lines
+    assert re.search(r"clip\.mkv and .*clip\.m4v both give trial 'clip'", lines[1]), lines
+    assert re.search(r"run 9\.mp4 and .*Run 9\.mov both give trial .*differ only in case.*rename one of them", lines[2])
+    for name in ("Run 9.mov", "clip.mkv", "clip.m4v"):
+        (tmp_path / name).unlink()
     (tmp_path / "Joint.mp4").write_bytes(b"")
     with pytest.raises(ConfigError, match=r"'Joint' is reserved for the aggregate fits"):
         discover_trials(tmp_path)

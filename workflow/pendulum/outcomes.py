@@ -279,7 +279,10 @@ def print_outcome(log_path, since_s: float, passed_over: list | None = None) -> 
     if passed_over:
         names = ", ".join(Path(p).name for p in passed_over)
         folder = Path(passed_over[0]).parent.as_posix()
-        print(f"\nPassed over in {folder} (no video or angle table by its extension): {names}", file=sys.stderr)
+        hidden = (
+            ", or hidden: a name that starts with a dot" if any(Path(p).name[0] == "." for p in passed_over) else ""
+        )
+        print(f"\nPassed over in {folder} (no video or angle table by its extension{hidden}): {names}", file=sys.stderr)
     said = outcome_logged(log_path, since_s)
     if said:
         print(f"\nTrials ({Path(log_path).as_posix()}):\n{said}", file=sys.stderr)

@@ -255,7 +255,8 @@ def angles_from_track(
             raise InputError(
                 f"{source}: the swing hangs {hangs_deg:+.0f}° from the vertical it is measured from "
                 f"({vertical_deg:g}° in the image): the camera is on its side or upside down, or vertical_deg is "
-                "wrong; set the rig's vertical_deg to null to have it estimated from the swing"
+                "wrong; set vertical_deg: null in its rig's entry in config.yaml (rigs: <rig>: vertical_deg: null) to "
+                "have it estimated from the swing (a sidecar's vertical_deg is a number within ±45°)"
             )
     turn = None
     if knock and ok.any():  # measured about the swing's own middle: no wrap at ±180° (a camera upside down)

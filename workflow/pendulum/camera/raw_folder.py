@@ -100,13 +100,14 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         name = trial_name(path.stem)
         if name.lower() in RESERVED_NAMES:
             raise ConfigError(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
-        if name.lower() in by_case:
+        if name.lower() in by_case:  # every clash named at once, with the sidecars' problems
             other = trials[by_case[name.lower()]]
-            raise ConfigError(
+            problems.append(
                 f"{path} and {other.path} both give trial {name!r} (a trial's name is its file name with spaces, "
                 "brackets and other signs made _, and names that differ only in case are one file on macOS and "
                 "Windows); rename one of them"
             )
+            continue
         by_case[name.lower()] = name
         kind = "video" if suffix in VIDEO_EXTENSIONS else "angles"
         trial = Trial(name, kind, str(path))
@@ -130,20 +131,27 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         for path in stray
     ]
     if problems:
-        raise ConfigError(all_problems(problems, "sidecars"))
+        clashes = any(" both give trial " in problem for problem in problems)
+        raise ConfigError(all_problems(problems, "files of the raw folder" if clashes else "sidecars"))
     return trials
 
 
 def passed_over(raw_dir: str | Path) -> list[Path]:
-    """The files in ``raw_dir`` that are neither a trial (a video or an angle table) nor a sidecar, hidden files
-    left out: a video in a container not read as one (its extension), or notes kept beside the videos."""
+    """The files in ``raw_dir`` that are no trial and no sidecar, but could be meant as one: a video in a container not
+    read as one (its extension), notes kept beside the videos, or a video or angle table whose name starts with a dot
+    (hidden: passed over like ``.DS_Store``, but named; macOS's ``._name.mp4`` copies are not)."""
     known = VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS + SIDECAR_EXTENSIONS
     if not Path(raw_dir).is_dir():
         return []
     return [
         p
         for p in sorted(Path(raw_dir).iterdir())
-        if p.is_file() and not p.name.startswith(".") and p.suffix.lower() not in known
+        if p.is_file()
+        and (
+            p.suffix.lower() not in known
+            if not p.name.startswith(".")
+            else p.suffix.lower() in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS and not p.name.startswith("._")
+        )
     ]
 
 

@@ -68,7 +68,8 @@ def marker_candidates(image: np.ndarray, settings: TrackerSettings, near=None, s
         if score <= 0:
             break
         patch = small[loc[1] : loc[1] + size, loc[0] : loc[0] + size]
-        contrast = float(patch[inside].mean() - patch[~inside].mean())
+        disk = inside[: patch.shape[0], : patch.shape[1]]  # a window smaller than the template: its part
+        contrast = float(patch[disk].mean() - patch[~disk].mean()) if disk.any() and not disk.all() else 0.0
         found.append(Candidate(x0 + 2 * (loc[0] + half) + 0.5, y0 + 2 * (loc[1] + half) + 0.5, float(score), contrast))
         response[
             max(0, loc[1] - keep_out) : loc[1] + keep_out + 1, max(0, loc[0] - keep_out) : loc[0] + keep_out + 1
