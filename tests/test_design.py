@@ -168,6 +168,21 @@ def test_measurement_advice_reaches_the_target_it_names():
     assert "Measuring the displaced volume to ±" in advice["sentence"]
     # a referee: volume, density and mass to be measured apart, where one weighing in the tank settles the buoyancy
     assert "or weigh the body hung in the fluid and state that reading as submerged_mass_kg" in advice["sentence"]
+    assert "still to be measured" not in advice["sentence"]  # the reading stands for all three
+    # the drag coefficient's: the volume and the frontal area (an ROV engineer, 2026-12-07: "or weigh the body" read
+    # as reaching the target alone, where the area's tolerance alone gives ±3 %)
+    advice = measurement_advice(
+        "drag_coefficient",
+        "the drag coefficient",
+        dict(entry, floor_relative_halfwidth95=Z95 * 0.05),
+        {"error_budget": {"displaced_volume_m3": -0.03 * value, "frontal_area_m2": -0.012 * value}},
+        0.02,
+        {"paper": {"displaced_volume_m3": 2e-5, "frontal_area_m2": 5e-4}},
+        {},
+    )
+    assert [m["input"] for m in advice["measure"]] == ["displaced_volume_m3", "frontal_area_m2"], advice
+    assert "in place of the volume" in advice["sentence"] and "(the frontal area" in advice["sentence"], advice
+    assert advice["sentence"].endswith("still to be measured as above)"), advice["sentence"]
     budget_without = {"length_m": -0.1, "mass_kg": 0.02}
     advice = measurement_advice(
         "added_mass_kg",

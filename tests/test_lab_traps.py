@@ -84,15 +84,17 @@ def test_hidden_files_are_not_trials_and_names_differing_in_case_are_refused(tmp
     (tmp_path / ".run 10.mp4").write_bytes(b"")  # a video hidden by its name: passed over, but named at the end
     assert sorted(discover_trials(tmp_path)) == ["run_9"] and passed_over(tmp_path) == [tmp_path / ".run 10.mp4"]
     (tmp_path / "Run 9.mov").write_bytes(b"")
-    (tmp_path / "clip.mkv").write_bytes(b"")
-    (tmp_path / "clip.m4v").write_bytes(b"")
+    (tmp_path / "run 9.yaml").write_text("mass_kg: 0.18\n")  # the clashing pair's sidecar: not one of no trial
+    for name in ("clip.mkv", "Clip.m4v", "CLIP.mp4", "joint.mp4"):
+        (tmp_path / name).write_bytes(b"")
     with pytest.raises(ConfigError) as error:  # every clash at once (a helper renamed files over three runs)
         discover_trials(tmp_path)
     lines = str(error.value).splitlines()
-    assert lines[0] == "2 files of the raw folder have problems:" and len(lines) == 3, lines
-    assert re.search(r"clip\.mkv and .*clip\.m4v both give trial 'clip'", lines[1]), lines
+    assert lines[0] == "3 problems in the raw folder:" and len(lines) == 4, lines
+    assert re.search(r"CLIP\.mp4, .*Clip\.m4v, .*clip\.mkv all give trial 'CLIP'.*all but one of them", lines[1])
+    assert re.search(r"joint\.mp4: 'joint' is reserved for the aggregate fits", lines[3]), lines
     assert re.search(r"run 9\.mp4 and .*Run 9\.mov both give trial .*differ only in case.*rename one of them", lines[2])
-    for name in ("Run 9.mov", "clip.mkv", "clip.m4v"):
+    for name in ("Run 9.mov", "run 9.yaml", "clip.mkv", "Clip.m4v", "CLIP.mp4", "joint.mp4"):
         (tmp_path / name).unlink()
     (tmp_path / "Joint.mp4").write_bytes(b"")
     with pytest.raises(ConfigError, match=r"'Joint' is reserved for the aggregate fits"):

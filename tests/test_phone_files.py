@@ -198,20 +198,24 @@ def disk_scene(width, height, centre, radius, level=200):
     return image
 
 
-def write_streams(path, streams, n=6, rate=30):
-    """One container with a video stream per ``(frames, sample_aspect_ratio)`` of ``streams`` (H.264, in order)."""
+def write_streams(path, streams, n=6, rate=30, codecs=()):
+    """One container with a video stream per ``(frames, sample_aspect_ratio)`` of ``streams`` (H.264, in order;
+    ``codecs``: another codec per stream, e.g. ``png`` for a cover image)."""
     with av.open(str(path), mode="w") as container:
         added = []
-        for frames, ratio in streams:
-            stream = container.add_stream("libx264", rate=rate)
-            stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], "yuv420p"
-            stream.options = {"crf": "12", "preset": "veryfast", "threads": "1"}
+        for k, (frames, ratio) in enumerate(streams):
+            codec = codecs[k] if k < len(codecs) else "libx264"
+            stream = container.add_stream(codec, rate=rate)
+            pix_fmt = "yuv420p" if codec == "libx264" else "gray"
+            stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], pix_fmt
+            stream.options = {"crf": "12", "preset": "veryfast", "threads": "1"} if codec == "libx264" else {}
             if ratio is not None:
                 stream.codec_context.sample_aspect_ratio = ratio
             added.append(stream)
         for i in range(n):
             for stream, (frames, _) in zip(added, streams, strict=True):
-                frame = av.VideoFrame.from_ndarray(frames[i % len(frames)], format="gray").reformat(format="yuv420p")
+                frame = av.VideoFrame.from_ndarray(frames[i % len(frames)], format="gray")
+                frame = frame.reformat(format=stream.pix_fmt)
                 frame.pts = i
                 for packet in stream.encode(frame):
                     container.mux(packet)
@@ -261,6 +265,13 @@ def test_the_recording_is_measured_not_a_thumbnail_stored_before_it(tmp_path):
     assert len(images) == 6 and all(image.shape == (96, 128) for image in images)
     x, y, _, _ = bright_centre(images[0])
     assert abs(x - 80) < 0.5 and abs(y - 48) < 0.5
+    # a cover image larger than the recording, stored first, its attached-picture flag dropped (as a reviewer.s MKV did)
+    cover = disk_scene(256, 192, (40, 40), 20)
+    write_streams(tmp_path / "cover.mov", [([cover], None), ([recording], None)], codecs=("png",))
+    info, _ = frame_timeline(tmp_path / "cover.mov")
+    assert (info.width_px, info.height_px) == (128, 96), info
+    assert any("stream 0, 256×192 (a still picture) left out" in w for w in info.warnings), info.warnings
+    assert next(iter(iter_luma(tmp_path / "cover.mov")))[2].shape == (96, 128)
 
 
 def test_a_picture_stored_on_its_side_turns_the_vertical_given_with_it():

@@ -440,3 +440,23 @@ def test_a_swing_that_leaves_the_frame_is_no_post_in_front():
         counts.add(row, body[b0 : y0 + int(4 * r), a0 : x0 + int(4 * r)], a0, b0, x, y)
     frames, found = hidden_frames(counts, xs, ys, background, 5.0)
     assert not frames.any() and found["hidden_px"] == 0
+
+
+def test_a_marker_under_a_pixel_gives_no_candidate_and_no_warning():
+    """A radius under 0.5 px (a 1 s clip's detection, a helper, 2026-12-07) made a one-pixel template with no surround:
+    a candidate of score 1 anywhere, and numpy's "Mean of empty slice" on the terminal. No disk is found at that
+    scale; a 3 px dot still is, at its place."""
+    import warnings
+    from dataclasses import replace
+
+    from pendulum.tracking.acquisition import marker_candidates
+
+    image = np.random.default_rng(1).integers(0, 255, (60, 80)).astype(np.uint8)
+    settings = TrackerSettings()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert marker_candidates(image, replace(settings, marker_radius_px=0.4)) == []
+    canvas = np.full((60, 80), 40.0, np.float32)
+    draw_disk(canvas, 50.3, 20.6, 6.0, 230.0)
+    (best, *_) = marker_candidates(canvas.round().astype(np.uint8), replace(settings, marker_radius_px=6.0))
+    assert math.hypot(best.x - 50.3, best.y - 20.6) < 1.5 and best.score > 0.9

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from pendulum.camera.streams import main_stream, square_width, squared
+from pendulum.camera.streams import main_stream, squarer
 
 HELD_OUT_EVERY = 4  # view k is held out when k % 4 == 3
 MAX_VIEWS = 40  # views used for a calibration (evenly spread over the clip)
@@ -96,9 +96,9 @@ def _grey_frames(path):
     try:
         with av.open(str(path)) as container:
             stream = main_stream(container)  # the trials' own: the recording, in square pixels
-            width = square_width(stream)
+            square = squarer(stream)
             for index, frame in enumerate(container.decode(stream)):
-                yield index, squared(frame, width).to_ndarray(format="gray")
+                yield index, (frame if square is None else square(frame)).to_ndarray(format="gray")
     except (av.error.FFmpegError, ValueError) as exc:  # ValueError: no video stream
         raise CalibrationError(f"{path}: not a readable video ({exc})") from exc
 

@@ -90,30 +90,37 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
     trials: dict[str, Trial] = {}
     if not raw_dir.is_dir():
         return trials
-    by_case: dict[str, str] = {}
     used: set[Path] = set()
     problems: list[str] = []
-    for path in sorted(raw_dir.iterdir()):
+    files = [
+        p
+        for p in sorted(raw_dir.iterdir())
+        if not p.name.startswith(".") and p.is_file() and p.suffix.lower() in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS
+    ]
+    same_name: dict[str, list[Path]] = {}  # names that differ only in case are one file on macOS and Windows
+    for path in files:
+        same_name.setdefault(trial_name(path.stem).lower(), []).append(path)
+    for path in files:  # every problem named at once, with the sidecars'
         suffix = path.suffix.lower()
-        if path.name.startswith(".") or not path.is_file() or suffix not in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS:
-            continue
         name = trial_name(path.stem)
+        found = _sidecars_of(path, name)
+        used.update(found)  # a file refused for its name keeps its sidecar: none is said to be of no trial
+        clash = same_name[name.lower()]
         if name.lower() in RESERVED_NAMES:
-            raise ConfigError(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
-        if name.lower() in by_case:  # every clash named at once, with the sidecars' problems
-            other = trials[by_case[name.lower()]]
-            problems.append(
-                f"{path} and {other.path} both give trial {name!r} (a trial's name is its file name with spaces, "
-                "brackets and other signs made _, and names that differ only in case are one file on macOS and "
-                "Windows); rename one of them"
-            )
+            problems.append(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
             continue
-        by_case[name.lower()] = name
+        if len(clash) > 1:
+            if path == clash[0]:
+                listing = f"{clash[1]} and {clash[0]} both" if len(clash) == 2 else f"{', '.join(map(str, clash))} all"
+                problems.append(
+                    f"{listing} give trial {name!r} (a trial's name is its file name with spaces, brackets and other "
+                    "signs made _, and names that differ only in case are one file on macOS and Windows); rename "
+                    + ("one of them" if len(clash) == 2 else "all but one of them")
+                )
+            continue
         kind = "video" if suffix in VIDEO_EXTENSIONS else "angles"
         trial = Trial(name, kind, str(path))
-        found = _sidecars_of(path, name)
-        used.update(found)
-        try:  # every bad sidecar named at once
+        try:
             if (sidecar := _sidecar_of(path, name, found)) is not None:
                 trial.sidecar, trial.sidecar_path = read_sidecar(sidecar), str(sidecar)
         except ConfigError as exc:
@@ -131,8 +138,10 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         for path in stray
     ]
     if problems:
-        clashes = any(" both give trial " in problem for problem in problems)
-        raise ConfigError(all_problems(problems, "files of the raw folder" if clashes else "sidecars"))
+        names = any(" give trial " in problem or " is reserved " in problem for problem in problems)
+        if names and len(problems) > 1:
+            raise ConfigError(f"{len(problems)} problems in the raw folder:\n" + "\n".join(problems))
+        raise ConfigError(all_problems(problems, "sidecars"))
     return trials
 
 

@@ -18,15 +18,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from pendulum.camera import streams as pixels  # the stream measured, its pixels made square
 from pendulum.camera.stamps import read_clock, regular_times
-from pendulum.camera.streams import (
-    main_stream,
-    non_square_sentence,
-    other_streams_sentence,
-    sample_aspect_ratio,
-    square_width,
-    squared,
-)
 
 # the containers a lab's cameras write: phones (.mov, .mp4, .m4v, .3gp), action cameras (.mp4), camcorders (.mts),
 # screen and webcam recorders (.mkv, .webm), older cameras (.avi); any of them decoded by FFmpeg (PyAV)
@@ -172,7 +165,7 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
     """
     container = _open(path)
     try:
-        stream = main_stream(container)
+        stream = pixels.main_stream(container)
         rate = stream.average_rate or stream.guessed_rate
         if not rate:
             raise VideoError(f"{path}: the video stream states no frame rate")
@@ -180,7 +173,7 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         stated_rates = [float(r) for r in (rate, stream.base_rate, stream.guessed_rate) if r]
         tb = stream.time_base
         rows, discarded = [], 0
-        warnings = [w for w in (other_streams_sentence(path, container, stream),) if w]
+        warnings = []
         first: dict = {}
         try:
             for packet in container.demux(stream):
@@ -210,10 +203,10 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
                 "file; the rest of the recording is missing"
             )
         width, height = int(stream.codec_context.width), int(stream.codec_context.height)
-        ratio = sample_aspect_ratio(stream)
-        if (square := square_width(stream)) is not None:
-            warnings.append(non_square_sentence(path, stream, square))
-            width = square
+        warnings += [w for w in (pixels.other_streams_sentence(path, container, stream),) if w]
+        if (square := pixels.square_width(stream)) is not None:  # resampled: said, and its ratio reported
+            warnings.append(pixels.non_square_sentence(path, stream, square))
+            width, ratio = square, pixels.sample_aspect_ratio(stream)
     finally:
         container.close()
     table = pd.DataFrame(rows, columns=["pts", "keyframe", "packet_bytes"]).sort_values("pts", kind="stable")
@@ -235,8 +228,9 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
     if facts["rotation_deg"]:
         warnings.append(
             f"{path}: the file asks players to rotate the picture by {facts['rotation_deg']:g}°; its frames are used "
-            f"as stored ({width}×{height}): tracks and pivot_px are in stored pixel coordinates (give pivot_px as "
-            "measured in the stored frames, not in the rotated picture a player shows; a vertical_deg the swing "
+            f"as stored ({width}×{height}{' once made square' if square else ''}): tracks and pivot_px are in stored "
+            "pixel coordinates (give pivot_px as measured in the stored frames, not in the rotated picture a player "
+            "shows; a vertical_deg the swing "
             "shows to be the shown picture's is turned with it)"
         )
     table.insert(3, "interval_s", clock["interval"])
@@ -259,7 +253,7 @@ def frame_timeline(path: Path) -> tuple[VideoInfo, pd.DataFrame]:
         rotation_deg=facts["rotation_deg"],
         pixel_format=facts["pixel_format"],
         bit_depth=facts["bit_depth"],
-        sample_aspect_ratio=None if ratio == 1 else f"{ratio.numerator}:{ratio.denominator}",
+        sample_aspect_ratio=None if square is None else f"{ratio.numerator}:{ratio.denominator}",
     )
     return info, table.reset_index(drop=True)
 
@@ -295,7 +289,7 @@ def _decoder_threads(threads: int | None) -> int | None:
 def _decoded_frames(path, container, stream, counts: dict, stop: threading.Event) -> Iterator:
     """``(frame, damaged)`` in presentation order, in square pixels (:mod:`pendulum.camera.streams`); failed packets
     counted and skipped (see :func:`iter_luma`)."""
-    width = square_width(stream)
+    square = pixels.squarer(stream)
     broken = False  # a packet failed: frames are unreliable until the next key frame
     packets = container.demux(stream)
     n_frames = 0
@@ -320,7 +314,7 @@ def _decoded_frames(path, container, stream, counts: dict, stop: threading.Event
             if frame.key_frame and not corrupt:
                 broken = False
             n_frames += 1
-            yield squared(frame, width), broken or corrupt
+            yield (frame if square is None else square(frame)), broken or corrupt
 
 
 def _decode_ahead(frames: Iterator, stop: threading.Event, ahead: int) -> Iterator:
@@ -399,7 +393,7 @@ def iter_luma(
     stop = threading.Event()
     decoded = None
     try:
-        stream = main_stream(container)
+        stream = pixels.main_stream(container)
         stream.thread_type = "AUTO"  # frame and slice threads
         if threads is not None:
             stream.codec_context.thread_count = threads
@@ -443,10 +437,10 @@ def _keyframe_lumas(path: Path, wanted_pts: set, origin_pts: int) -> list[tuple[
     container = _open(path)
     found = []
     try:
-        stream = main_stream(container)
+        stream = pixels.main_stream(container)
         stream.codec_context.skip_frame = "NONKEY"
         tb = float(stream.time_base)
-        width = square_width(stream)
+        square = pixels.squarer(stream)
         for packet in container.demux(stream):
             try:
                 frames = packet.decode()
@@ -454,7 +448,7 @@ def _keyframe_lumas(path: Path, wanted_pts: set, origin_pts: int) -> list[tuple[
                 continue
             for frame in frames:
                 if frame.pts in wanted_pts:
-                    frame = squared(frame, width)
+                    frame = frame if square is None else square(frame)
                     fmt = frame.format.name
                     planar = fmt in ("gray", "gray8") or fmt.startswith(("yuv", "yuvj", "nv12"))
                     y = luma(frame) if planar else frame.to_ndarray(format="gray")

@@ -29,6 +29,9 @@ INPUT_WORDS = {  # error-budget input → (words in a sentence, unit)
 }
 
 
+BUOYANCY_INPUTS = ("displaced_volume_m3", "fluid_density_kg_m3", "mass_kg")  # what one reading in the fluid settles
+
+
 def split_key(key: str) -> tuple[str, str | None]:
     """``displaced_volume_m3[short_arm]`` → (``displaced_volume_m3``, ``short_arm``)."""
     base, _, rig = key.partition("[")
@@ -156,9 +159,12 @@ def measurement_advice(
     times = f"{1 / factor:.2g}× as precisely" if factor > 0 else "exactly"
     sentence = head + f". Measuring {listing} (1σ; {times} as today) would reach ±{100 * target:g} %"
     if any(split_key(k)[0] == "displaced_volume_m3" for k in chosen):  # a weighed rig has no volume entry
+        # the reading stands for the buoyancy's inputs alone: another input in the list is still to be measured
+        others = [input_words(k) for k in chosen if split_key(k)[0] not in BUOYANCY_INPUTS]
         sentence += (
             "; or weigh the body hung in the fluid and state that reading as submerged_mass_kg (m − ρV) in place of "
             "the volume: one scale reading settles the buoyancy, which the volume and density set together"
+            + (f" ({' and '.join(others)} still to be measured as above)" if others else "")
         )
     return {
         "limited_by": first,

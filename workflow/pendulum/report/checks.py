@@ -327,7 +327,12 @@ class CheckSections(ReportData):
         )
         return (
             " They do not hold the equation's own form: m, B and the drag are the body's; the rod's (or string's) own "
-            "mass, buoyancy and drag are not in it." + where
+            "mass, buoyancy and drag are not in it." + where + " What the coefficients are: m<sub>a</sub> is the added "
+            "mass as swung on this pendulum (a body that turns with the swing adds its rotational added inertia about "
+            "its centre, as I<sub>a</sub>/L²; a vehicle's added mass along one axis is this less that, for the axis "
+            "it was swung along); C<sub>d</sub> and c are those of the oscillating flow at the trials' "
+            "Keulegan–Carpenter numbers (KC in Table 3), not steady-flow values; c and τ<sub>f</sub> may be the "
+            "rig's (its bearing) as much as the body's."
         )
 
     def calibration_table(self) -> str:

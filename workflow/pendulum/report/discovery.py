@@ -192,8 +192,8 @@ def candidates_table(document: dict, caption=_PLAIN) -> str:
         rows,
         row_attrs=attrs,
         caption=caption(
-            "Every candidate refitted in each forward round (best fit first). A candidate is taken when "
-            f"{esc(document['threshold']['rule'])} (α = {document['threshold']['alpha']:g})."
+            f"Every candidate refitted in each forward round (best fit first); α = {document['threshold']['alpha']:g}. "
+            f"A candidate is taken when {esc(document['threshold']['rule'])}."
         ),
         table_id=f"discovery-candidates-{document.get('group', '')}",
     )

@@ -55,8 +55,8 @@ def marker_candidates(image: np.ndarray, settings: TrackerSettings, near=None, s
     small = cv2.resize(img, None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA).astype(np.float32)
     template = _disk_template(settings.marker_radius_px / 2)
     size = template.shape[0]
-    if small.shape[0] <= size or small.shape[1] <= size:
-        return []
+    if small.shape[0] <= size or small.shape[1] <= size or (template > 0).all():
+        return []  # no room for the disk, or a disk under a pixel with no surround to tell it by
     response = cv2.matchTemplate(small, template, cv2.TM_CCOEFF_NORMED)
     response = np.nan_to_num(response, nan=0.0)
     inside = template > 0
@@ -68,8 +68,7 @@ def marker_candidates(image: np.ndarray, settings: TrackerSettings, near=None, s
         if score <= 0:
             break
         patch = small[loc[1] : loc[1] + size, loc[0] : loc[0] + size]
-        disk = inside[: patch.shape[0], : patch.shape[1]]  # a window smaller than the template: its part
-        contrast = float(patch[disk].mean() - patch[~disk].mean()) if disk.any() and not disk.all() else 0.0
+        contrast = float(patch[inside].mean() - patch[~inside].mean())
         found.append(Candidate(x0 + 2 * (loc[0] + half) + 0.5, y0 + 2 * (loc[1] + half) + 0.5, float(score), contrast))
         response[
             max(0, loc[1] - keep_out) : loc[1] + keep_out + 1, max(0, loc[0] - keep_out) : loc[0] + keep_out + 1
