@@ -1,10 +1,11 @@
 """The video stream a clip is measured from, and its pixels made square.
 
 A file may hold several video streams (a camera's preview or thumbnail beside the recording, a cover image): the
-recording is the stream with the most pixels, an attached picture (a cover) never. A stream whose pixels are not
+recording is the stream with the most pixels as shown, a still picture (a cover) never. A stream whose pixels are not
 square (a sample aspect ratio other than 1: HDV's 1440×1080 shown as 1920×1080, DV, an anamorphic export) is
-resampled to square pixels, as a player shows it, before anything is measured: in its stored pixels a swing's
-horizontal offsets are scaled by 1/SAR, and tan θ with them (at 4:3 an angle of 24° reads 18.5°; at 3:4, 31°).
+resampled to square pixels, as a player shows it, before anything is measured: in its stored pixels a swing's path
+is an ellipse, its horizontal offsets scaled by 1/SAR, and the pivot fitted to it and the angles about it are wrong
+(a reviewer's 4:3 copy of the apple clip: its pivot 200 px off, its angles 33 % too large, and nothing said).
 """
 
 from __future__ import annotations
