@@ -92,6 +92,7 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         return trials
     used: set[Path] = set()
     problems: list[str] = []
+    misnamed = False  # a clash or a reserved name among the problems: not the sidecars' alone
     files = [
         p
         for p in sorted(raw_dir.iterdir())
@@ -108,8 +109,10 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         clash = same_name[name.lower()]
         if name.lower() in RESERVED_NAMES:
             problems.append(f"{path}: {name!r} is reserved for the aggregate fits; rename the file")
+            misnamed = True
             continue
         if len(clash) > 1:
+            misnamed = True
             if path == clash[0]:
                 listing = f"{clash[1]} and {clash[0]} both" if len(clash) == 2 else f"{', '.join(map(str, clash))} all"
                 problems.append(
@@ -137,10 +140,9 @@ def discover_trials(raw_dir: str | Path) -> dict[str, Trial]:
         "(data/raw/run1.yaml or data/raw/run1.mp4.yaml for data/raw/run1.mp4), or move it out of the raw folder"
         for path in stray
     ]
+    if misnamed and len(problems) > 1:
+        raise ConfigError(f"{len(problems)} problems in the raw folder:\n" + "\n".join(problems))
     if problems:
-        names = any(" give trial " in problem or " is reserved " in problem for problem in problems)
-        if names and len(problems) > 1:
-            raise ConfigError(f"{len(problems)} problems in the raw folder:\n" + "\n".join(problems))
         raise ConfigError(all_problems(problems, "sidecars"))
     return trials
 
@@ -149,19 +151,16 @@ def passed_over(raw_dir: str | Path) -> list[Path]:
     """The files in ``raw_dir`` that are no trial and no sidecar, but could be meant as one: a video in a container not
     read as one (its extension), notes kept beside the videos, or a video or angle table whose name starts with a dot
     (hidden: passed over like ``.DS_Store``, but named; macOS's ``._name.mp4`` copies are not)."""
-    known = VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS + SIDECAR_EXTENSIONS
+    trial_kinds = VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS
     if not Path(raw_dir).is_dir():
         return []
-    return [
-        p
-        for p in sorted(Path(raw_dir).iterdir())
-        if p.is_file()
-        and (
-            p.suffix.lower() not in known
-            if not p.name.startswith(".")
-            else p.suffix.lower() in VIDEO_EXTENSIONS + ANGLE_TABLE_EXTENSIONS and not p.name.startswith("._")
-        )
-    ]
+
+    def named(p: Path) -> bool:
+        if p.name.startswith("."):  # hidden: named only where it is a video or table, not an AppleDouble copy
+            return p.suffix.lower() in trial_kinds and not p.name.startswith("._")
+        return p.suffix.lower() not in trial_kinds + SIDECAR_EXTENSIONS
+
+    return [p for p in sorted(Path(raw_dir).iterdir()) if p.is_file() and named(p)]
 
 
 def raw_folder_problem(raw_dir: str | Path, trials: dict) -> str | None:

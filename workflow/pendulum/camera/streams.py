@@ -13,16 +13,11 @@ from __future__ import annotations
 from fractions import Fraction
 
 
-def _attached_picture(stream) -> bool:
+def _disposition(stream, flag: str) -> bool:
+    """Whether the stream's disposition holds ``flag`` (``attached_pic``, ``default``)."""
     import av
 
-    return bool(int(stream.disposition) & int(av.stream.Disposition.attached_pic))
-
-
-def _default(stream) -> bool:
-    import av
-
-    return bool(int(stream.disposition) & int(av.stream.Disposition.default))
+    return bool(int(stream.disposition) & int(getattr(av.stream.Disposition, flag)))
 
 
 STILL_CODECS = ("png", "bmp", "tiff", "webp", "gif")  # a picture's codecs: a cover whose flag a muxer dropped (MKV)
@@ -30,7 +25,7 @@ STILL_CODECS = ("png", "bmp", "tiff", "webp", "gif")  # a picture's codecs: a co
 
 def _still(stream) -> bool:
     """An attached picture, a still image's codec, or a stream of one frame: no recording."""
-    return _attached_picture(stream) or stream.codec_context.name in STILL_CODECS or stream.frames == 1
+    return _disposition(stream, "attached_pic") or stream.codec_context.name in STILL_CODECS or stream.frames == 1
 
 
 def main_stream(container):
@@ -39,7 +34,11 @@ def main_stream(container):
     streams = [s for s in container.streams.video if not _still(s)] or list(container.streams.video)
     return max(
         streams,
-        key=lambda s: (s.codec_context.width * s.codec_context.height * sample_aspect_ratio(s), _default(s), -s.index),
+        key=lambda s: (
+            s.codec_context.width * s.codec_context.height * sample_aspect_ratio(s),
+            _disposition(s, "default"),
+            -s.index,
+        ),
     )
 
 

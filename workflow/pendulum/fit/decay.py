@@ -17,6 +17,9 @@ from pendulum.fit.records import AngleRecord
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import PendulumModel
 
+PEAK_DROP_SIGMAS = 4.0  # a peak's refining window reaches where the swing has come back by this many noise σ
+MAX_PEAK_HALF_WIDTH = 64  # ... at most this many samples each side
+
 
 def extrema(t, theta, noise_rad: float = 0.0):
     """Times and signed values of the swing extrema (:func:`~pendulum.angles.swings.swing_extrema`: one
@@ -47,10 +50,6 @@ def extrema(t, theta, noise_rad: float = 0.0):
         times.append(t[i] + tv)
         values.append(c - b * b / (4 * a))
     return np.array(times), np.array(values)
-
-
-PEAK_DROP_SIGMAS = 4.0  # a peak's refining window reaches where the swing has come back by this many noise σ
-MAX_PEAK_HALF_WIDTH = 64  # ... at most this many samples each side
 
 
 def decay_analysis(model: PendulumModel, record: AngleRecord) -> dict:
