@@ -319,6 +319,61 @@ def test_the_normal_signal_is_set_from_thirty_frames_and_frames_flagged_for_it_a
     assert table.flag[40] == "ok" and table.signal_ratio[40] == pytest.approx(0.85)
 
 
+def _pass_along_an_arc(rho, seed, hold_phi=0.5, r=8.0):
+    """Frames through ``MarkerSignal`` as the marker pass gives them, the circle unknown (the marker given, no
+    detection): held 30 frames at ``hold_phi``, then five swings of ±``hold_phi`` rad (40 frames each) on a 250 px
+    arm, the signal 100 ρ(φ) with 0.5 % noise, flagged outside [0.9, 1.12]. Returns the table after ``finish``, the
+    frames' φ and the share of them flagged in the pass."""
+    from pendulum.tracking.marker_arc import MarkerArc, MarkerSignal
+
+    pivot, arm = (320.0, 20.0), 250.0
+    arc = MarkerArc(None, r)
+    signal = MarkerSignal(arc, r, True, 0.9, 1.12)
+    phi = np.concatenate([np.full(30, hold_phi), hold_phi * np.cos(np.arange(200) * 2 * np.pi / 40)])
+    noise = np.random.default_rng(seed).normal(0.0, 0.005, phi.size)
+    ratios, flags = [], []
+    for row, (p, e) in enumerate(zip(phi, noise, strict=True)):
+        x, y = pivot[0] + arm * math.sin(p), pivot[1] + arm * math.cos(p)
+        level = 100.0 * rho(p) * (1.0 + e)
+        ratio = signal.ratio(row, False, level, x, y, steady=True)
+        flag = "ok" if 0.9 <= ratio <= 1.12 else ("occluded" if ratio < 0.9 else "glare")
+        if flag == "ok":
+            arc.add(x, y)
+        signal.judged(row, False, level, x, y, ratio, flag, biased=False)
+        ratios.append(ratio)
+        flags.append(flag)
+    table = pd.DataFrame({"quality": 0.9, "signal_ratio": ratios, "flag": flags})
+    signal.finish(table)
+    return table, phi, float(np.mean(np.array(flags) != "ok"))
+
+
+def test_a_signal_that_changes_smoothly_away_from_the_hold_is_refitted_along_the_whole_path():
+    """The marker (r = 8 px on a 250 px arm) held at 0.5 rad near a wide lens's edge, its signal 1.36 − (φ + 0.1)²
+    along the swing (1.36 times at the lens's centre, 1.2 at the swing's other end, up to 3.8 % per radius of arc
+    at the edge): the ok frames about the hold span too little arc to fit the circle, and most later frames are
+    flagged "glare" in the pass; refitted
+    along the whole path at the end (a smoothing spline over 2 radii of arc), all are ok, in each of 20 seeds. A
+    shadow over half the path (φ < 0, ρ = 0.8: its edge a step within a diameter) is not a lens: those frames stay
+    "occluded" in every seed. A small occluder at φ ≈ 0.2 (0.6 over 2 radii of arc) on the lens's curve: its
+    frames stay flagged, the rest of the path is ok."""
+
+    def lens(p):
+        return 1.0 + 0.36 - (p + 0.1) ** 2
+
+    for seed in range(20):
+        table, phi, flagged = _pass_along_an_arc(lens, seed)
+        assert flagged > 0.5
+        assert (table.flag == "ok").all()
+
+        table, phi, _ = _pass_along_an_arc(lambda p: 1.0 if p >= 0 else 0.8, seed)
+        assert (table.flag[phi < -0.02] == "occluded").all()
+
+        spot = np.abs(phi - 0.2) <= 0.032  # 2 radii of arc
+        table, phi, _ = _pass_along_an_arc(lambda p: lens(p) * (0.6 if abs(p - 0.2) <= 0.032 else 1.0), seed)
+        assert (table.flag[spot] != "ok").all()
+        assert (table.flag[~spot] == "ok").all()
+
+
 def test_a_still_body_with_more_of_something_at_either_end_of_the_record_is_held():
     """``held_still_runs``: fingers alone over the body's edge make its silhouette ~1.5 times its own area, under
     the 1.5 that flags a hand: a run of still frames over 1.2 times from the record's first frame (or to its last)

@@ -57,7 +57,7 @@ from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.acquisition import Candidate, inner_grey, marker_candidates, marker_like, near_any, static_spot
 from pendulum.tracking.centroids import measure_marker
 from pendulum.tracking.checks import estimate_exposure_fraction, exposure_centre_correction, flag_jumps
-from pendulum.tracking.marker_arc import ArcReference, MarkerArc, MarkerSignal
+from pendulum.tracking.marker_arc import MarkerArc, MarkerSignal
 from pendulum.tracking.samples import frame_count
 from pendulum.tracking.settings import TrackerSettings
 
@@ -220,8 +220,9 @@ def track_video(
         settings.reference_along_arc,
         settings.min_signal_ratio,
         settings.max_signal_ratio,
+        settings.max_width_ratio,
     )
-    width_curve = ArcReference(arc, settings.marker_radius_px, settings.reference_along_arc)
+    width_curve = signal.width
     rows = []
     history: list[tuple[int, float, float]] = []  # (frame, x, y) of good frames
     previous = None
@@ -253,7 +254,7 @@ def track_video(
     allowed = math.inf if total is None else (1.0 - abandon_below) * total  # frames that may be not ok
     not_ok = counted = 0
     for index, t, image in iter_luma(path, damaged=True, report=video_report, view=view):
-        not_ok += sum(row[6] != "ok" for row in rows[counted:])
+        not_ok += sum(row[6] != "ok" and not signal.again(k) for k, row in enumerate(rows[counted:], counted))
         counted = len(rows)
         if not_ok > allowed:
             most = (total - not_ok) / total
@@ -334,7 +335,9 @@ def track_video(
                 vx = vy = 0.0
             gap = index - f1
             step = math.hypot(vx, vy)
-            direction = (vx / step, vy / step) if step > 0 else None
+            # under 0.05 px a step is a marker at rest's noise: no direction (its width² read along one axis in
+            # every such frame, not across a direction that turns at random: a squashed marker has two widths)
+            direction = (vx / step, vy / step) if step >= 0.05 else None
             if gap == 1:
                 guess = (x1 + vx, y1 + vy)
                 speed = step
@@ -346,7 +349,7 @@ def track_video(
                     # frames' turn from the last step's chord (centred at t − 1.5)
                     turn = (math.atan2(vy, vx) - math.atan2(uy0, ux0) + math.pi) % (2 * math.pi) - math.pi
                     turn *= 1.5
-                    if abs(turn) < 0.5:
+                    if abs(turn) < 0.5 and direction is not None:
                         c, s_ = math.cos(turn), math.sin(turn)
                         direction = (direction[0] * c - direction[1] * s_, direction[0] * s_ + direction[1] * c)
             elif all(row[6] == "duplicate" for row in rows[len(rows) - (gap - 1) :]):
@@ -417,8 +420,11 @@ def track_video(
             # a free marker not measurable against the scene (something else around it): biased
             or (coverage_expected and not m.mode_coverage)
             or near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
-            or m.width2_px2 > settings.max_width_ratio * width_curve.value(m.x, m.y) + streak_width2
         )
+        wide = m.width2_px2 > settings.max_width_ratio * width_curve.value(m.x, m.y) + streak_width2
+        # the width² of a frame biased by nothing else, judged again at the end where it is wide
+        width = None if biased else (m.width2_px2 - streak_width2, wide, speed >= 1.0)
+        biased = biased or wide
         if ratio < 0.5:
             flag, x, y, quality = "lost", np.nan, np.nan, 0.0
         elif duplicate:
@@ -452,7 +458,7 @@ def track_video(
                     box = np.s_[max(yi - half, 0) : yi + half + 1, max(xi - half, 0) : xi + half + 1]
                     window = (index, box, image[box].astype(np.float32))
         if flag != "lost" and not astray:
-            signal.judged(len(rows), kind, m.signal, x, y, ratio, flag, biased)
+            signal.judged(len(rows), kind, m.signal, x, y, ratio, flag, biased, width)
         rows.append((index, t, x, y, quality, ratio, flag))
         streak2[index] = m.streak2_px2
         if progress and index % progress_every == 0 and index:

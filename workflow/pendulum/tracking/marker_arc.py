@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.interpolate import make_smoothing_spline
 
 
 class MarkerArc:
@@ -30,18 +31,24 @@ class MarkerArc:
         self.points.append((x, y))
         if len(self.points) >= self.next_fit:
             self.next_fit = int(len(self.points) * 1.5)
-            pts = np.array(self.points[:: max(1, len(self.points) // 400)])
-            a = np.column_stack([pts[:, 0], pts[:, 1], np.ones(len(pts))])
-            (p, q, c), *_ = np.linalg.lstsq(a, (pts**2).sum(axis=1), rcond=None)
-            cx, cy = p / 2, q / 2
-            arm = math.sqrt(max(c + cx * cx + cy * cy, 0.0))
-            resid = np.abs(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - arm)
-            span = np.ptp(np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)) * arm
-            if span >= 6 * self.r and float(np.median(resid)) <= 0.5 and arm >= 3 * self.r:
-                self.circle = (float(cx), float(cy), float(arm))
+            self.circle = self.fitted(self.points) or self.circle
         if self.circle is not None:
             a = self.angle(x, y)
             self.angles = [min(self.angles[0], a), max(self.angles[1], a)]
+
+    def fitted(self, points) -> tuple[float, float, float] | None:
+        """The circle through ``points`` (x, y), where they span 6 marker radii of arc, lie within 0.5 px of it
+        (median) and its radius is at least 3 marker radii; else None."""
+        pts = np.asarray(points[:: max(1, len(points) // 400)], float)
+        a = np.column_stack([pts[:, 0], pts[:, 1], np.ones(len(pts))])
+        (p, q, c), *_ = np.linalg.lstsq(a, (pts**2).sum(axis=1), rcond=None)
+        cx, cy = p / 2, q / 2
+        arm = math.sqrt(max(c + cx * cx + cy * cy, 0.0))
+        resid = np.abs(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - arm)
+        span = np.ptp(np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)) * arm
+        if span >= 6 * self.r and float(np.median(resid)) <= 0.5 and arm >= 3 * self.r:
+            return float(cx), float(cy), float(arm)
+        return None
 
     def near(self, x: float, y: float) -> bool:
         """On the arc (within a few marker radii) and inside the swing seen (when seen)."""
@@ -92,6 +99,8 @@ class ArcReference:
     MIN_SPAN_RADII = 4.0
     REACH_RADII = 4.0
     MAX_SLOPE_PER_RADIUS = 0.03
+    MAX_SETTLED_SLOPE_PER_RADIUS = 0.08
+    SETTLED_RADII = 2.0
 
     def __init__(self, arc: MarkerArc, radius_px: float, enabled: bool):
         self.arc, self.r, self.enabled = arc, radius_px, enabled
@@ -101,9 +110,13 @@ class ArcReference:
         self.fitted_n = 0
         self.bins_seen = (math.inf, -math.inf)
         self.fitted_circle = None
+        self.settled = None  # (spline of ρ in radii of arc, its ends, circle), from :meth:`settle`
 
     def ratio(self, x: float, y: float) -> float:
         """ρ(φ) at the marker position (x, y): its normal value / ``base``."""
+        if self.settled is not None:
+            spline, lo, hi, (cx, cy, arm) = self.settled
+            return float(spline(min(max(math.atan2(x - cx, y - cy) * arm / self.r, lo), hi)))
         if self.fit is None:
             return 1.0
         coef, lo, hi, (cx, cy, arm) = self.fit
@@ -144,19 +157,12 @@ class ArcReference:
 
     def _refit(self, circle) -> None:
         self.fitted_n, self.fitted_circle = len(self.points), circle
-        cx, cy, arm = circle
         pts = np.asarray(self.points)
-        phi = np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)
-        rho = pts[:, 2] / self.base
-        bins = np.floor(phi * arm / self.r).astype(int)
-        keys, inverse, counts = np.unique(bins, return_inverse=True, return_counts=True)
-        if keys.size < 4 or keys[-1] - keys[0] + 1 < self.MIN_SPAN_RADII:
+        binned = self._bins(pts, circle)
+        if binned is None or binned[0].size < 4:
             self.fit = None
             return
-        order = np.argsort(inverse, kind="stable")
-        groups = np.split(order, np.cumsum(counts)[:-1])
-        centre = np.array([float(np.median(phi[g])) for g in groups])
-        median = np.array([float(np.median(rho[g])) for g in groups])
+        keys, centre, median, counts = binned
         weight = np.sqrt(np.minimum(counts, 10)).astype(float)
         degree = 2 if keys.size >= 8 else 1
         coef = np.polyfit(centre, median, degree, w=weight)
@@ -164,7 +170,80 @@ class ArcReference:
         keep = np.abs(resid) <= max(0.03, 3.0 * 1.4826 * float(np.median(np.abs(resid))))
         if keep.sum() >= degree + 3 and not keep.all():
             coef = np.polyfit(centre[keep], median[keep], degree, w=weight[keep])
+        phi = np.arctan2(pts[:, 0] - circle[0], pts[:, 1] - circle[1])
         self.fit = (coef, float(phi.min()), float(phi.max()), circle)
+
+    def settle(self, points) -> bool:
+        """At the end of the pass, ρ(φ) refitted on ``points`` (x, y, value): the ok frames and those flagged
+        for their value alone, where one smooth curve explains them: a lens's magnification or vignetting along
+        a swing that leaves the place of the first frames (a marker held at release near a wide lens's edge
+        grows 1.3–1.4 times towards the centre, by up to 5 % per radius of arc at the edge; the ok frames alone
+        never span it). The curve: a cubic smoothing spline through the bins' medians (one marker radius of arc
+        per bin, weights √min(count, 10)) that follows changes over :attr:`SETTLED_RADII` radii of arc, not
+        within one; fitted again without the bin farthest off it while that is off by more than max(3 %, 3 × the
+        kept bins' robust spread).
+        Taken where those bins hold at most a tenth of the frames, its slope stays within
+        :attr:`MAX_SETTLED_SLOPE_PER_RADIUS` per radius of arc, and across bins left off the value changes as
+        the kept bins beside them (6 radii on either side) trend, within that limit: a shadow's or a stripe's
+        edge is a step between level stretches (the spline would smooth it over the bins left off), an
+        occluder at a few places falls in the bins left off. Returns whether it was taken (ρ then held level
+        beyond the angles given)."""
+        if not self.enabled or not math.isfinite(self.base) or len(points) < 8:
+            return False
+        pts = np.asarray(points, float)
+        circle = self.arc.circle or self.arc.fitted(pts[:, :2])
+        binned = None if circle is None else self._bins(pts, circle)
+        if binned is None or binned[0].size < 8:
+            return False
+        keys, centre, median, counts = binned
+        along = centre * circle[2] / self.r  # radii of arc
+        weight = np.sqrt(np.minimum(counts, 10)).astype(float)
+        lam = float(np.mean(weight)) * self.SETTLED_RADII**4
+        keep = np.ones(keys.size, bool)
+        for _ in range(keys.size // 4 + 1):  # the worst bin off the curve left off, one at a time
+            spline = make_smoothing_spline(along[keep], median[keep], w=weight[keep], lam=lam)
+            resid = median - spline(along)
+            limit = max(0.03, 3.0 * 1.4826 * float(np.median(np.abs(resid[keep]))))
+            worst = int(np.argmax(np.where(keep, np.abs(resid), -1.0)))
+            if abs(resid[worst]) <= limit or keep.sum() <= 8:
+                break
+            keep[worst] = False
+        keep = np.abs(resid) <= limit
+        if counts[keep].sum() < 0.9 * counts.sum() or keep.sum() < 8:
+            return False
+        grid = np.linspace(along[0], along[-1], 8 * keys.size)
+        if np.max(np.abs(spline.derivative()(grid))) > self.MAX_SETTLED_SLOPE_PER_RADIUS:
+            return False
+        kept = np.flatnonzero(keep)
+        for a, b in zip(kept[:-1], kept[1:], strict=True):
+            if b == a + 1:
+                continue
+            # bins left off between kept bins a and b: the change across them is the trend of the kept bins
+            # beside them (a lens), not a step (a shadow's edge that the spline smooths over the gap)
+            before = kept[(kept <= a) & (along[kept] >= along[a] - 6)]
+            after = kept[(kept >= b) & (along[kept] <= along[b] + 6)]
+            slopes = [np.polyfit(along[side], median[side], 1)[0] for side in (before, after) if side.size >= 3]
+            expected = float(np.mean(slopes)) * (along[b] - along[a]) if slopes else 0.0
+            if abs(float(spline(along[b]) - spline(along[a])) - expected) > limit:
+                return False
+        self.settled = (spline, float(along[0]), float(along[-1]), circle)
+        return True
+
+    def _bins(self, pts: np.ndarray, circle):
+        """The values / ``base`` binned by φ, one marker radius of arc per bin: the bins' keys, median φ, median
+        ratio and frame counts, or None where they span fewer than :attr:`MIN_SPAN_RADII` radii of arc."""
+        cx, cy, arm = circle
+        phi = np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy)
+        rho = pts[:, 2] / self.base
+        bins = np.floor(phi * arm / self.r).astype(int)
+        keys, inverse, counts = np.unique(bins, return_inverse=True, return_counts=True)
+        if keys[-1] - keys[0] + 1 < self.MIN_SPAN_RADII:
+            return None
+        order = np.argsort(inverse, kind="stable")
+        groups = np.split(order, np.cumsum(counts)[:-1])
+        centre = np.array([float(np.median(phi[g])) for g in groups])
+        median = np.array([float(np.median(rho[g])) for g in groups])
+        return keys, centre, median, counts
 
 
 class SignalSpread:
@@ -222,14 +301,23 @@ class MarkerSignal:
     REFERENCE_FRAMES = 30
     PLACE_FRAMES = 3
 
-    def __init__(self, arc: MarkerArc, radius_px: float, along_arc: bool, low: float, high: float):
+    def __init__(
+        self, arc: MarkerArc, radius_px: float, along_arc: bool, low: float, high: float, width_ratio: float = 1.15
+    ):
         self.curves = {kind: ArcReference(arc, radius_px, along_arc) for kind in (False, True)}
+        self.width = ArcReference(arc, radius_px, along_arc)  # the marker's normal width² along the arc
+        self.width_ratio = width_ratio
+        self.wide: list[tuple[int, float, float, float]] = []  # (row, x, y, width²) of frames flagged for it alone
+        self.wide_rows: set[int] = set()
+        self.widths: list[tuple[float, float, float]] = []  # (x, y, width²) of moving frames biased by nothing else
         self.radius_px = radius_px
         self.band = SignalSpread(low, high)
         self.samples: dict[bool, list[float]] = {False: [], True: []}
         self.first: list[tuple[int, bool, float]] = []  # (row, kind, signal) before the kind's reference
         self.measured: list[tuple[int, bool, float, float, float]] = []  # (row, kind, signal, x, y) of measured frames
         self.by_signal: set[int] = set()  # rows flagged for their signal alone
+        self.ok_rows: list[int] = []
+        self.settled = {False: False, True: False}  # whether the kind's curve was refitted on the whole path
 
     def ratio(self, row: int, kind: bool, signal: float, x: float, y: float, steady: bool) -> float:
         """ρ of a measured frame; ``steady``: not a repeated frame nor one at the picture's edge (the normal value
@@ -248,18 +336,43 @@ class MarkerSignal:
                 curve.base = float(np.median(samples))
         return ratio
 
-    def judged(self, row: int, kind: bool, signal: float, x: float, y: float, ratio: float, flag: str, biased: bool):
+    def judged(
+        self,
+        row: int,
+        kind: bool,
+        signal: float,
+        x: float,
+        y: float,
+        ratio: float,
+        flag: str,
+        biased: bool,
+        width: tuple[float, bool, bool] | None = None,
+    ):
         """A measured frame's flag, given: one flagged for its signal alone (not ``biased``) is judged again at the
-        end; an ok one teaches the band and the curve along the arc."""
+        end, as is one ``biased`` for its width² alone; an ok one teaches the band and the curve along the arc.
+        ``width``: (width², wide, moving) where nothing else biased the frame; a moving frame's width² (across
+        its motion: a marker a lens squashes reads another width at rest) enters the width² refitted at the end."""
         if flag in ("ok", "occluded", "glare"):
             self.measured.append((row, kind, signal, x, y))
+        if width is not None and flag in ("ok", "occluded", "glare"):
+            width2, wide, moving = width
+            if moving:
+                self.widths.append((x, y, width2))
+            if wide and flag != "ok":
+                self.wide.append((row, x, y, width2))
+                self.wide_rows.add(row)
         if flag in ("occluded", "glare") and not biased:
             self.by_signal.add(row)
         elif flag == "ok":
+            self.ok_rows.append(row)
             if len(self.samples[kind]) == self.REFERENCE_FRAMES and self.curves[kind].covers(x, y):
                 # its spread about the normal value, where that is known
                 self.band.add(ratio)
             self.curves[kind].add(x, y, signal)
+
+    def again(self, row: int) -> bool:
+        """Whether the row's flag is judged again at the end (set for its signal or its width² alone)."""
+        return row in self.by_signal or row in self.wide_rows
 
     def finish(self, table) -> None:
         """The first frames' ratios against their kind's normal value; frames flagged for their signal alone judged
@@ -267,9 +380,16 @@ class MarkerSignal:
         for row, kind, signal in self.first:
             if len(self.samples[kind]) >= self.FIRST_FRAMES:
                 table.loc[row, "signal_ratio"] = signal / self.curves[kind].base
+        if self.wide and self.width.settle(self.widths):
+            # the width² refitted along the whole path: those within it now are judged by their signal
+            self.by_signal.update(row for row, x, y, w in self.wide if w <= self.width_ratio * self.width.value(x, y))
         if not self.by_signal:
             return
         rows, kinds, signals, xs, ys = (np.asarray(v) for v in zip(*self.measured, strict=True))
+        unbiased = np.isin(rows, sorted(self.by_signal)) | np.isin(rows, self.ok_rows)
+        for kind, curve in self.curves.items():
+            on = unbiased & (kinds == kind)
+            self.settled[kind] = curve.settle(np.column_stack([xs[on], ys[on], signals[on]]))
         ratios = np.array([s / self.curves[k].value(x, y) for k, s, x, y in zip(kinds, signals, xs, ys, strict=True)])
         low, high = self.band.settings_band
         steady = (ratios >= low) & (ratios <= high)
