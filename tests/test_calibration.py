@@ -168,43 +168,57 @@ def test_a_flat_port_is_corrected_by_a_lens_clip_filmed_through_it(optics_dir):
     assert plane_only > 0.3 and without > 0.3  # measured 0.83° and 0.91°: the homography takes only the first order
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize(("k1", "release_deg", "seed"), [(-0.3, 40.0, 52), (-0.35, 40.0, 54), (-0.3, 45.0, 55)])
-def test_a_marker_held_at_release_near_a_wide_lenss_edge_is_followed_across_the_frame(
-    optics_dir, k1, release_deg, seed
-):
-    """A GoPro-like lens (f = 300 px on 640 px, 93° across; barrel k1 −0.3, −0.35), the marker held at 40–45° near
-    the frame's right edge, config defaults: the lens shrinks and squashes the marker there, and its signal and
-    width² grow 1.3–1.4 times towards the centre, smoothly, on every pass, by up to 5 % per radius of arc near the
-    edge. The ok frames about the hold never span that change: before, every later frame was "glare" or "occluded"
-    (k1 −0.3 at 40°: 94 % ok with the hold flagged, 11 % with the marker given; the others fell to the body).
-    Refitted along the whole path at the end, the marker track is used, ok in ≥ 97 % of the frames and within
-    0.25 px of the rendered marker (measured 99.2–99.6 %, 0.10 px). With the marker given: the same; against the
-    first frames' value everywhere (``reference_along_arc: false``) most frames stay flagged."""
-    lens = Optics(focal_px=300.0, distortion=(k1, 0.08 * (k1 / -0.3) ** 2, 0.0, 0.0, 0.0))
-    spec = _trial(f"wide_{seed}", seed, release_deg)
-    spec = replace(spec, duration_s=8.0, camera=replace(spec.camera, pivot_px=(320.3, 30.0), marker_arm_px=300.0))
-    rendered = render_trial_through(spec, lens)
+def _wide_lens_trial(optics_dir, seed):
+    """A GoPro-like render of seed ``seed``: f 280–360 px on 640×360 (93–106° across), barrel k1 −0.2 … −0.4, the
+    marker (bright or dark, r 6–10 px, on a 260–320 px arm) held at 30–45° either side, near the frame's edge.
+    Returns the video and the rendered marker positions."""
+    rng = np.random.default_rng(seed)
+    k1, focal, release = rng.uniform(-0.4, -0.2), rng.uniform(280, 360), rng.uniform(30, 45) * rng.choice([-1, 1])
+    radius, arm, pivot_y = rng.uniform(6, 10), rng.uniform(260, 320), rng.uniform(20, 60)
+    lens = Optics(focal_px=focal, distortion=(k1, 0.08 * (k1 / -0.3) ** 2, 0.0, 0.0, 0.0))
+    spec = _trial(f"wide_{seed}", seed, release)
+    camera = replace(
+        spec.camera,
+        pivot_px=(320.3 + rng.uniform(-20, 20), pivot_y),
+        marker_arm_px=arm,
+        marker_radius_px=radius,
+        polarity=str(rng.choice(["bright", "dark"])),
+    )
+    rendered = render_trial_through(replace(spec, duration_s=8.0, camera=camera), lens)
     video = optics_dir / f"wide_{seed}.mp4"
     write_video(rendered.frames, video, 30.0, 22, "veryfast")
+    return video, rendered.truth
+
+
+@pytest.mark.slow
+def test_a_marker_held_at_release_near_a_wide_lenss_edge_is_followed_across_the_frame(optics_dir):
+    """Ten GoPro-like renders (:func:`_wide_lens_trial`, seeds not tuned on), config defaults: the lens shrinks and
+    squashes the marker near the edge, and its signal and width² grow 1.2–1.4 times towards the centre, smoothly, on
+    every pass, by up to 5 % per radius of arc near the edge. The ok frames about the hold never span that change:
+    before, later frames were "glare" or "occluded" (of 30 such renders 4 passed, 8 were refused, the rest fell to
+    the body). Refitted along the whole path at the end, the marker track is used, ok in ≥ 95 % of the frames and
+    within 0.25 px of the rendered marker in at least 8 of 10 (measured 9: 98.8–100 %, 0.07–0.13 px; of 30, 28; one
+    other is a marker whose plate matches the wall behind it at the hold, taken as a free marker, and one touches
+    the frame's edge). With the marker given (r = 8) on one: ≥ 97 % ok; against the first frames' value everywhere
+    (``reference_along_arc: false``) most frames stay flagged."""
     config = yaml.safe_load((ROOT / "config.yaml").read_text())["tracking"]
-
-    def judged(track):
+    passed = 0
+    for seed in range(9000, 9010):
+        video, truth = _wide_lens_trial(optics_dir, seed)
+        track = track_trial(video, TrackerSettings.from_config(config))
         ok = (track.flag == "ok").to_numpy()
-        error = np.hypot(track.x_px - rendered.truth.marker_x_px, track.y_px - rendered.truth.marker_y_px).to_numpy()
-        print(f"k1 {k1}, {release_deg}°: {ok.mean():.1%} ok, {np.sqrt(np.mean(error[ok] ** 2)):.3f} px RMS")
-        return ok.mean(), np.sqrt(np.mean(error[ok] ** 2))
-
-    track = track_trial(video, TrackerSettings.from_config(config))
-    assert track.attrs["method"]["used"] == "marker"
-    ok, rms = judged(track)
-    assert ok >= 0.97 and rms <= 0.25
-    if seed == 52:
-        given = TrackerSettings(marker_radius_px=8.0, min_usable_fraction=0.0)
-        ok, rms = judged(track_video(video, given))
-        assert ok >= 0.97 and rms <= 0.25
-        level = track_video(video, replace(given, reference_along_arc=False))
-        assert (level.flag == "ok").mean() < 0.5
+        error = np.hypot(track.x_px - truth.marker_x_px, track.y_px - truth.marker_y_px).to_numpy()
+        rms = float(np.sqrt(np.mean(error[ok] ** 2)))
+        used = track.attrs["method"]["used"]
+        print(f"seed {seed}: {used}, {ok.mean():.1%} ok, {rms:.3f} px RMS")
+        passed += used == "marker" and ok.mean() >= 0.95 and rms <= 0.25
+    assert passed >= 8
+    video, truth = _wide_lens_trial(optics_dir, 9002)
+    given = TrackerSettings(marker_radius_px=8.0, polarity="dark", min_usable_fraction=0.0)
+    track = track_video(video, given)
+    assert (track.flag == "ok").mean() >= 0.97 and "signal" in track.attrs["marker"]["refitted_along_path"]
+    level = track_video(video, replace(given, reference_along_arc=False))
+    assert (level.flag == "ok").mean() < 0.5
 
 
 def test_a_turned_swing_plane_is_detected_from_a_long_arc_only():

@@ -18,8 +18,8 @@ at the marker's place on its arc, gives each frame's quality: an occluder lowers
 it, glare raises it. The normal value (and the width² of the check below) is the
 first frames' value times a smooth curve in the arc angle fitted to the ok frames
 (:class:`pendulum.tracking.marker_arc.ArcReference`): a lens's magnification or vignetting changes it slowly
-and repeatably along the swing, an occluder or a stripe within a marker
-diameter, and flagged frames never enter the curve. An
+and repeatably along the swing, an occluder or a stripe within a marker diameter. Frames flagged for these
+alone are judged again at the end, against the curve refitted along the whole path where it is smooth. An
 occluder that the signal misses makes the linear and a thresholded centroid in
 the same capsule disagree (> 0.4 px), and something of the marker's grey in the
 capsule's margin moves the linear centroid when the mask shrinks to r + 1 px
@@ -222,7 +222,6 @@ def track_video(
         settings.max_signal_ratio,
         settings.max_width_ratio,
     )
-    width_curve = signal.width
     rows = []
     history: list[tuple[int, float, float]] = []  # (frame, x, y) of good frames
     previous = None
@@ -335,8 +334,7 @@ def track_video(
                 vx = vy = 0.0
             gap = index - f1
             step = math.hypot(vx, vy)
-            # under 0.05 px a step is a marker at rest's noise: no direction (its width² read along one axis in
-            # every such frame, not across a direction that turns at random: a squashed marker has two widths)
+            # a step under 0.05 px is noise at rest: no direction (a squashed marker's width² read along one axis)
             direction = (vx / step, vy / step) if step >= 0.05 else None
             if gap == 1:
                 guess = (x1 + vx, y1 + vy)
@@ -401,7 +399,7 @@ def track_video(
             widths.append(m.width2_px2)
             if len(widths) >= 5:
                 width_ref = float(np.median(widths))
-                width_curve.base = width_ref
+                signal.width.base = width_ref
         if not math.isfinite(disagreement_ref) and math.isfinite(m.disagreement_px):
             disagreements.append(m.disagreement_px)
             if len(disagreements) >= 5:
@@ -421,9 +419,8 @@ def track_video(
             or (coverage_expected and not m.mode_coverage)
             or near_any(m.x, m.y, distractors, intrudes)  # a distractor inside the marker's window or ring
         )
-        wide = m.width2_px2 > settings.max_width_ratio * width_curve.value(m.x, m.y) + streak_width2
-        # the width² of a frame biased by nothing else, judged again at the end where it is wide
-        width = None if biased else (m.width2_px2 - streak_width2, wide, speed >= 1.0)
+        wide = m.width2_px2 > settings.max_width_ratio * signal.width.value(m.x, m.y) + streak_width2
+        width = None if biased else (m.width2_px2 - streak_width2, wide, speed >= 1.0)  # judged again if wide
         biased = biased or wide
         if ratio < 0.5:
             flag, x, y, quality = "lost", np.nan, np.nan, 0.0
@@ -452,7 +449,7 @@ def track_video(
                 del history[:-6]
                 if flag == "ok":
                     arc.add(x, y)
-                    width_curve.add(x, y, m.width2_px2 - streak_width2)
+                    signal.width.add(x, y, m.width2_px2 - streak_width2)
                 if flag in ("ok", "edge"):
                     xi, yi, half = int(round(x)), int(round(y)), int(r + 4)
                     box = np.s_[max(yi - half, 0) : yi + half + 1, max(xi - half, 0) : xi + half + 1]
@@ -472,7 +469,6 @@ def track_video(
         "marker_radius_px": round(float(r), 3),
         "start_px": None if settings.start_px is None else [round(float(v), 2) for v in settings.start_px],
         "found_by": found_by,
-        **signal.summary(),
     }
     if reference_contrast is None:
         score = "no disk-like spot at all" if best_seen is None else f"the best spot scores {best_seen.score:.2f}"
@@ -500,6 +496,7 @@ def track_video(
             f"{settings.min_acquire_score:g}); {advice}{seen}"
         )
     signal.finish(table)  # the first frames' ratios; frames flagged for their signal alone judged again
+    table.attrs["marker"].update(signal.summary())
     usable = (table.flag == "ok").to_numpy()
     jumps = flag_jumps(table.x_px.to_numpy(), table.y_px.to_numpy(), usable, settings, table.time_s.to_numpy())
     table.loc[jumps, "flag"] = "jump"

@@ -93,7 +93,8 @@ class ArcReference:
     or an occluder changes the signal by as much over one marker diameter), then stays level.
     ρ = 1 (the first frames' value) while the circle is unknown, the ok frames span fewer than
     :attr:`MIN_SPAN_RADII` radii of arc, or ``enabled`` is False. Refitted when the angles seen
-    grow by a bin, the frames by a quarter, or the circle is refitted.
+    grow by a bin, the frames by a quarter, or the circle is refitted; at the end of the pass, along
+    the whole path where one smooth curve explains it (:meth:`settle`).
     """
 
     MIN_SPAN_RADII = 4.0
@@ -294,7 +295,10 @@ class MarkerSignal:
     or within the band its spread allows (:class:`SignalSpread`) while the marker's other frames at that place
     (within a marker radius; at least :attr:`PLACE_FRAMES`) read within the settings' band: the noise of one frame,
     not something at that place (an occluder's edge, a shadow across the path, a lamp's highlight where the bob
-    passes it, which dim or brighten it there on every pass).
+    passes it, which dim or brighten it there on every pass). Before that, the curves of the signal and of the
+    width² are refitted along the whole path (:meth:`ArcReference.settle`), on the ok frames and those flagged for
+    that value alone, and a frame flagged for its width² alone that is within it is judged by its signal: a
+    marker held near a wide lens's edge changes both smoothly along a swing its ok frames never span.
     """
 
     FIRST_FRAMES = 5
@@ -317,7 +321,7 @@ class MarkerSignal:
         self.measured: list[tuple[int, bool, float, float, float]] = []  # (row, kind, signal, x, y) of measured frames
         self.by_signal: set[int] = set()  # rows flagged for their signal alone
         self.ok_rows: list[int] = []
-        self.settled = {False: False, True: False}  # whether the kind's curve was refitted on the whole path
+        self.refitted: list[str] = []  # the values whose curve was refitted along the whole path
 
     def ratio(self, row: int, kind: bool, signal: float, x: float, y: float, steady: bool) -> float:
         """ρ of a measured frame; ``steady``: not a repeated frame nor one at the picture's edge (the normal value
@@ -382,6 +386,7 @@ class MarkerSignal:
                 table.loc[row, "signal_ratio"] = signal / self.curves[kind].base
         if self.wide and self.width.settle(self.widths):
             # the width² refitted along the whole path: those within it now are judged by their signal
+            self.refitted.append("width")
             self.by_signal.update(row for row, x, y, w in self.wide if w <= self.width_ratio * self.width.value(x, y))
         if not self.by_signal:
             return
@@ -389,7 +394,8 @@ class MarkerSignal:
         unbiased = np.isin(rows, sorted(self.by_signal)) | np.isin(rows, self.ok_rows)
         for kind, curve in self.curves.items():
             on = unbiased & (kinds == kind)
-            self.settled[kind] = curve.settle(np.column_stack([xs[on], ys[on], signals[on]]))
+            if curve.settle(np.column_stack([xs[on], ys[on], signals[on]])):
+                self.refitted.append("signal")
         ratios = np.array([s / self.curves[k].value(x, y) for k, s, x, y in zip(kinds, signals, xs, ys, strict=True)])
         low, high = self.band.settings_band
         steady = (ratios >= low) & (ratios <= high)
@@ -407,9 +413,11 @@ class MarkerSignal:
 
     def summary(self) -> dict:
         """For the tracks JSON: the ratios' spread about the normal value, and the band within which a frame flagged
-        for its signal alone may be ``ok``."""
+        for its signal alone may be ``ok``; ``refitted_along_path``, where the curves were refitted at the end."""
         sigma = self.band.sigma
+        refitted = {"refitted_along_path": sorted(set(self.refitted))} if self.refitted else {}
         return {
             "signal_spread": None if math.isnan(sigma) else round(sigma, 4),
             "signal_band": [round(self.band.low, 3), round(self.band.high, 3)],
+            **refitted,
         }
