@@ -31,6 +31,8 @@ def test_demo_marker_centre_is_subpixel(demo_tracks, trial):
     # what remains is mostly H.264 (0.01 px on the same render encoded losslessly).
     assert np.sqrt(np.mean(errors.error_px[ok] ** 2)) <= 0.065
     assert errors.error_px[ok].max() <= 0.3
+    # a camera square to the swing plane, no lens distortion: the marker the same size all along its path
+    assert "size_change_along_path" not in demo_tracks[trial].attrs["marker"]
 
 
 def test_dark_marker_on_bright_scene(hard_videos):

@@ -77,6 +77,16 @@ def geometry_inputs(wildcards):
     return inputs
 
 
+def tracks_calibration(wildcards):
+    """The calibration of the trial's camera setup where it has a lens clip: the track's path is measured in the
+    lens-corrected picture (scripts/tracks.py; a wide lens bends the swing's circle)."""
+    camera = SETTINGS[wildcards.trial]["camera"]
+    setup = (config.get("cameras") or {}).get(camera) or {}
+    if camera and setup.get("calibration_video"):
+        return {"calibration": f"results/calibration/{camera}.json"}
+    return {}
+
+
 def camera_setup(wildcards):
     """A camera setup's settings (config `cameras`), with the defaults filled in."""
     setup = (config.get("cameras") or {}).get(wildcards.camera)

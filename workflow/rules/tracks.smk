@@ -1,6 +1,7 @@
 rule tracks:
     """Sub-pixel marker (or body) centre and quality flag per frame; the track drawn over a contact sheet."""
     input:
+        unpack(tracks_calibration),
         video=raw_video,
         frames_summary="results/frames/{trial}/summary.json",
         contact_sheet="results/frames/{trial}/contact_sheet.png",

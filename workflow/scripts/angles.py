@@ -51,7 +51,9 @@ def work():
         if "calibration" in sm.input.keys():
             calibration = require_ok(read_json(sm.input.calibration), "calibration")
         in_image = pd.read_csv(source)
-        warnings += calibration_warnings(trial, in_image, track_summary.get("frame_px"), calibration)
+        warnings += calibration_warnings(
+            trial, in_image, track_summary.get("frame_px"), calibration, track_summary.get("marker")
+        )
         plane_calibrated = calibration.get("camera_setup") if calibration and calibration.get("plane") else None
         track = map_track(in_image, calibration)
         pivot, vertical = map_point(settings["pivot_px"], calibration), settings["vertical_deg"]

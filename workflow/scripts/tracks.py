@@ -13,12 +13,12 @@ import cv2
 import numpy as np
 
 import _setup  # noqa: F401
+from pendulum.camera.calibration import Lens
 from pendulum.camera.video import VideoError, track_over_sheet
 from pendulum.io import script_logger, write_csv, write_json, write_png
 from pendulum.status import empty_table, failure_image, require_ok, run_stage
-from pendulum.tracking.camera_motion import steady_camera
+from pendulum.tracking.camera_motion import path_through_lens, steady_camera
 from pendulum.tracking.method import track_trial, usable_fraction
-from pendulum.tracking.path_shape import path_departure
 from pendulum.tracking.settings import TrackerSettings
 from pendulum.tracking.timing_notes import break_sentence, slip_sentence
 
@@ -48,6 +48,14 @@ def drawn_sheet(track, frames: dict):
     return sheet
 
 
+def calibrated_lens():
+    """The camera setup's lens, where its calibration has one (a failed calibration fails the trial's angles)."""
+    if "calibration" not in sm.input.keys():
+        return None
+    document = json.loads(Path(sm.input.calibration).read_text())
+    return Lens.from_dict(document["lens"]) if document.get("status") == "ok" and document.get("lens") else None
+
+
 def work():
     # a video the frames stage could not read is not tracked again: its failure is said once, by that stage
     frames = require_ok(json.loads(Path(sm.input.frames_summary).read_text()), "frames")
@@ -55,7 +63,7 @@ def work():
     method = track.attrs.get("method", {})
     log.info("%s: tracked the %s (%s)", video, method.get("used"), method.get("reason"))
     measured_track = track
-    track, path = path_departure(measured_track)
+    track, path = path_through_lens(measured_track, calibrated_lens())
     if path.get("not_a_pendulum"):  # a camera in the hand? its motion from the still scene, taken out
         track, path = steady_camera(video, measured_track, path)
     log.info("%s: %s", video, path["verdict"])

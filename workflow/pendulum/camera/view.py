@@ -304,12 +304,28 @@ def frames_unlike_calibration(trial: str, frame_px, document: dict | None) -> st
 OUTSIDE_COVERAGE_WARN_SHARE = 0.1  # a track this much outside the lens clip's board coverage is warned about
 
 
-def calibration_warnings(trial: str, track, frame_px, document: dict | None) -> list[str]:
+def calibration_warnings(trial: str, track, frame_px, document: dict | None, marker: dict | None = None) -> list[str]:
     """What a trial measured through its camera setup's calibration should say: the calibration's own warnings,
     and where its usable centres (image pixels) lie beyond the board's coverage (the lens model extrapolated).
-    Raises ValueError where its frames are not the calibration's size (:func:`frames_unlike_calibration`)."""
+    Without a lens model, where the marker's image changes size along its path (``marker``: the tracks summary's,
+    ``size_change_along_path``, largest / least, said from 1.05 on): a pinhole camera square to the swing plane
+    sees it the same size everywhere, so a wide lens's distortion or a turned swing plane scales the angles (on
+    GoPro-like renders, sizes 1.06–1.23: angles 8–17 % too large). Raises ValueError where its frames are not the
+    calibration's size (:func:`frames_unlike_calibration`)."""
+    change = (marker or {}).get("size_change_along_path")
+    if change and not (document or {}).get("lens"):
+        view = "a wide lens's distortion" + (
+            "" if (document or {}).get("plane") else ", or a swing plane turned from the camera"
+        )
+        lens_said = [
+            f"the marker's image is {100 * (change - 1):.0f} % larger at one place on its path than at another: "
+            f"{view}, which scales the angles (a GoPro-like lens on renders: 8–17 % too large) unless the camera "
+            "setup is calibrated with a lens clip (docs/footage.md, Checkerboard clip)"
+        ]
+    else:
+        lens_said = []
     if not document:
-        return []
+        return lens_said
     if why := frames_unlike_calibration(trial, frame_px, document):
         raise ValueError(why)
     said = [f"calibration: {w}" for w in document.get("warnings") or []]
@@ -321,4 +337,4 @@ def calibration_warnings(trial: str, track, frame_px, document: dict | None) -> 
             f"(camera setup {document.get('camera_setup', '?')}): the lens model is extrapolated there; film the "
             "board over that part of the frame too"
         )
-    return said
+    return said + lens_said

@@ -161,3 +161,31 @@ def steady_camera(path, track: pd.DataFrame, document: dict) -> tuple[pd.DataFra
         "flagged jump); without it the path was no circle; " + judged["verdict"]
     )
     return again, judged
+
+
+def path_through_lens(track: pd.DataFrame, lens) -> tuple[pd.DataFrame, dict]:
+    """:func:`path_departure` in the lens-corrected picture (``lens``: the camera setup's
+    :class:`pendulum.camera.calibration.Lens`; None: in the image as filmed). A wide lens bends the swing's circle
+    more where the swing reaches further out, so the first, widest swings and the later ones fit circles apart:
+    in the image a GoPro-like render's path read as a knock of 4 px at the first swing's end, corrected and its
+    frames flagged; in the corrected picture it is one circle. The corrections found there are taken back into
+    the image (``x_px``, ``y_px``; the tracked positions in ``x_image_px``, ``y_image_px``), where the angle
+    stage maps them through the same lens."""
+    if lens is None:
+        return path_departure(track)
+    x, y = track.x_px.to_numpy(float), track.y_px.to_numpy(float)
+    seen = np.isfinite(x) & np.isfinite(y)
+    ideal = track.copy()
+    undone = lens.undistort_px(np.column_stack([x[seen], y[seen]]))
+    ideal.loc[seen, "x_px"], ideal.loc[seen, "y_px"] = undone[:, 0], undone[:, 1]
+    out, document = path_departure(ideal)
+    if "x_image_px" in out:  # corrected there: the corrected positions taken back into the image
+        back = lens.distort_px(np.column_stack([out.x_px.to_numpy(float)[seen], out.y_px.to_numpy(float)[seen]]))
+        corrected_x, corrected_y = x.copy(), y.copy()
+        corrected_x[seen], corrected_y[seen] = back[:, 0], back[:, 1]
+        out["x_image_px"], out["y_image_px"] = x, y
+        out["x_px"], out["y_px"] = corrected_x, corrected_y
+    else:
+        out["x_px"], out["y_px"] = x, y
+    document["measured_in"] = "the lens-corrected picture"
+    return out, document

@@ -130,6 +130,18 @@ class ArcReference:
         reach = self.REACH_RADII * self.r / arm
         return float(np.polyval(coef, end)) + slope * min(max(phi - end, -reach), reach)
 
+    def span(self) -> tuple[float, float] | None:
+        """The least and largest ρ along the path where the curve is fitted (None while it is not)."""
+        if self.settled is not None:
+            spline, lo, hi, _ = self.settled
+            values = spline(np.linspace(lo, hi, 64))
+        elif self.fit is not None:
+            coef, lo, hi, _ = self.fit
+            values = np.polyval(coef, np.linspace(lo, hi, 64))
+        else:
+            return None
+        return float(np.min(values)), float(np.max(values))
+
     def covers(self, x: float, y: float) -> bool:
         """Whether ρ at (x, y) is fitted there, not carried on from the angles seen."""
         if self.fit is None:
@@ -304,6 +316,7 @@ class MarkerSignal:
     FIRST_FRAMES = 5
     REFERENCE_FRAMES = 30
     PLACE_FRAMES = 3
+    SIZE_CHANGE_SAID = 1.05  # the marker's size along its path, largest / least, said in the summary from this on
 
     def __init__(
         self, arc: MarkerArc, radius_px: float, along_arc: bool, low: float, high: float, width_ratio: float = 1.15
@@ -415,9 +428,12 @@ class MarkerSignal:
         """For the tracks JSON: the ratios' spread about the normal value, and the band within which a frame flagged
         for its signal alone may be ``ok``; ``refitted_along_path``, where the curves were refitted at the end."""
         sigma = self.band.sigma
-        refitted = {"refitted_along_path": sorted(set(self.refitted))} if self.refitted else {}
+        said = {"refitted_along_path": sorted(set(self.refitted))} if self.refitted else {}
+        span = self.width.span()
+        if span is not None and span[0] > 0 and span[1] >= self.SIZE_CHANGE_SAID**2 * span[0]:
+            said["size_change_along_path"] = round(math.sqrt(span[1] / span[0]), 3)
         return {
             "signal_spread": None if math.isnan(sigma) else round(sigma, 4),
             "signal_band": [round(self.band.low, 3), round(self.band.high, 3)],
-            **refitted,
+            **said,
         }
