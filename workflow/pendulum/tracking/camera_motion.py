@@ -170,9 +170,21 @@ def path_through_lens(track: pd.DataFrame, lens) -> tuple[pd.DataFrame, dict]:
     in the image a GoPro-like render's path read as a knock of 4 px at the first swing's end, corrected and its
     frames flagged; in the corrected picture it is one circle. The corrections found there are taken back into
     the image (``x_px``, ``y_px``; the tracked positions in ``x_image_px``, ``y_image_px``), where the angle
-    stage maps them through the same lens."""
+    stage maps them through the same lens. Without a lens, where the marker's image changes size along its path
+    (``size_change_along_path``: an uncalibrated wide lens), a correction found is said and not applied."""
     if lens is None:
-        return path_departure(track)
+        out, document = path_departure(track)
+        change = (track.attrs.get("marker") or {}).get("size_change_along_path")
+        if not (change and document.get("corrected")):
+            return out, document
+        # uncalibrated, a view that changes the marker's size along its path bends the circle too: not a move
+        document["creep"] = {**document["creep"], "corrected": False}
+        document.update(
+            corrected=False,
+            verdict=f"not applied, as the marker's image changes size by {100 * (change - 1):.0f} % along its path and "
+            f"a wide lens that does so bends the swing's circle too (calibrate the lens): {document['verdict']}",
+        )
+        return track.copy(), document
     x, y = track.x_px.to_numpy(float), track.y_px.to_numpy(float)
     seen = np.isfinite(x) & np.isfinite(y)
     ideal = track.copy()
