@@ -376,6 +376,50 @@ def test_a_signal_that_changes_smoothly_away_from_the_hold_is_refitted_along_the
         assert (table.flag[~spot] == "ok").all()
 
 
+def _widths_along_an_arc(shape, seed, r=8.0):
+    """A marker held 30 frames at 0.5 rad, then five swings (40 frames each) on a 250 px arm, its width² 64 ×
+    ``shape(φ)`` after the release (2 % noise; 64 at the hold), flagged "occluded" where over 1.15 × the first
+    frames' (the width check), through ``MarkerSignal`` as the pass gives it: the table after ``finish``, and the
+    share of the frames after the release flagged in the pass."""
+    from pendulum.tracking.marker_arc import MarkerArc, MarkerSignal
+
+    pivot, arm = (320.0, 20.0), 250.0
+    arc = MarkerArc(None, r)
+    signal = MarkerSignal(arc, r, True, 0.9, 1.12)
+    phi = np.concatenate([np.full(30, 0.5), 0.5 * np.cos(np.arange(200) * 2 * np.pi / 40)])
+    noise = np.random.default_rng(seed).normal(0.0, 0.02, phi.size)
+    flags = []
+    for row, (p, e) in enumerate(zip(phi, noise, strict=True)):
+        x, y = pivot[0] + arm * math.sin(p), pivot[1] + arm * math.cos(p)
+        ratio = signal.ratio(row, False, 100.0, x, y, steady=True)
+        width2 = 64.0 * (1.0 if row < 30 else shape(p)) * (1.0 + e)
+        if row == 4:
+            signal.width.base = 64.0
+        wide = row >= 5 and width2 > 1.15 * signal.width.value(x, y)
+        flag = "occluded" if wide else "ok"
+        if flag == "ok":
+            arc.add(x, y)
+            signal.width.add(x, y, width2)
+        signal.judged(row, False, 100.0, x, y, ratio, flag, wide, (width2, wide, row >= 30))
+        flags.append(flag)
+    table = pd.DataFrame({"quality": 1.0, "signal_ratio": 1.0, "flag": flags})
+    signal.finish(table)
+    return table, float(np.mean(np.array(flags[30:]) != "ok"))
+
+
+def test_a_marker_wider_all_along_its_path_after_the_release_is_not_a_lens():
+    """The width² refitted along the whole path must somewhere read as the first frames allow (within 1.15 of
+    them): a lens changes it from place to place (here 1.0 at the hold's place, 1.35 at the lens's centre: every
+    frame ok at the end, in each of 10 seeds); one 1.3 times as wide all along the path once it swings (a two-tone
+    bob beside the marker: a reviewer's render was 3.8 px off in every frame) keeps its frames flagged."""
+    for seed in range(10):
+        lens, flagged = _widths_along_an_arc(lambda p: 1.36 - (p + 0.1) ** 2, seed)
+        assert flagged > 0.3
+        assert (lens.flag == "ok").all()
+        beside, _ = _widths_along_an_arc(lambda p: 1.3, seed)
+        assert (beside.flag[30:] == "occluded").mean() > 0.9
+
+
 def test_a_still_body_with_more_of_something_at_either_end_of_the_record_is_held():
     """``held_still_runs``: fingers alone over the body's edge make its silhouette ~1.5 times its own area, under
     the 1.5 that flags a hand: a run of still frames over 1.2 times from the record's first frame (or to its last)

@@ -334,8 +334,8 @@ def track_video(
                 vx = vy = 0.0
             gap = index - f1
             step = math.hypot(vx, vy)
-            # a step under 0.05 px is noise at rest: no direction (a squashed marker's width² read along one axis)
-            direction = (vx / step, vy / step) if step >= 0.05 else None
+            moved = step >= 0.05 or (step > 0 and max_step >= 1.0)  # held: noise, its width² read on one axis
+            direction = (vx / step, vy / step) if moved else None
             if gap == 1:
                 guess = (x1 + vx, y1 + vy)
                 speed = step

@@ -186,7 +186,7 @@ class ArcReference:
         phi = np.arctan2(pts[:, 0] - circle[0], pts[:, 1] - circle[1])
         self.fit = (coef, float(phi.min()), float(phi.max()), circle)
 
-    def settle(self, points) -> bool:
+    def settle(self, points, least_at_most: float = math.inf) -> bool:
         """At the end of the pass, ρ(φ) refitted on ``points`` (x, y, value): the ok frames and those flagged
         for their value alone, where one smooth curve explains them: a lens's magnification or vignetting along
         a swing that leaves the place of the first frames (a marker held at release near a wide lens's edge
@@ -199,12 +199,13 @@ class ArcReference:
         :attr:`MAX_SETTLED_SLOPE_PER_RADIUS` per radius of arc, and across bins left off the value changes as
         the kept bins beside them (6 radii on either side) trend, within that limit: a shadow's or a stripe's
         edge is a step between level stretches (the spline would smooth it over the bins left off), an
-        occluder at a few places falls in the bins left off. Returns whether it was taken (ρ then held level
-        beyond the angles given)."""
+        occluder at a few places falls in the bins left off. ``least_at_most``: refused where the curve's least
+        value is above it. Returns whether it was taken (ρ then held level beyond the angles given)."""
         if not self.enabled or not math.isfinite(self.base) or len(points) < 8:
             return False
         pts = np.asarray(points, float)
-        circle = self.arc.circle or self.arc.fitted(pts[:, :2])
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        circle = self.arc.circle or (self.arc.fitted(pts[:, :2]) if len(pts) >= 8 else None)
         binned = None if circle is None else self._bins(pts, circle)
         if binned is None or binned[0].size < 8:
             return False
@@ -224,8 +225,11 @@ class ArcReference:
         keep = np.abs(resid) <= limit
         if counts[keep].sum() < 0.9 * counts.sum() or keep.sum() < 8:
             return False
+        spline = make_smoothing_spline(along[keep], median[keep], w=weight[keep], lam=lam)  # on the bins kept
         grid = np.linspace(along[0], along[-1], 8 * keys.size)
         if np.max(np.abs(spline.derivative()(grid))) > self.MAX_SETTLED_SLOPE_PER_RADIUS:
+            return False
+        if float(np.min(spline(grid))) > least_at_most:
             return False
         kept = np.flatnonzero(keep)
         for a, b in zip(kept[:-1], kept[1:], strict=True):
@@ -397,7 +401,9 @@ class MarkerSignal:
         for row, kind, signal in self.first:
             if len(self.samples[kind]) >= self.FIRST_FRAMES:
                 table.loc[row, "signal_ratio"] = signal / self.curves[kind].base
-        if self.wide and self.width.settle(self.widths):
+        # a lens changes the width from place to place, and somewhere it reads as the first frames allow; more all
+        # along the path (a two-tone bob beside the marker once it swings) is something else in its mask
+        if self.wide and self.width.settle(self.widths, least_at_most=self.width_ratio):
             # the width² refitted along the whole path: those within it now are judged by their signal
             self.refitted.append("width")
             self.by_signal.update(row for row, x, y, w in self.wide if w <= self.width_ratio * self.width.value(x, y))
