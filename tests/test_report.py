@@ -744,6 +744,24 @@ def test_the_summary_says_a_knocked_camera_apart_from_its_creep(documents):
     assert "the camera crept by 12 px (corrected)" in box  # |(17.3 − 10.4, −6.5 − 3.2)| = 11.9
 
 
+def test_the_summary_says_an_uncalibrated_wide_lens_and_a_knock_it_bent_into_the_path(documents):
+    """An uncalibrated GoPro-like trial: its angles 8–17 % too large, said only in the tracking table's notes, while
+    the summary said the knock its lens bent into the path was "corrected" (it was not applied)."""
+    documents.docs[("t20", "tracks")] = {
+        "status": "ok",
+        "path": {
+            "corrected": False,
+            "creep": {"degree": 0, "corrected": False},
+            "not_applied": {"degree": 0, "knock": {"time_s": 1.58, "shift_px": [3.5, -2.2]}},
+        },
+    }
+    documents.docs[("t20", "angles")] = {"status": "ok", "uncalibrated_size_change": 1.167}
+    box = documents.summary_box()
+    assert "image is 17 % larger at one place on its path than at another" in box
+    assert "scales the angles" in box and "its path read a knock that such a view bends into it (not applied)" in box
+    assert "pivot jumped" not in box
+
+
 def test_a_record_without_a_release_is_labelled_by_its_first_swing_extremum(documents):
     """A clip that starts mid-swing: the † angle is the measured amplitude at its first extremum (the fitted angle at
     its first sample, −11° for a 15° swing passing through, said nothing of the swing)."""

@@ -16,7 +16,7 @@ from pendulum.angles.record import (
     vertical_turned_with_the_picture,
 )
 from pendulum.angles.swings import missing_period
-from pendulum.camera.view import ImageToPlane, calibration_warnings, map_point, map_track
+from pendulum.camera.view import ImageToPlane, calibration_warnings, map_point, map_track, uncalibrated_size_change
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
 
@@ -33,7 +33,7 @@ def read_json(path):
 
 
 def work():
-    track_summary, path, plane_calibrated = None, None, None
+    track_summary, path, plane_calibrated, size_change = None, None, None, None
     warnings = []  # about the angle measurement (shown in the report's tracking-quality notes)
     if "table" in sm.input.keys():
         source = sm.input.table
@@ -54,6 +54,7 @@ def work():
         warnings += calibration_warnings(
             trial, in_image, track_summary.get("frame_px"), calibration, track_summary.get("marker")
         )
+        size_change = uncalibrated_size_change(track_summary.get("marker"), calibration)
         plane_calibrated = calibration.get("camera_setup") if calibration and calibration.get("plane") else None
         track = map_track(in_image, calibration)
         pivot, vertical = map_point(settings["pivot_px"], calibration), settings["vertical_deg"]
@@ -125,6 +126,8 @@ def work():
     if track_summary is not None:
         document["method"] = (track_summary.get("method") or {}).get("used", "marker")
         document["path"] = path
+        if size_change:  # an uncalibrated view that scales the angles (the report's summary says so)
+            document["uncalibrated_size_change"] = size_change
     write_json({**document, "warnings": warnings}, sm.output.summary)
 
 

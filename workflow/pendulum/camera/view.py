@@ -304,6 +304,13 @@ def frames_unlike_calibration(trial: str, frame_px, document: dict | None) -> st
 OUTSIDE_COVERAGE_WARN_SHARE = 0.1  # a track this much outside the lens clip's board coverage is warned about
 
 
+def uncalibrated_size_change(marker: dict | None, document: dict | None) -> float | None:
+    """The marker's size change along its path (the tracks summary's ``size_change_along_path``) where the camera
+    setup has no lens model to correct what makes it (:func:`calibration_warnings`); else None."""
+    change = (marker or {}).get("size_change_along_path")
+    return None if not change or (document or {}).get("lens") else float(change)
+
+
 def calibration_warnings(trial: str, track, frame_px, document: dict | None, marker: dict | None = None) -> list[str]:
     """What a trial measured through its camera setup's calibration should say: the calibration's own warnings,
     and where its usable centres (image pixels) lie beyond the board's coverage (the lens model extrapolated).
@@ -312,8 +319,8 @@ def calibration_warnings(trial: str, track, frame_px, document: dict | None, mar
     sees it the same size everywhere, so a wide lens's distortion or a turned swing plane scales the angles (on
     GoPro-like renders, sizes 1.06–1.23: angles 8–17 % too large). Raises ValueError where its frames are not the
     calibration's size (:func:`frames_unlike_calibration`)."""
-    change = (marker or {}).get("size_change_along_path")
-    if change and not (document or {}).get("lens"):
+    change = uncalibrated_size_change(marker, document)
+    if change:
         view = "a wide lens's distortion" + (
             "" if (document or {}).get("plane") else ", or a swing plane turned from the camera"
         )

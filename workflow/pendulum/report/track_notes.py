@@ -51,6 +51,17 @@ def tracking_note(tracks: dict | None, angles: dict | None) -> str:
             + f"its path is off one circle by {fmt(path['unexplained_rms_px'], 2)} px RMS "
             f"({fmt(path['unexplained_angle_deg'], 2)}°; not corrected, it stays in the angles)"
         )
+    if change := (angles or {}).get("uncalibrated_size_change"):
+        parts.append(
+            f"its marker's image is {fmt(100 * (change - 1), 2)} % larger at one place on its path than at another: "
+            "a wide lens or a turned swing plane, uncalibrated, which scales the angles (a GoPro-like lens: 8–17 % "
+            "too large; film a lens clip)"
+        )
+    if read := path.get("not_applied"):
+        parts.append(
+            f"its path read {'a knock' if read.get('knock') else 'a creep'} that such a view bends into it "
+            "(not applied)"
+        )
     harmonic = (angles or {}).get("second_harmonic") or {}
     if harmonic.get("present"):
         parts.append(

@@ -178,7 +178,10 @@ def path_through_lens(track: pd.DataFrame, lens) -> tuple[pd.DataFrame, dict]:
         if not (change and document.get("corrected")):
             return out, document
         # uncalibrated, a view that changes the marker's size along its path bends the circle too: not a move
-        document["creep"] = {**document["creep"], "corrected": False}
+        document["not_applied"] = document["creep"]
+        rms, radius = document["circle_rms_px"], document.get("radius_px") or math.inf
+        document["creep"] = {"degree": 0, "corrected": False, "rms_after_px": rms}
+        document.update(unexplained_rms_px=rms, unexplained_angle_deg=round(math.degrees(rms / radius), 4))
         document.update(
             corrected=False,
             verdict=f"not applied, as the marker's image changes size by {100 * (change - 1):.0f} % along its path and "
