@@ -13,7 +13,14 @@ from pendulum.angles.geometry import (
     estimate_rig_geometry,
     unlike_picture,
 )
-from pendulum.camera.view import ImageToPlane, frames_unlike_calibration, map_point, map_track, path_tilt
+from pendulum.camera.view import (
+    ImageToPlane,
+    frames_unlike_calibration,
+    map_point,
+    map_track,
+    path_tilt,
+    uncalibrated_size_change,
+)
 from pendulum.io import script_logger, write_json
 from pendulum.status import is_failed, require_ok, run_stage
 
@@ -27,8 +34,10 @@ def read_json(path):
     return json.loads(Path(path).read_text())
 
 
-def tilt_warning(tracks: dict) -> tuple[dict | None, str | None]:
-    """The ellipse test of the pooled marker paths: a swing plane not facing the camera, detected, not corrected."""
+def tilt_warning(tracks: dict, lens_change: float | None = None) -> tuple[dict | None, str | None]:
+    """The ellipse test of the pooled marker paths: a swing plane not facing the camera, detected, not corrected;
+    ``lens_change``: the largest size change of a marker along its path that no lens calibration corrects (a wide
+    lens makes the ellipse too, and the angles too large, not compressed)."""
     ok = [t[t.flag == "ok"] for t in tracks.values()]
     if not ok:
         return None, None
@@ -37,6 +46,13 @@ def tilt_warning(tracks: dict) -> tuple[dict | None, str | None]:
     )
     if not tilt or not tilt["significant"]:
         return tilt, None
+    if lens_change:
+        return tilt, (
+            f"the marker path is an ellipse (axis ratio {tilt['axis_ratio']:.3f} ± {tilt['axis_ratio_stderr']:.3f}) "
+            f"and the marker's image changes size by {100 * (lens_change - 1):.0f} % along it: most likely a wide "
+            "lens's distortion, uncalibrated (the angles too large), else a swing plane turned against the camera; "
+            "calibrate the lens first (cameras: calibration_video, docs/configuration.md)"
+        )
     return tilt, (
         f"the marker path is an ellipse (axis ratio {tilt['axis_ratio']:.3f} ± {tilt['axis_ratio_stderr']:.3f}): "
         f"the swing plane seems turned about the image's {tilt['tilt_axis']} by about {tilt['tilt_deg']:.0f}° "
@@ -50,7 +66,7 @@ def work():
     if "calibration" in sm.input.keys():
         calibration = require_ok(read_json(sm.input.calibration), "calibration")
         log.info("rig %s: %s", rig, ImageToPlane(calibration).describe())
-    tracks, failed, pictures, refused = {}, {}, {}, {}
+    tracks, failed, pictures, refused, lens_change = {}, {}, {}, {}, {}
     for path, summary_path in zip(sm.input.tracks, sm.input.summaries, strict=True):
         summary = read_json(summary_path)
         name = Path(path).stem
@@ -64,6 +80,7 @@ def work():
             log.warning("left out of the pooled geometry: %s", unlike)
         else:
             tracks[name] = map_track(pd.read_csv(path), calibration)
+            lens_change[name] = uncalibrated_size_change(summary.get("marker"), calibration)
     pivot = map_point(sm.params.pivot_px, calibration)
     if not tracks and pivot is None:
         if failed or refused:  # nothing to measure on this rig: the trials' own errors say why (trials.csv)
@@ -102,13 +119,13 @@ def work():
     if not (calibration and calibration.get("plane")):
         kept = {k: v for k, v in tracks.items() if k not in geometry["rejected_trials"]}
         if shared:
-            geometry["path_tilt"], warning = tilt_warning(kept)
+            geometry["path_tilt"], warning = tilt_warning(kept, max(filter(None, lens_change.values()), default=None))
             if warning:
                 geometry["warnings"].append(warning)
         else:  # paths about different pivots are no one ellipse: each is tested alone
             geometry["path_tilt"] = {}
             for name in sorted(kept):
-                geometry["path_tilt"][name], warning = tilt_warning({name: kept[name]})
+                geometry["path_tilt"][name], warning = tilt_warning({name: kept[name]}, lens_change.get(name))
                 if warning:
                     geometry["warnings"].append(f"{name}: {warning}")
     if calibration:

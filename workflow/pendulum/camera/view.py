@@ -326,8 +326,9 @@ def calibration_warnings(trial: str, track, frame_px, document: dict | None, mar
         )
         lens_said = [
             f"the marker's image is {100 * (change - 1):.0f} % larger at one place on its path than at another: "
-            f"{view}, which scales the angles (a GoPro-like lens on renders: 8–17 % too large) unless the camera "
-            "setup is calibrated with a lens clip (docs/footage.md, Checkerboard clip)"
+            f"{view}, which scales the angles (a GoPro-like lens on renders: 8–17 % too large), and with them the drag "
+            "and damping coefficients, unless the camera setup is calibrated with a lens clip (cameras: "
+            "calibration_video, docs/configuration.md)"
         ]
     else:
         lens_said = []

@@ -55,7 +55,8 @@ def tracking_note(tracks: dict | None, angles: dict | None) -> str:
         parts.append(
             f"its marker's image is {fmt(100 * (change - 1), 2)} % larger at one place on its path than at another: "
             "a wide lens or a turned swing plane, uncalibrated, which scales the angles (a GoPro-like lens: 8–17 % "
-            "too large; film a lens clip)"
+            "too large), and with them the drag and damping coefficients, beyond their intervals (the added mass, "
+            "from the period, hardly; film a lens clip)"
         )
     if read := path.get("not_applied"):
         parts.append(

@@ -182,10 +182,17 @@ def path_through_lens(track: pd.DataFrame, lens) -> tuple[pd.DataFrame, dict]:
         rms, radius = document["circle_rms_px"], document.get("radius_px") or math.inf
         document["creep"] = {"degree": 0, "corrected": False, "rms_after_px": rms}
         document.update(unexplained_rms_px=rms, unexplained_angle_deg=round(math.degrees(rms / radius), 4))
+        read = document["not_applied"]
+        if knock := read.get("knock"):
+            (dx, dy), when = knock["shift_px"], knock["time_s"]
+            what = f"a jump of the pivot by ({dx:+.1f}, {dy:+.1f}) px at {when:.2f} s"
+        else:
+            what = f"a creep of the pivot by {read.get('motion_px', 0.0):.1f} px"
         document.update(
             corrected=False,
-            verdict=f"not applied, as the marker's image changes size by {100 * (change - 1):.0f} % along its path and "
-            f"a wide lens that does so bends the swing's circle too (calibrate the lens): {document['verdict']}",
+            verdict=f"the path sits {rms:.2f} px RMS off one fixed circle (noise {document['noise_px']:.3f} px); it "
+            f"reads as {what}, not applied: the marker's image changes size by {100 * (change - 1):.0f} % along "
+            "its path, and a wide lens that does so bends the swing's circle (calibrate the lens)",
         )
         return track.copy(), document
     x, y = track.x_px.to_numpy(float), track.y_px.to_numpy(float)
