@@ -136,6 +136,9 @@ def test_a_rig_with_a_camera_gets_its_calibration_table_and_swing_plane_note(tmp
     report = R.Report(files=files, trials=trials, rigs=rigs, variants=VARIANTS)
     assert "gopro_rig" not in report.rig_table() and "rig (camera setup gopro_tank)" in report.rig_table()
     assert "swing-plane coordinates" in report.rig_table()
+    # the pivot's row says so too (a GoPro user read "pivot in the image" and took the lens-corrected value for one)
+    assert "pivot (swing-plane px where a camera setup is calibrated)" in report.rig_table()
+    assert "pivot in the image" not in report.rig_table()
     html = report.tracking_section()
     assert 'id="calibration-table"' in html and "Camera calibration" in html and "900.6, 900.7" in html
 

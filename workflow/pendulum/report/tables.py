@@ -134,8 +134,13 @@ class TableSections(ReportData):
                 text = fmt(value, 4) + (" (the sidecars of all its trials)" if by_trials else "")
                 cells += [td(esc(text), "num"), td(esc(tol_text), "num")]
             rows.append([td(esc(label)), td(esc(unit))] + cells)
+        calibrated = any(self.rigs[rig]["values"].get("camera") for rig in rigs)
         for key, label, unit in (
-            ("pivot_px", "pivot in the image", "px"),
+            (
+                "pivot_px",
+                "pivot (swing-plane px where a camera setup is calibrated)" if calibrated else "pivot in the image",
+                "px",
+            ),
             ("vertical_deg", "image angle of the vertical", "°"),
         ):
             cells = []
