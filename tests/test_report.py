@@ -948,6 +948,8 @@ def test_the_header_says_what_no_interval_holds_a_point_mass_and_the_rod(documen
     assert "On rig rig no Ip (body_inertia_kg_m2) is stated: the body is a point mass, Ip = mL²" in text
     # an ROV engineer read m_a as the vehicle's added mass and C_d as a steady-flow value (2026-12-07)
     assert "ma is the added mass as swung on this pendulum" in text and "not steady-flow values" in text
+    # and the paper whose tables these follow is named (the same reviewer)
+    assert "Tables 1–3 follow the paper the method comes from, Identification of Hydrodynamics Coefficient" in text
     monkeypatch.setitem(documents.rigs["rig"]["values"], "body_inertia_kg_m2", 2.0)
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
     assert "the rod's (or string's) own mass" in text and "point mass" not in text

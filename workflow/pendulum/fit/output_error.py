@@ -55,6 +55,7 @@ from pendulum.fit.records import (
     added_mass_lower_kg,
     samples_digest,
     systematic_inputs,
+    value_or_range,
 )
 from pendulum.fit.uncertainty import (
     Z95,
@@ -476,6 +477,7 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
             "peak_speed_m_s": peak_speed,
             "period_s": period,
             "keulegan_carpenter_number": kc,
+            "measured_first_swing": rec.measured_first_swing(),
             "start_values": starts[k],
             "release_skip_s": rec.release_skip_s,
             "dropped_samples": rec.dropped,
@@ -505,12 +507,10 @@ def _summarise(model, records, problem, sol, cov, white_cov, res_parts, starts, 
         "samples_digest": samples_digest(records, problem.masks),
         "n_parameters": int(x.size),
         "correlation": {"parameters": names, "matrix": corr[: len(names), : len(names)].tolist()},
-        "keulegan_carpenter_number": [
-            min(t["keulegan_carpenter_number"] for t in trials.values()),
-            max(t["keulegan_carpenter_number"] for t in trials.values()),
-        ]
-        if len(trials) > 1
-        else next(iter(trials.values()))["keulegan_carpenter_number"],
+        "keulegan_carpenter_number": value_or_range([t["keulegan_carpenter_number"] for t in trials.values()]),
+        "measured_keulegan_carpenter_number": value_or_range(
+            [(t["measured_first_swing"] or {}).get("keulegan_carpenter_number") for t in trials.values()]
+        ),
         "uncertainty": {
             "method": "statistical: least-squares sandwich covariance with an AR(p) model of the residual "
             "noise (p by AIC), its bias from fitting residuals corrected by a parametric bootstrap; systematic: "

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.record import InputError
-from pendulum.angles.swings import swing_extrema
+from pendulum.angles.swings import first_swing_rate, swing_extrema
 from pendulum.model.rig import Rig, tolerances_alike
 
 
@@ -122,6 +122,37 @@ class AngleRecord:
     @property
     def n_samples(self) -> int:
         return int(self.time_s.size)
+
+    def measured_first_swing(self) -> dict | None:
+        """The first fitted swing as the record shows it (:func:`~pendulum.angles.swings.first_swing_rate`), the
+        same whatever a variant fits: U_max = L |θ̇| where it crosses the vertical, that cycle's period T and the
+        Keulegan–Carpenter number KC = U_max T / D; None where the record crosses the vertical under twice."""
+        rate = first_swing_rate(self.time_s, self.theta_rad)
+        if rate is None:
+            return None
+        speed = rate[0] * self.rig.length_m
+        return {
+            "peak_speed_m_s": speed,
+            "period_s": rate[1],
+            "keulegan_carpenter_number": speed * rate[1] / self.characteristic_length_m,
+        }
+
+
+def keulegan_carpenter_number(fit: dict):
+    """A fit document's Keulegan–Carpenter number (its trials' first fitted swings): as the records show it, else
+    (a record that crosses the vertical under twice) from the variant's fitted
+    curve; a number, or [least, largest] over a joint fit's trials."""
+    measured = fit.get("measured_keulegan_carpenter_number")
+    return fit["keulegan_carpenter_number"] if measured is None else measured
+
+
+def value_or_range(values: list):
+    """A fit's figure from its trials' (a Keulegan–Carpenter number): one trial's value, else [least, largest] of
+    those known; None where none is."""
+    known = [v for v in values if v is not None]
+    if len(values) == 1 or not known:
+        return values[0] if len(values) == 1 else None
+    return [min(known), max(known)]
 
 
 def characteristic_length_m(rig_values: dict) -> float:

@@ -10,7 +10,13 @@ import pandas as pd
 
 from pendulum.angles.swings import swing_centre_track
 from pendulum.fit.decay import half_cycles, loss_at_amplitude
-from pendulum.fit.records import FitSettings, characteristic_length_m, kinematic_viscosity_m2_s, load_record
+from pendulum.fit.records import (
+    FitSettings,
+    characteristic_length_m,
+    keulegan_carpenter_number,
+    kinematic_viscosity_m2_s,
+    load_record,
+)
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.model.physics import PendulumModel, simulate
 from pendulum.model.rig import Rig
@@ -57,7 +63,7 @@ def summary_table(documents: list[dict]) -> pd.DataFrame:
     for doc in documents:
         fits = [(_label(doc), doc)]
         for label, fit in fits:
-            kc = fit["keulegan_carpenter_number"]
+            kc = keulegan_carpenter_number(fit)
             first = next(iter(fit["trials"].values()))
             row = {
                 "variant": fit["variant"],

@@ -16,6 +16,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
+from pendulum.fit.records import keulegan_carpenter_number
 from pendulum.model.effects import ADDED_MASS, TERMS
 from pendulum.outcomes import MISFIT_MARK
 from pendulum.report.format import MARKERS, PALETTE, TERM_LABELS, fmt, is_finite, with_minus_sign
@@ -325,7 +326,7 @@ class ReportData:
 
     def kc(self, variant: str, trial: str) -> float | None:
         fit = self.fits.get((variant, trial))
-        return float(fit["keulegan_carpenter_number"]) if is_ok(fit) else None
+        return float(keulegan_carpenter_number(fit)) if is_ok(fit) else None
 
     def curve(self, variant: str, trial: str) -> pd.DataFrame:
         key = ("curve", variant, trial)

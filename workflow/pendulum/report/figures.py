@@ -267,7 +267,7 @@ class FigureSections(ReportData):
                             ax.set_xlabel(
                                 "release angle (°)"
                                 if xkind == "release"
-                                else "KC of the first fitted swing (variant's fitted curve)"
+                                else "KC of the first fitted swing (as the record shows it)"
                             )
                         if col == 0:
                             ax.set_ylabel(PLAIN_SYMBOLS[name])

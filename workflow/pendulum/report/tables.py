@@ -12,6 +12,7 @@ from collections import Counter
 from pendulum.fit.records import (
     RIG_DEFAULTS,
     WATER_KINEMATIC_VISCOSITY_M2_S,
+    keulegan_carpenter_number,
     kinematic_viscosity_m2_s,
     rig_tolerances,
     with_rig_defaults,
@@ -391,13 +392,16 @@ class TableSections(ReportData):
 
         for trial in self.trial_order():
             first, above = True, None
+            shown_kc = None
             for v in self.order:
-                kc = self.kc(v, trial)
+                kc = self.kc(v, trial)  # the record's, one per trial (a variant's own where the record lacks it)
+                kc_text = fmt(kc, 2) if first or (kc is not None and fmt(kc, 2) != shown_kc) else ""
                 label = [
                     td(esc(trial) if first else ""),
                     td(self.angle_label(trial) if first else "", "num"),
-                    td(esc(fmt(kc, 2)), "num"),
+                    td(esc(kc_text), "num"),
                 ]
+                shown_kc = kc_text or shown_kc
                 fit = self.fits.get((v, trial))
                 fit_row(label, v, fit, "trial", trial, above)
                 above = None if is_ok(fit) else failure_text(fit)
@@ -417,18 +421,19 @@ class TableSections(ReportData):
                 attrs.append({"data-trial": trial, "data-kind": "truth", "class": "truth"})
             attrs[-1]["class"] = (attrs[-1].get("class", "") + " group-end").strip()
         for rig in self.rig_names:
-            first = True
+            first, shown_joint_kc = True, None
             for v in self.order:
                 joint = self.joint.get((v, rig))
                 if joint is None:
                     continue
-                kc = joint.get("keulegan_carpenter_number") if is_ok(joint) else None
+                kc = keulegan_carpenter_number(joint) if is_ok(joint) else None
                 kc_text = f"{fmt(min(kc), 2)}–{fmt(max(kc), 2)}" if isinstance(kc, list) and kc else fmt(kc, 2)
                 label = [
                     td(f"<b>joint</b> {esc(rig)}" if first else ""),
                     td("all" if first else "", "num"),
-                    td(esc(kc_text), "num"),
+                    td(esc(kc_text) if first or kc_text != shown_joint_kc else "", "num"),
                 ]
+                shown_joint_kc = kc_text
                 fit_row(label, v, joint, "joint", f"joint:{rig}")
                 attrs[-1]["class"] = "joint"
                 first = False
@@ -462,9 +467,11 @@ class TableSections(ReportData):
             "and, where the variant has them, linear damping c and bearing friction torque τ<sub>f</sub>: "
             "estimate and 95 % interval per trial and variant, and the joint fit of each rig (shared "
             "coefficients, statistical part widened by the consistency scale factor S). KC: Keulegan–Carpenter "
-            "number U<sub>max</sub>T/D of the trial's first fitted swing (T that cycle's period, longer than the "
-            "small-swing one for a wide release), from the variant's fitted curve (so it "
-            "differs a little between variants, and more where a variant misses the record); joint: the range. "
+            "number U<sub>max</sub>T/D of the trial's first fitted swing as its record shows it (U<sub>max</sub> = "
+            "L|θ̇|, its largest over that cycle, T the cycle's period, longer than the small-swing one for a wide "
+            "release): the flow the trial made, one per trial whatever a variant fits (given on a variant's "
+            "row only where the record shows too little of the swing and it comes from that variant's fitted "
+            "curve); joint: the range. "
             + ("Rows ‘truth’: the synthetic trials' true values. " if self.truth else "")
             + "“at bound” marks a coefficient that ended on its lower bound: the data prefer an unphysical "
             "value, and only the one-sided 95 % upper limit is a result. Per-trial intervals of the damping "
