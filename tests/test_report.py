@@ -644,6 +644,7 @@ def test_the_report_renders_in_chromium_with_every_image_and_table3_complete(rep
         "rig-values",
         "rms",
         "coefficients",
+        "budget",
         "records",
         "consistency",
         "extinction",
@@ -995,3 +996,51 @@ def test_rig_values_where_every_sidecar_weighs_its_body_show_no_volume_the_fits_
     text = re.sub(r"\s+", " ", html_module.unescape(re.sub(r"<[^>]+>", " ", documents.rig_table())))
     assert "displaced volume V m³ 0.002500 (from the submerged mass) derived" in text, text
     assert "weight mg N 34.63 derived buoyancy B = ρgV N 24.53 derived" in text, text
+
+
+def test_the_correlation_of_the_recommended_coefficients_takes_every_error_in():
+    """Σ = D R D + Σ_i b_i b_iᵀ by hand: statistical σ 0.1 (S = 2) and 0.2, correlated +0.5 → D R D =
+    [[0.04, 0.02], [0.02, 0.04]]; the volume moves them +0.3 and −0.4 → [[0.09, −0.12], [−0.12, 0.16]]; the pivot's
+    one axis +0.1 and +0.1 → [[0.01, 0.01], [0.01, 0.01]]. Sum [[0.14, −0.09], [−0.09, 0.21]]: the correlation
+    −0.09 / √(0.14 · 0.21) = −0.5249, where the statistical part alone says +0.5."""
+    from pendulum.report.budget import budget_sources, combined_correlation, source_shift
+
+    entries = {
+        "added_mass_kg": {
+            "stderr_statistical": 0.1,
+            "scale_factor": 2.0,
+            "error_budget": {"displaced_volume_m3": 0.3, "pivot_px (axis 1)": 0.1, "pivot_px (axis 2)": 0.0},
+        },
+        "drag_area_m2": {
+            "stderr_statistical": 0.2,
+            "error_budget": {"displaced_volume_m3": -0.4, "pivot_px (axis 1)": 0.1, "pivot_px (axis 2)": 0.0},
+        },
+    }
+    statistical = {"parameters": ["added_mass_kg", "drag_area_m2"], "matrix": [[1.0, 0.5], [0.5, 1.0]]}
+    names, corr = combined_correlation(entries, statistical)
+    assert names == ["added_mass_kg", "drag_area_m2"]
+    assert corr[0, 1] == pytest.approx(-0.09 / (0.14 * 0.21) ** 0.5, abs=1e-12) and corr[0, 0] == pytest.approx(1)
+    # the pivot's axes in one column, in quadrature; the sources in Table 1's order, the pivot last
+    entries["added_mass_kg"]["error_budget"]["pivot_px (axis 2)"] = 0.2
+    assert source_shift(entries["added_mass_kg"], "pivot_px") == pytest.approx((0.1**2 + 0.2**2) ** 0.5)
+    assert budget_sources(entries) == ["displaced_volume_m3", "pivot_px"]
+
+
+def test_the_uncertainty_budget_names_each_sources_share_and_the_largest(documents, monkeypatch):
+    """An ROV engineer asked where the recommended coefficients' uncertainty comes from (2026-12-07): the budget of
+    the recommended joint fit, each source's 1σ part as a percentage of the estimate. The added mass 2.5 ± u, u
+    from a statistical 0.01 kg (0.4 %), the volume's −0.1 kg (−4 %) and the mass's 0.02 kg (0.8 %): the volume
+    holds 0.01 / (0.0001 + 0.01 + 0.0004) = 95 % of u²."""
+    joint = documents.joint[("linear", "rig")]
+    entry = joint["parameters"]["added_mass_kg"]
+    monkeypatch.setitem(entry, "stderr_statistical", 0.01)
+    monkeypatch.setitem(entry, "stderr", (0.01**2 + 0.1**2 + 0.02**2) ** 0.5)
+    monkeypatch.setitem(entry, "error_budget", {"displaced_volume_m3": -0.1, "mass_kg": 0.02})
+    monkeypatch.setitem(joint, "correlation", {"parameters": ["added_mass_kg"], "matrix": [[1.0]]})
+    text = re.sub(r"\s+", " ", html_module.unescape(re.sub(r"<[^>]+>", " ", documents.uncertainty_budget())))
+    assert "variant linear" in text
+    assert "added mass, m a 2.500 kg 0.10 kg (4.1 %) 0.4 % 0.8 % −4 % displaced volume V (95 % of u²)" in text, text
+    assert "linear damping, c 0.1500 N·m·s 0.0051 N·m·s (3.4 %) 2.7 % · · statistical (100 % of u²)" in text
+    assert "variant quadratic" not in text  # not the recommended variant
+    # the correlation: only of coefficients the fit's matrix holds, so here none to show
+    assert "Correlation of the recommended coefficients" not in text

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import re
 
+from pendulum.report.budget import BudgetSections
 from pendulum.report.checks import CheckSections
 from pendulum.report.comparison import ComparisonSections
 from pendulum.report.design import DesignSections
@@ -38,6 +39,7 @@ from pendulum.report.truth import TruthSections
 class Report(
     ComparisonSections,
     TableSections,
+    BudgetSections,
     FigureSections,
     DiscoverySections,
     DesignSections,

@@ -1,0 +1,163 @@
+"""The recommended coefficients' uncertainty budget: each source's share, and the coefficients' correlation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pendulum.report.data import ReportData, is_ok, record_problems
+from pendulum.report.format import COEFFICIENTS, RIG_LABELS, esc, fmt, is_finite, table_html, td, with_minus_sign
+
+PIVOT = "pivot_px"  # the error budget's pivot inputs: "pivot_px (axis 1)", "pivot_px[0] (axis 2)", ...
+SYMBOLS = {  # a rig value's symbol as Table 1 names it (a column head; the whole name its tooltip)
+    "mass_kg": "m",
+    "length_m": "L",
+    "frontal_area_m2": "A",
+    "displaced_volume_m3": "V",
+    "submerged_mass_kg": "m − ρV",
+    "fluid_density_kg_m3": "ρ",
+    "gravity_m_s2": "g",
+    "body_inertia_kg_m2": "I<sub>p</sub>",
+    PIVOT: "pivot",
+}
+
+
+def budget_sources(entries: dict) -> list[str]:
+    """The budget's sources in the order shown: the rig values as Table 1 lists them, then the pivot, then any
+    other (a source none of the coefficients moves is left out)."""
+    keys = {k for e in entries.values() for k, v in (e.get("error_budget") or {}).items() if v}
+    sources = [k for k in RIG_LABELS if k in keys]
+    if any(k.startswith(PIVOT) for k in keys):
+        sources.append(PIVOT)
+    return sources + sorted(k for k in keys if k not in RIG_LABELS and not k.startswith(PIVOT))
+
+
+def source_shift(entry: dict, source: str) -> float:
+    """A coefficient's 1σ shift from one source: the signed refit shift of a rig value; for the pivot, its
+    axes' shifts in quadrature (an estimated pivot's error ellipse: its axes have no sign a reader can use)."""
+    budget = entry.get("error_budget") or {}
+    if source == PIVOT:
+        return math.sqrt(sum(v * v for k, v in budget.items() if k.startswith(PIVOT)))
+    return float(budget.get(source, 0.0))
+
+
+def combined_correlation(entries: dict, statistical: dict) -> tuple[list[str], np.ndarray]:
+    """The coefficients' correlation with every error in it: the fit's statistical covariance (its correlation
+    ``statistical``: parameters and matrix, each σ widened by the joint fit's S) plus, for each systematic
+    input i, the outer product of its shifts b_i (one rig value moves every coefficient at once):
+    Σ = D R D + Σ_i b_i b_iᵀ, D = diag(S σ_stat). C_d takes C_dA's statistical correlation (C_d = C_dA / A)."""
+    index = {n: statistical["parameters"].index(n) for n in statistical["parameters"]}
+    source = {n: index.get("drag_area_m2" if n == "drag_coefficient" else n) for n in entries}
+    names = [n for n in entries if source[n] is not None]  # a coefficient the fit's matrix lacks: not shown
+    matrix = np.asarray(statistical["matrix"], float)
+    sigma = np.array(
+        [float(entries[n]["stderr_statistical"]) * float(entries[n].get("scale_factor") or 1.0) for n in names]
+    )
+    cov = np.zeros((len(names), len(names)))
+    for a, na in enumerate(names):
+        for b, nb in enumerate(names):
+            cov[a, b] = matrix[source[na], source[nb]] * sigma[a] * sigma[b]
+    inputs = sorted({k for n in names for k in (entries[n].get("error_budget") or {})})
+    for key in inputs:
+        shift = np.array([float((entries[n].get("error_budget") or {}).get(key, 0.0)) for n in names])
+        cov += np.outer(shift, shift)
+    scale = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(scale, scale)
+    return names, corr
+
+
+def _percent(value: float, estimate: float) -> str:
+    """A standard uncertainty or a shift as a signed percentage of the estimate ("−4.7 %"); "·" where none."""
+    if not value or not estimate:
+        return "·"
+    return with_minus_sign(f"{100 * value / abs(estimate):.2g} %")
+
+
+class BudgetSections(ReportData):
+    """The uncertainty budget of each rig's recommended joint fit (the summary box's coefficients)."""
+
+    def uncertainty_budget(self) -> str:
+        """Per rig: where each recommended coefficient's uncertainty comes from (statistical, each rig value, the
+        pivot) and how the coefficients' errors go together (their correlation, every error included)."""
+        out = []
+        for rig in self.rig_names:
+            variant = self.recommended(rig)
+            joint = self.joint.get((variant, rig)) if variant else None
+            if not is_ok(joint) or record_problems(joint):
+                continue
+            entries = {
+                n: e
+                for n, e in joint["parameters"].items()
+                if n in COEFFICIENTS and not e.get("at_bound") and e.get("identifiable", True) and e.get("stderr")
+            }
+            if not entries:
+                continue
+            sources = budget_sources(entries)
+            labels = [
+                RIG_LABELS[s][0] if s in RIG_LABELS else ("the estimated pivot" if s == PIVOT else s) for s in sources
+            ]
+            header = (
+                ["coefficient", "estimate", "u (1σ)", "statistical"]
+                + [
+                    f'<span title="{esc(label)}">{SYMBOLS.get(source, esc(source))}</span>'
+                    for source, label in zip(sources, labels, strict=True)
+                ]
+                + ["largest source"]
+            )
+            rows = []
+            for name, e in entries.items():
+                symbol, label, unit = COEFFICIENTS[name]
+                statistical = float(e["stderr_statistical"]) * float(e.get("scale_factor") or 1.0)
+                shifts = [source_shift(e, s) for s in sources]
+                parts = {"statistical": statistical**2, **{lab: v * v for lab, v in zip(labels, shifts, strict=True)}}
+                total = sum(parts.values())
+                top = max(parts, key=parts.get)
+                unit_text = "" if unit == "–" else f" {unit}"
+                rows.append(
+                    [td(f"{label}, {symbol}"), td(esc(fmt(e["value"], 4)) + esc(unit_text), "num")]
+                    + [td(esc(f"{fmt(e['stderr'], 2)}{unit_text} ({_percent(e['stderr'], e['value'])})"), "num")]
+                    + [td(esc(_percent(statistical, e["value"])), "num")]
+                    + [td(esc(_percent(v, e["value"])), "num") for v in shifts]
+                    + [td(esc(f"{top} ({100 * parts[top] / total:.0f} % of u²)") if total else "·")]
+                )
+            caption = self.table_caption(
+                f"Uncertainty budget of the recommended coefficients, rig {esc(rig)} (variant {esc(variant)}, joint "
+                "fit; the summary's values): its standard uncertainty u and each source's 1σ part of it as a "
+                "percentage of the estimate. Statistical: the fit's (widened by the consistency scale factor S "
+                "where the trials disagree). Each rig value of Table 1 (m, L, A, V, ρ, ...): its stated 1σ "
+                "tolerance, propagated by refitting with the value 1σ larger (the sign: the way the coefficient "
+                "moves; one rig value moves every coefficient at once). Pivot: the estimated pivot's two error "
+                "axes in quadrature. u = √(sum of squares). The largest source is what to measure better first; "
+                "more trials shrink only the statistical part (What to film next)."
+            )
+            out.append(table_html(header, rows, caption=caption, table_id=f"budget-{rig}"))
+            out.append(self._correlation_table(rig, entries, joint))
+        return "".join(out) or "<p>No recommended joint fit: no uncertainty budget.</p>"
+
+    def _correlation_table(self, rig: str, entries: dict, joint: dict) -> str:
+        """The recommended coefficients' correlation matrix, every error in it (:func:`combined_correlation`)."""
+        statistical = joint.get("correlation")
+        if not statistical or len(entries) < 2:
+            return ""
+        names, corr = combined_correlation(entries, statistical)
+        if len(names) < 2:
+            return ""
+        symbols = [COEFFICIENTS[n][0] for n in names]
+        rows = [
+            [td(symbols[a])]
+            + [
+                td(esc(with_minus_sign(f"{corr[a, b]:.2f}")) if is_finite(corr[a, b]) else "·", "num")
+                for b in range(len(names))
+            ]
+            for a in range(len(names))
+        ]
+        caption = self.table_caption(
+            f"Correlation of the recommended coefficients, rig {esc(rig)}: the statistical covariance (the fit's, "
+            "widened by S) plus each rig value's shifts in the budget above, taken together (a volume read too large "
+            "moves the added mass and the drag at once). Use it, with the standard uncertainties, to carry the "
+            "coefficients into a vehicle model: near ±1, two coefficients are known as a combination, not apart. "
+            "The statistical part alone is in the fit's JSON (<code>correlation</code>)."
+        )
+        return table_html([""] + symbols, rows, caption=caption, table_id=f"correlation-{rig}")
