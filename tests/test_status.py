@@ -166,7 +166,7 @@ def test_a_trial_that_succeeded_carries_its_warnings_and_a_model_that_misses_it_
     # the fits' own words (pendulum.fit.checks), not a copy of them, are what the table looks for
     t = np.arange(600) / 60.0
     theta = np.radians(20) * np.cos(2 * np.pi * t / 2.078) + np.random.default_rng(1).normal(0, 5e-5, t.size)
-    record = SimpleNamespace(trial="apple", time_s=t, theta_rad=theta)
+    record = SimpleNamespace(trial="apple", time_s=t, theta_rad=theta, noise_rad=None)
     (said,) = misfit_warning(record, np.radians(0.2) * np.sin(2 * np.pi * t / 2.078))
     real = [("angles", "a.log", {"status": "ok"}), ("fit:quadratic", "q.log", {"status": "ok", "warnings": [said]})]
     assert misfit_trials(status_table([trial_status("apple", "a", "air", real)])) == ["apple"]

@@ -22,9 +22,9 @@ from pendulum.angles.swings import (
     crossing_period,
     detect_release,
     noise_level,
+    record_noise_floor_rad,
     release_by_hand,
     rest_start_index,
-    sample_noise_rad,
     swing_extrema,
     turn_at_knock,
 )
@@ -45,7 +45,7 @@ class AngleRecordInfo:
     n_samples: int
     n_flagged: int
     rest_from_s: float | None
-    noise_deg: float
+    noise_deg: float  # the record's noise σ (swings.record_noise_floor_rad), the one every stage and the report say
     # frames the tracker found held (the body with a hand) before the first free one: a release by hand in view,
     # its instant and hold angle from the free swing's start (swings.release_by_hand)
     held_frames: int = 0
@@ -141,7 +141,7 @@ def angle_record(
         n_flagged=int((table.flag != "ok").sum()),
         rest_from_s=rest_from,
         held_frames=int((held[:first_free] & (t[:first_free] < release.time_s)).sum()) if by_hand else 0,
-        noise_deg=math.degrees(sample_noise_rad(theta, t)),
+        noise_deg=math.degrees(record_noise_floor_rad(theta, t)),
         arm_radius_px=arm_radius_px,
         pivot_covariance_px2=pivot_covariance_px2,
     )

@@ -208,6 +208,24 @@ def sample_noise_rad(theta: np.ndarray, time_s: np.ndarray | None = None) -> flo
     return differences_sigma(time_s, theta, 5, 5)
 
 
+def record_noise_floor_rad(theta: np.ndarray, time_s: np.ndarray | None = None) -> float:
+    """The record's noise σ, the one figure the angles, the fits' warnings, the report and discovery all give:
+    :func:`sample_noise_rad` (fifth differences), and at least the quantisation step's uniform σ, step/√12, for a
+    record its tracker quantised (integer-pixel clicks: at least a quarter of its third differences exactly zero;
+    the step the median gap between its distinct values). A record of continuous values has no such step: the gap
+    between its distinct values is only how densely the samples fill the swing (a 60° swing of 600 samples: 0.2°,
+    whose /√12 is four times a tracker's 0.005°)."""
+    sigma = sample_noise_rad(theta, time_s)
+    values = np.asarray(theta, float)
+    values = values[np.isfinite(values)]
+    d3 = np.diff(values, 3)
+    if d3.size == 0 or np.mean(np.abs(d3) < 1e-12) < 0.25:
+        return sigma
+    steps = np.diff(np.unique(np.round(values, 12)))
+    quantum = float(np.median(steps)) if steps.size else 0.0
+    return max(sigma, quantum / math.sqrt(12))
+
+
 def differences_sigma(time_s: np.ndarray, values: np.ndarray, order: int, least: int) -> float:
     """Robust (MAD) σ of :func:`noise_differences` of ``order`` (finite); 0 with fewer than ``least``."""
     z = noise_differences(time_s, values, order)

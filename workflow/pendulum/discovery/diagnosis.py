@@ -14,7 +14,7 @@ import pandas as pd
 from scipy import stats
 from scipy.optimize import brentq, nnls
 
-from pendulum.angles.swings import sample_noise_rad, swing_centre_track
+from pendulum.angles.swings import record_noise_floor_rad, swing_centre_track
 from pendulum.fit.decay import half_cycles
 from pendulum.fit.group import GroupFit
 from pendulum.model.effects import TERMS
@@ -24,24 +24,11 @@ WHITENESS_MAX_LAGS = 20
 
 
 def noise_floor_rad(record, noise_deg: float | None = None) -> float:
-    """σ of the record's sample noise: the angles stage's ``noise_deg`` (fifth differences), else recomputed.
-
-    A record quantised by its tracker (integer-pixel clicks) can have most third differences
-    exactly zero; when at least a quarter are, the floor is at least the quantisation step's
-    uniform σ, step/√12 (the step: the median gap between the distinct values). A record of
-    continuous values has no such step: the gap between its distinct values is only how densely
-    the samples fill the swing (a 60° swing of 600 samples: 0.2°, whose /√12 is four times a
-    tracker's 0.005°).
-    """
-    sigma = math.radians(noise_deg) if noise_deg is not None else sample_noise_rad(record.theta_rad, record.time_s)
-    theta = np.asarray(record.theta_rad, float)
-    theta = theta[np.isfinite(theta)]
-    d3 = np.diff(theta, 3)
-    if d3.size == 0 or np.mean(np.abs(d3) < 1e-12) < 0.25:
-        return sigma
-    steps = np.diff(np.unique(np.round(theta, 12)))
-    quantum = float(np.median(steps)) if steps.size else 0.0
-    return max(sigma, quantum / math.sqrt(12))
+    """σ of the record's sample noise: the angles stage's ``noise_deg`` (Table 2's record noise), else the same
+    figure recomputed (:func:`~pendulum.angles.swings.record_noise_floor_rad`)."""
+    if noise_deg is not None:
+        return math.radians(noise_deg)
+    return record_noise_floor_rad(record.theta_rad, record.time_s)
 
 
 def whiteness(fit: GroupFit, spacing_s: float = WHITENESS_SPACING_S, max_lags: int = WHITENESS_MAX_LAGS) -> dict:

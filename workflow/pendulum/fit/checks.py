@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from pendulum.angles.swings import differences_sigma, noise_differences
+from pendulum.angles.swings import differences_sigma, noise_differences, record_noise_floor_rad
 from pendulum.fit.records import AngleRecord
 from pendulum.fit.uncertainty import lag1_autocorrelation
 from pendulum.model.rig import Rig
@@ -243,12 +243,16 @@ MISFIT_RATIO = 5.0  # residual RMS over the record's sample-to-sample noise abov
 
 
 def misfit_warning(record: AngleRecord, residual: np.ndarray) -> list[str]:
-    """A model that misses physics leaves smooth residuals far above the record's noise (third-difference σ).
+    """A model that misses physics leaves smooth residuals far above the record's noise: the angles stage's (Table
+    2's record noise; for a record that did not come from there, the same figure of its samples,
+    :func:`~pendulum.angles.swings.record_noise_floor_rad`).
 
     Its coefficients then absorb the missing effect and no interval covers that; say so. On tracked
     video with the right model the ratio is 1–3.
     """
-    floor = record_noise_rad(record.time_s, record.theta_rad)  # runs of consecutive samples: gaps span nothing
+    floor = record.noise_rad
+    if floor is None:
+        floor = record_noise_floor_rad(record.theta_rad, record.time_s)
     rms = float(np.sqrt(np.mean(residual**2)))
     if floor <= 0 or rms <= MISFIT_RATIO * floor:
         return []

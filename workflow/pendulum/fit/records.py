@@ -117,6 +117,7 @@ class AngleRecord:
     arm_radius_px: float | None = None
     pivot_covariance_px2: list | None = None
     vertical_rad: float = 0.0  # image angle of the vertical: θ_image = θ + vertical
+    noise_rad: float | None = None  # the angles stage's record noise (its noise_deg), where it came from there
     release_skip_s: float = 0.0  # the release transient left out (0: a record that starts mid-swing has none)
 
     @property
@@ -250,6 +251,7 @@ def load_record(
         arm_radius_px=info.get("arm_radius_px"),
         pivot_covariance_px2=info.get("pivot_covariance_px2"),
         vertical_rad=math.radians(info.get("vertical_deg") or 0.0),
+        noise_rad=math.radians(info["noise_deg"]) if info.get("noise_deg") is not None else None,
         release_skip_s=skip_s,
     )
 

@@ -237,9 +237,9 @@ def residual_check_table(document: dict, caption=_PLAIN) -> str:
             f"Residual check: structure is left when the RMS residual exceeds {fmt(th['misfit_ratio'], 2)}× the "
             "noise floor the angle records imply and the residuals (thinned to "
             f"{fmt(document['residual_check']['whiteness']['spacing_s'], 2)} s) are not white (Ljung–Box p < "
-            f"{fmt(th['whiteness_alpha'], 2)}). The pooled noise floor: each trial's record noise (the tracking "
-            "table's; at least the angle quantisation step/√12), pooled over the group's fitted samples (RMS "
-            "weighted by their number), so it can differ from a single trial's."
+            f"{fmt(th['whiteness_alpha'], 2)}). The pooled noise floor: each trial's record noise (Table 2's), "
+            "pooled over the group's fitted samples (RMS weighted by their number), so it can differ from a single "
+            "trial's."
         ),
         table_id=f"discovery-check-{document.get('group', '')}",
     )

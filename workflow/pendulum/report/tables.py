@@ -41,9 +41,9 @@ from pendulum.report.format import (
 
 NOISE_WORDS = "the record's noise"  # record_checks.misfit_warning's words for its noise
 FIT_NOISE_NOTE = (
-    "<p>“The record's noise” in these warnings: σ from the third differences of the fitted samples, on runs of "
-    "consecutive samples only (a flagged or dropped frame breaks a run), so it can differ slightly from the record "
-    "noise of Table 2 (the whole angle record).</p>"
+    "<p>“The record's noise” in these warnings is the record noise of Table 2 (σ from the fifth differences of the "
+    "whole angle record, at least the quantisation step's for a record its tracker quantised), as everywhere in "
+    "this report.</p>"
 )
 
 
@@ -288,14 +288,12 @@ class TableSections(ReportData):
         caption = self.table_caption(
             "RMS residual (fitted − measured angle over the fitted samples) per trial and model variant, in "
             "radians, degrees and metres of arc at the body (Lθ, here in mm). The record noise is the angle "
-            "noise of the tracked record (σ from the fifth differences of the whole angle record, as in the "
-            "tracking table): it sees the frame-to-frame noise, not the tracking's slow errors (a bias that "
-            "follows the body across the wall), so a variant that captures the physics leaves an RMS of one to a "
-            "few times it (the demo's ±5° swings: 3×), a variant that misses some far more. The fits' warnings "
-            "quote the noise of the fitted samples only (runs of consecutive samples, a "
-            "gap breaks a run) and discovery a noise floor pooled over a group's trials, so they differ slightly."
-            + self.dagger_note()
-            + self.short_note()
+            "noise of the tracked record (σ from the fifth differences of the whole angle record, at least the "
+            "quantisation step's for a record its tracker quantised): it sees the frame-to-frame noise, not the "
+            "tracking's slow errors (a bias that follows the body across the wall), so a variant that captures the "
+            "physics leaves an RMS of one to a few times it (the demo's ±5° swings: 3×), a variant that misses some "
+            "far more. It is the one noise figure of this report: the tracking table's, the fits' warnings' and "
+            "the model comparison's; discovery pools it over a group's trials." + self.dagger_note() + self.short_note()
         )
         return table_html(header, rows, caption=caption, table_id="table2", row_attrs=attrs, note=self.garbage_note())
 
