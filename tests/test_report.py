@@ -1003,7 +1003,8 @@ def test_the_correlation_of_the_recommended_coefficients_takes_every_error_in():
     [[0.04, 0.02], [0.02, 0.04]]; the volume moves them +0.3 and −0.4 → [[0.09, −0.12], [−0.12, 0.16]]; the pivot's
     one axis +0.1 and +0.1 → [[0.01, 0.01], [0.01, 0.01]]. Sum [[0.14, −0.09], [−0.09, 0.21]]: the correlation
     −0.09 / √(0.14 · 0.21) = −0.5249, where the statistical part alone says +0.5."""
-    from pendulum.report.budget import budget_sources, combined_correlation, source_shift
+    from pendulum.fit.summary import combined_covariance
+    from pendulum.report.budget import budget_sources, correlation_of, source_shift
 
     entries = {
         "added_mass_kg": {
@@ -1017,9 +1018,16 @@ def test_the_correlation_of_the_recommended_coefficients_takes_every_error_in():
         },
     }
     statistical = {"parameters": ["added_mass_kg", "drag_area_m2"], "matrix": [[1.0, 0.5], [0.5, 1.0]]}
-    names, corr = combined_correlation(entries, statistical)
-    assert names == ["added_mass_kg", "drag_area_m2"]
+    covariance = combined_covariance(entries, statistical)
+    assert sum(covariance["matrix"], []) == pytest.approx([0.14, -0.09, -0.09, 0.21], abs=1e-12)
+    names, corr = correlation_of(covariance, ["drag_area_m2", "added_mass_kg"])
+    assert names == ["added_mass_kg", "drag_area_m2"]  # the document's order
     assert corr[0, 1] == pytest.approx(-0.09 / (0.14 * 0.21) ** 0.5, abs=1e-12) and corr[0, 0] == pytest.approx(1)
+    # C_d = C_dA / A takes C_dA's statistical correlation, with its own budget
+    entries["drag_coefficient"] = {"stderr_statistical": 0.2 / 0.03, "error_budget": {"frontal_area_m2": 0.5}}
+    names = combined_covariance(entries, statistical)["parameters"]
+    assert names == ["added_mass_kg", "drag_area_m2", "drag_coefficient"]
+    del entries["drag_coefficient"]
     # the pivot's axes in one column, in quadrature; the sources in Table 1's order, the pivot last
     entries["added_mass_kg"]["error_budget"]["pivot_px (axis 2)"] = 0.2
     assert source_shift(entries["added_mass_kg"], "pivot_px") == pytest.approx((0.1**2 + 0.2**2) ** 0.5)
@@ -1036,11 +1044,11 @@ def test_the_uncertainty_budget_names_each_sources_share_and_the_largest(documen
     monkeypatch.setitem(entry, "stderr_statistical", 0.01)
     monkeypatch.setitem(entry, "stderr", (0.01**2 + 0.1**2 + 0.02**2) ** 0.5)
     monkeypatch.setitem(entry, "error_budget", {"displaced_volume_m3": -0.1, "mass_kg": 0.02})
-    monkeypatch.setitem(joint, "correlation", {"parameters": ["added_mass_kg"], "matrix": [[1.0]]})
+    monkeypatch.setitem(joint, "covariance", {"parameters": ["added_mass_kg"], "matrix": [[0.0105]]})
     text = re.sub(r"\s+", " ", html_module.unescape(re.sub(r"<[^>]+>", " ", documents.uncertainty_budget())))
     assert "variant linear" in text
     assert "added mass, m a 2.500 kg 0.10 kg (4.1 %) 0.4 % 0.8 % −4 % displaced volume V (95 % of u²)" in text, text
     assert "linear damping, c 0.1500 N·m·s 0.0051 N·m·s (3.4 %) 2.7 % · · statistical (100 % of u²)" in text
     assert "variant quadratic" not in text  # not the recommended variant
-    # the correlation: only of coefficients the fit's matrix holds, so here none to show
+    # the correlation: only of coefficients the fit's covariance holds, so here none to show
     assert "Correlation of the recommended coefficients" not in text

@@ -54,6 +54,10 @@ def test_fits_every_variant_and_the_demo_reproduces_the_paper_symptom(project):
     for name, true in TRUTH.items():
         low, high = friction["parameters"][name]["ci95"]
         assert low <= true <= high, (name, friction["parameters"][name])
+    # the covariance with every error in it: its diagonal is each coefficient's combined standard error squared
+    covariance = friction["covariance"]
+    for k, name in enumerate(covariance["parameters"]):
+        assert covariance["matrix"][k][k] == pytest.approx(friction["parameters"][name]["stderr"] ** 2, rel=1e-6)
     quadratic = json.loads((project / "results/fits/quadratic/joint/paper_rig.json").read_text())
     assert quadratic["consistency"]["verdict"] == "inconsistent"
     assert "drag_area_m2" in quadratic["consistency"]["inconsistent_parameters"]

@@ -23,14 +23,41 @@ from pendulum.model.rig import Rig
 
 
 def fit_document(fit: dict, *, variant: str, rig: dict, sources: list[str], settings: FitSettings) -> dict:
-    """A fit as written to results/fits: what was fitted, to what, with which settings, then the fit."""
-    return {
+    """A fit as written to results/fits: what was fitted, to what, with which settings, then the fit and the
+    covariance of its coefficients with every error in it (:func:`combined_covariance`)."""
+    document = {
         "variant": variant,
         "terms": fit["terms"],
         "rig": rig,
         "sources": list(sources),
         "settings": asdict(settings),
         **{k: v for k, v in fit.items() if k != "terms"},
+    }
+    if fit.get("parameters") and fit.get("correlation"):
+        document["covariance"] = combined_covariance(fit["parameters"], fit["correlation"])
+    return document
+
+
+def combined_covariance(parameters: dict, statistical: dict) -> dict:
+    """The coefficients' covariance with every error in it, what carrying them into a vehicle model needs:
+    Σ = D R D + Σ_i b_i b_iᵀ, R the fit's statistical correlation (``statistical``: its parameters and matrix),
+    D = diag(S σ_stat) (S the joint fit's consistency scale factor, 1 elsewhere) and b_i each systematic input's
+    1σ shifts of all the coefficients at once (their ``error_budget``: one rig value moves them together). C_d
+    takes C_dA's statistical correlation (C_d = C_dA / A); its diagonal is each coefficient's ``stderr``²."""
+    index = {n: k for k, n in enumerate(statistical["parameters"])}
+    source = {n: index.get("drag_area_m2" if n == "drag_coefficient" else n) for n in parameters}
+    names = [n for n in parameters if source[n] is not None]
+    r = np.asarray(statistical["matrix"], float)[np.ix_([source[n] for n in names], [source[n] for n in names])]
+    sigma = np.array([parameters[n]["stderr_statistical"] * (parameters[n].get("scale_factor") or 1.0) for n in names])
+    cov = r * np.outer(sigma, sigma)
+    for key in sorted({k for n in names for k in parameters[n].get("error_budget") or {}}):
+        shift = np.array([(parameters[n].get("error_budget") or {}).get(key, 0.0) for n in names], float)
+        cov += np.outer(shift, shift)
+    return {
+        "parameters": names,
+        "matrix": cov.tolist(),
+        "method": "statistical covariance (each σ widened by the joint fit's scale factor S) plus, for each "
+        "systematic input, the outer product of its 1σ shifts of the coefficients (error_budget)",
     }
 
 

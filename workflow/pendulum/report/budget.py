@@ -42,30 +42,14 @@ def source_shift(entry: dict, source: str) -> float:
     return float(budget.get(source, 0.0))
 
 
-def combined_correlation(entries: dict, statistical: dict) -> tuple[list[str], np.ndarray]:
-    """The coefficients' correlation with every error in it: the fit's statistical covariance (its correlation
-    ``statistical``: parameters and matrix, each σ widened by the joint fit's S) plus, for each systematic
-    input i, the outer product of its shifts b_i (one rig value moves every coefficient at once):
-    Σ = D R D + Σ_i b_i b_iᵀ, D = diag(S σ_stat). C_d takes C_dA's statistical correlation (C_d = C_dA / A)."""
-    index = {n: statistical["parameters"].index(n) for n in statistical["parameters"]}
-    source = {n: index.get("drag_area_m2" if n == "drag_coefficient" else n) for n in entries}
-    names = [n for n in entries if source[n] is not None]  # a coefficient the fit's matrix lacks: not shown
-    matrix = np.asarray(statistical["matrix"], float)
-    sigma = np.array(
-        [float(entries[n]["stderr_statistical"]) * float(entries[n].get("scale_factor") or 1.0) for n in names]
-    )
-    cov = np.zeros((len(names), len(names)))
-    for a, na in enumerate(names):
-        for b, nb in enumerate(names):
-            cov[a, b] = matrix[source[na], source[nb]] * sigma[a] * sigma[b]
-    inputs = sorted({k for n in names for k in (entries[n].get("error_budget") or {})})
-    for key in inputs:
-        shift = np.array([float((entries[n].get("error_budget") or {}).get(key, 0.0)) for n in names])
-        cov += np.outer(shift, shift)
+def correlation_of(covariance: dict, names: list[str]) -> tuple[list[str], np.ndarray]:
+    """The correlation of ``names`` (those the fit document's ``covariance`` holds, in its order) from it."""
+    index = {n: k for k, n in enumerate(covariance["parameters"])}
+    kept = [n for n in covariance["parameters"] if n in names]
+    cov = np.asarray(covariance["matrix"], float)[np.ix_([index[n] for n in kept], [index[n] for n in kept])]
     scale = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(scale, scale)
-    return names, corr
+        return kept, cov / np.outer(scale, scale)
 
 
 def _percent(value: float, estimate: float) -> str:
@@ -137,11 +121,12 @@ class BudgetSections(ReportData):
         return "".join(out) or "<p>No recommended joint fit: no uncertainty budget.</p>"
 
     def _correlation_table(self, rig: str, entries: dict, joint: dict) -> str:
-        """The recommended coefficients' correlation matrix, every error in it (:func:`combined_correlation`)."""
-        statistical = joint.get("correlation")
-        if not statistical or len(entries) < 2:
+        """The recommended coefficients' correlation matrix, every error in it (the fit document's ``covariance``,
+        :func:`pendulum.fit.summary.combined_covariance`)."""
+        covariance = joint.get("covariance")
+        if not covariance:
             return ""
-        names, corr = combined_correlation(entries, statistical)
+        names, corr = correlation_of(covariance, list(entries))
         if len(names) < 2:
             return ""
         symbols = [COEFFICIENTS[n][0] for n in names]
@@ -158,6 +143,7 @@ class BudgetSections(ReportData):
             "widened by S) plus each rig value's shifts in the budget above, taken together (a volume read too large "
             "moves the added mass and the drag at once). Use it, with the standard uncertainties, to carry the "
             "coefficients into a vehicle model: near ±1, two coefficients are known as a combination, not apart. "
-            "The statistical part alone is in the fit's JSON (<code>correlation</code>)."
+            "The covariance is in the fit's JSON (<code>covariance</code>; the statistical part alone: "
+            "<code>correlation</code>)."
         )
         return table_html([""] + symbols, rows, caption=caption, table_id=f"correlation-{rig}")
