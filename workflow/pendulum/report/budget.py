@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from pendulum.outcomes import MISFIT_MARK
 from pendulum.report.data import ReportData, is_ok, record_problems
 from pendulum.report.format import COEFFICIENTS, RIG_LABELS, esc, fmt, is_finite, table_html, td, with_minus_sign
 
@@ -106,9 +107,18 @@ class BudgetSections(ReportData):
                     + [td(esc(_percent(v, e["value"])), "num") for v in shifts]
                     + [td(esc(f"{top} ({100 * parts[top] / total:.0f} % of u²)") if total else "·")]
                 )
+            misfit = any(MISFIT_MARK in w for w in joint.get("warnings") or [])
             caption = self.table_caption(
-                f"Uncertainty budget of the recommended coefficients, rig {esc(rig)} (variant {esc(variant)}, joint "
-                "fit; the summary's values): its standard uncertainty u and each source's 1σ part of it as a "
+                "Uncertainty budget of the "
+                + ("coefficients of the best of the variants tried" if misfit else "recommended coefficients")
+                + f", rig {esc(rig)} (variant {esc(variant)}, joint fit; the summary's values"
+                + (
+                    '; <span class="warn">it misses its records by far more than their noise: its coefficients '
+                    "absorb what it misses, and no line of this budget holds that</span>"
+                    if misfit
+                    else ""
+                )
+                + "): its standard uncertainty u and each source's 1σ part of it as a "
                 "percentage of the estimate. Statistical: the fit's (widened by the consistency scale factor S "
                 "where the trials disagree). Each rig value of Table 1 (m, L, A, V, ρ, ...): its stated 1σ "
                 "tolerance, propagated by refitting with the value 1σ larger (the sign: the way the coefficient "
