@@ -245,9 +245,9 @@ def first_swing_rate(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, floa
     """The record's fastest swing as measured: (the largest |θ̇| of its first cycle, in rad/s; that cycle's period T).
 
     T runs from the record's first crossing of θ = 0 to its third (linear interpolation), else is twice the first
-    to the second; θ̇ at each sample up to there is the slope of a quintic through the samples within T/6 of it (at
-    least 9: θ = A sin ωt to O((ωt)⁷) there, 0.03 % on a sine; so wide that the largest of the slopes is not
-    the noise's). The largest is not where it crosses the vertical: drag slows a wide release's swing well before
+    to the second; θ̇ at the samples up to there (every few, then each about the fastest of those) is the slope of a
+    quintic through the samples within T/6 of it (at least 9: θ = A sin ωt to O((ωt)⁷) there, 0.03 % on a sine; so
+    wide that the largest of the slopes is not the noise's). The largest is not where it crosses the vertical: drag slows a wide release's swing well before
     the bottom (a 75° one by 40 %). None with fewer than two crossings (4 samples apart at least: noise flickering
     about one is one).
     """
@@ -266,13 +266,17 @@ def first_swing_rate(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, floa
     period = float(crossings[2] - crossings[0]) if at.size >= 3 else 2 * float(crossings[1] - crossings[0])
     if not period > 0:
         return None
-    rates = []
-    for here in t[: at[-1] + 2]:
-        near = np.flatnonzero(np.abs(t - here) <= period / 6)
+
+    def rate(i: int) -> float:
+        near = np.flatnonzero(np.abs(t - t[i]) <= period / 6)
         if near.size < 9:  # a few samples a cycle: the 9 nearest
-            near = np.sort(np.argsort(np.abs(t - here), kind="stable")[:9])
-        rates.append(abs(np.polynomial.polynomial.polyfit(t[near] - here, x[near], 5)[1]))
-    return float(max(rates)), period
+            near = np.sort(np.argsort(np.abs(t - t[i]), kind="stable")[:9])
+        return abs(np.polynomial.polynomial.polyfit(t[near] - t[i], x[near], 5)[1])
+
+    cycle = min(int(at[-1]) + 2, t.size)
+    step = max(1, cycle // 40)  # every step-th sample, then every one about the fastest of those
+    coarse = max(range(0, cycle, step), key=rate)
+    return float(max(rate(i) for i in range(max(0, coarse - step), min(cycle, coarse + step + 1)))), period
 
 
 @dataclass
