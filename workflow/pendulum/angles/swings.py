@@ -247,9 +247,9 @@ def first_swing_rate(time_s: np.ndarray, theta: np.ndarray) -> tuple[float, floa
     T runs from the record's first crossing of θ = 0 to its third (linear interpolation), else is twice the first
     to the second; θ̇ at the samples up to there (every few, then each about the fastest of those) is the slope of a
     quintic through the samples within T/6 of it (at least 9: θ = A sin ωt to O((ωt)⁷) there, 0.03 % on a sine; so
-    wide that the largest of the slopes is not the noise's). The largest is not where it crosses the vertical: drag slows a wide release's swing well before
-    the bottom (a 75° one by 40 %). None with fewer than two crossings (4 samples apart at least: noise flickering
-    about one is one).
+    wide that the largest of the slopes is not the noise's). The largest is not where it crosses the vertical: drag
+    slows a wide release's swing well before the bottom (a 75° one by 40 %). None with fewer than two crossings (4
+    samples apart at least: noise flickering about one is one).
     """
     t, x = np.asarray(time_s, float), np.asarray(theta, float)
     good = np.isfinite(t) & np.isfinite(x)
