@@ -100,7 +100,7 @@ def test_scattered_samples_give_no_noise_estimate_and_are_flagged():
     assert_unreliable(fit(angles), "runs of four consecutive samples")
     angles.loc[np.arange(len(angles)) < 60, "flag"] = "ok"  # two seconds of every frame are enough
     result = fit(angles)
-    assert result["reliable"] and result["trials"]["t"]["record_checks"]["noise_deg"] > 0
+    assert result["reliable"] and result["trials"]["t"]["record_checks"]["residual_noise_deg"] > 0
 
 
 def test_a_variable_frame_rate_record_is_not_flagged():

@@ -950,7 +950,7 @@ def test_the_header_says_what_no_interval_holds_a_point_mass_and_the_rod(documen
     # an ROV engineer read m_a as the vehicle's added mass and C_d as a steady-flow value (2026-12-07)
     assert "ma is the added mass as swung on this pendulum" in text and "not steady-flow values" in text
     # and the paper whose tables these follow is named (the same reviewer)
-    assert "Tables 1–3 follow the paper the method comes from, Identification of Hydrodynamics Coefficient" in text
+    assert "Tables 1–3 follow the layout of the paper this tool grew from, Identification of Hydrodynamics" in text
     monkeypatch.setitem(documents.rigs["rig"]["values"], "body_inertia_kg_m2", 2.0)
     text = html_module.unescape(re.sub(r"<[^>]+>", "", documents.header()))
     assert "the rod's (or string's) own mass" in text and "point mass" not in text
@@ -1025,9 +1025,15 @@ def test_the_correlation_of_the_recommended_coefficients_takes_every_error_in():
     assert corr[0, 1] == pytest.approx(-0.09 / (0.14 * 0.21) ** 0.5, abs=1e-12) and corr[0, 0] == pytest.approx(1)
     # C_d = C_dA / A takes C_dA's statistical correlation, with its own budget
     entries["drag_coefficient"] = {"stderr_statistical": 0.2 / 0.03, "error_budget": {"frontal_area_m2": 0.5}}
-    names = combined_covariance(entries, statistical)["parameters"]
+    names = combined_covariance(entries, statistical)["quantities"]
     assert names == ["added_mass_kg", "drag_area_m2", "drag_coefficient"]
     del entries["drag_coefficient"]
+    # with the rig values: the volume's stated 1σ of 2 (its shifts above per 1σ): var 4, cov(m_a, V) = 0.3 · 2, the
+    # correlation 0.6 / (√0.14 · 2) = 0.802; cov(C_dA, V) = −0.8, −0.8 / (√0.21 · 2) = −0.873; the pivot no rig value
+    with_rig = combined_covariance(entries, statistical, {"displaced_volume_m3": 2.0, "mass_kg": 0.1})
+    assert with_rig["quantities"] == ["added_mass_kg", "drag_area_m2", "displaced_volume_m3"]  # m moves nothing
+    names, corr = correlation_of(with_rig, ["added_mass_kg", "drag_area_m2", "displaced_volume_m3"])
+    assert corr[0, 2] == pytest.approx(0.6 / (0.14**0.5 * 2)) and corr[1, 2] == pytest.approx(-0.8 / (0.21**0.5 * 2))
     # the pivot's axes in one column, in quadrature; the sources in Table 1's order, the pivot last
     entries["added_mass_kg"]["error_budget"]["pivot_px (axis 2)"] = 0.2
     assert source_shift(entries["added_mass_kg"], "pivot_px") == pytest.approx((0.1**2 + 0.2**2) ** 0.5)

@@ -54,10 +54,16 @@ def test_fits_every_variant_and_the_demo_reproduces_the_paper_symptom(project):
     for name, true in TRUTH.items():
         low, high = friction["parameters"][name]["ci95"]
         assert low <= true <= high, (name, friction["parameters"][name])
-    # the covariance with every error in it: its diagonal is each coefficient's combined standard error squared
+    # the covariance with every error in it: its diagonal is each coefficient's combined standard error squared,
+    # and each rig value's stated tolerance squared (the demo's volume, 2e-5 m³, moves the added mass the other way)
     covariance = friction["covariance"]
-    for k, name in enumerate(covariance["parameters"]):
-        assert covariance["matrix"][k][k] == pytest.approx(friction["parameters"][name]["stderr"] ** 2, rel=1e-6)
+    tolerances = friction["uncertainty"]["systematic_inputs"]["rig_tolerances"]
+    assert "displaced_volume_m3" in covariance["rig_values"]
+    for k, name in enumerate(covariance["quantities"]):
+        sigma = friction["parameters"][name]["stderr"] if name in friction["parameters"] else tolerances[name]
+        assert covariance["matrix"][k][k] == pytest.approx(sigma**2, rel=1e-6), name
+    m_a, volume = (covariance["quantities"].index(n) for n in ("added_mass_kg", "displaced_volume_m3"))
+    assert covariance["matrix"][m_a][volume] < 0
     quadratic = json.loads((project / "results/fits/quadratic/joint/paper_rig.json").read_text())
     assert quadratic["consistency"]["verdict"] == "inconsistent"
     assert "drag_area_m2" in quadratic["consistency"]["inconsistent_parameters"]

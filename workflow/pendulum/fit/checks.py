@@ -80,16 +80,19 @@ def record_checks(record: AngleRecord, mask: np.ndarray, residual: np.ndarray, r
         )
     elif rough is not None and rough > MAX_ROUGHNESS_RATIO:
         problems.append(
-            f"{name}: the residuals jump: their sample-to-sample changes have {rough:.0f}× the RMS their noise "
-            f"({math.degrees(noise):.2g}°) gives (more than {MAX_ROUGHNESS_RATIO:g}×; residual RMS "
-            f"{math.degrees(rms):.3g}°): the track hops between objects or mis-tracks; check the track"
+            f"{name}: the residuals jump: their sample-to-sample changes have {rough:.0f}× the RMS their own noise "
+            f"({math.degrees(noise):.2g}°, from their third differences' median) gives (more than "
+            f"{MAX_ROUGHNESS_RATIO:g}×; residual RMS {math.degrees(rms):.3g}°): the track hops between objects or "
+            "mis-tracks; check the track"
         )
     return {
         "usable_fraction": fraction,
         "rest_offset_deg": offset_deg,
         "vertical_known": vertical_known,
-        "noise_deg": math.degrees(noise) if d3.size >= MIN_NOISE_TRIPLES else None,
-        "rms_over_noise": rms / noise if noise > 0 and d3.size >= MIN_NOISE_TRIPLES else None,
+        # the residual's own sample-to-sample noise (its third differences), which its jumps are judged against: not
+        # the record's noise (the angles stage's noise_deg, Table 2's), and named apart from it
+        "residual_noise_deg": math.degrees(noise) if d3.size >= MIN_NOISE_TRIPLES else None,
+        "rms_over_residual_noise": rms / noise if noise > 0 and d3.size >= MIN_NOISE_TRIPLES else None,
         "roughness_ratio": rough,
         "thresholds": {
             "min_usable_fraction": MIN_USABLE_FRACTION,

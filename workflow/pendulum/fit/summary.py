@@ -11,6 +11,7 @@ import pandas as pd
 from pendulum.angles.swings import swing_centre_track
 from pendulum.fit.decay import half_cycles, loss_at_amplitude
 from pendulum.fit.records import (
+    DEFAULT_RELATIVE_TOLERANCES,
     FitSettings,
     characteristic_length_m,
     keulegan_carpenter_number,
@@ -34,30 +35,46 @@ def fit_document(fit: dict, *, variant: str, rig: dict, sources: list[str], sett
         **{k: v for k, v in fit.items() if k != "terms"},
     }
     if fit.get("parameters") and fit.get("correlation"):
-        document["covariance"] = combined_covariance(fit["parameters"], fit["correlation"])
+        tolerances = fit.get("uncertainty", {}).get("systematic_inputs", {}).get("rig_tolerances")
+        document["covariance"] = combined_covariance(fit["parameters"], fit["correlation"], tolerances)
     return document
 
 
-def combined_covariance(parameters: dict, statistical: dict) -> dict:
-    """The coefficients' covariance with every error in it, what carrying them into a vehicle model needs:
-    Σ = D R D + Σ_i b_i b_iᵀ, R the fit's statistical correlation (``statistical``: its parameters and matrix),
-    D = diag(S σ_stat) (S the joint fit's consistency scale factor, 1 elsewhere) and b_i each systematic input's
-    1σ shifts of all the coefficients at once (their ``error_budget``: one rig value moves them together). C_d
-    takes C_dA's statistical correlation (C_d = C_dA / A); its diagonal is each coefficient's ``stderr``²."""
+def combined_covariance(parameters: dict, statistical: dict, tolerances: dict | None = None) -> dict:
+    """The coefficients' covariance with every error in it, and with the rig values they were fitted with, what
+    carrying them into a vehicle model needs (its m, V and ρ are the rig's: a volume read too large moves m_a the
+    other way, and the weight-to-inertia ratio is known far better than either).
+
+    Coefficients: Σ = D R D + Σ_i b_i b_iᵀ, R the fit's statistical correlation (``statistical``: its parameters
+    and matrix), D = diag(S σ_stat) (S the joint fit's consistency scale factor, 1 elsewhere) and b_i each
+    systematic input's 1σ shifts of all the coefficients at once (their ``error_budget``); C_d takes C_dA's
+    statistical correlation (C_d = C_dA / A); the diagonal is each coefficient's ``stderr``². Rig values (those of
+    ``tolerances``, their stated 1σ u_i, that move a coefficient): var u_i², cov(coefficient, value) = b_i u_i,
+    independent of each other. The estimated pivot's inputs enter the coefficients' block only. A coefficient at
+    its bound is in it as fitted: its interval is one-sided (its entry's ``at_bound``)."""
     index = {n: k for k, n in enumerate(statistical["parameters"])}
     source = {n: index.get("drag_area_m2" if n == "drag_coefficient" else n) for n in parameters}
     names = [n for n in parameters if source[n] is not None]
     r = np.asarray(statistical["matrix"], float)[np.ix_([source[n] for n in names], [source[n] for n in names])]
     sigma = np.array([parameters[n]["stderr_statistical"] * (parameters[n].get("scale_factor") or 1.0) for n in names])
-    cov = r * np.outer(sigma, sigma)
-    for key in sorted({k for n in names for k in parameters[n].get("error_budget") or {}}):
-        shift = np.array([(parameters[n].get("error_budget") or {}).get(key, 0.0) for n in names], float)
-        cov += np.outer(shift, shift)
+    budgets = [parameters[n].get("error_budget") or {} for n in names]
+    keys = sorted({k for b in budgets for k in b})
+    shifts = {k: np.array([b.get(k, 0.0) for b in budgets], float) for k in keys}
+    order = [*DEFAULT_RELATIVE_TOLERANCES, *keys]  # Table 1's order: m, L, A, V, ...
+    rig = sorted((k for k in keys if (tolerances or {}).get(k) and shifts[k].any()), key=order.index)
+    n = len(names)
+    cov = np.zeros((n + len(rig), n + len(rig)))
+    cov[:n, :n] = r * np.outer(sigma, sigma) + sum((np.outer(v, v) for v in shifts.values()), np.zeros((n, n)))
+    for i, key in enumerate(rig, start=n):
+        cov[i, i] = float(tolerances[key]) ** 2
+        cov[:n, i] = cov[i, :n] = shifts[key] * float(tolerances[key])
     return {
-        "parameters": names,
+        "quantities": names + rig,
+        "rig_values": rig,
         "matrix": cov.tolist(),
-        "method": "statistical covariance (each σ widened by the joint fit's scale factor S) plus, for each "
-        "systematic input, the outer product of its 1σ shifts of the coefficients (error_budget)",
+        "method": "coefficients: statistical covariance (each σ widened by the joint fit's scale factor S) plus, for "
+        "each systematic input, the outer product of its 1σ shifts of the coefficients (error_budget); rig values: "
+        "their stated 1σ squared, with each coefficient its 1σ shift times that 1σ",
     }
 
 

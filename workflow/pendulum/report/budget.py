@@ -44,9 +44,11 @@ def source_shift(entry: dict, source: str) -> float:
 
 
 def correlation_of(covariance: dict, names: list[str]) -> tuple[list[str], np.ndarray]:
-    """The correlation of ``names`` (those the fit document's ``covariance`` holds, in its order) from it."""
-    index = {n: k for k, n in enumerate(covariance["parameters"])}
-    kept = [n for n in covariance["parameters"] if n in names]
+    """The correlation of ``names`` (those the fit document's ``covariance`` holds, in its order: coefficients, then
+    rig values) from it."""
+    quantities = covariance.get("quantities") or covariance["parameters"]
+    index = {n: k for k, n in enumerate(quantities)}
+    kept = [n for n in quantities if n in names]
     cov = np.asarray(covariance["matrix"], float)[np.ix_([index[n] for n in kept], [index[n] for n in kept])]
     scale = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -104,7 +106,10 @@ class BudgetSections(ReportData):
                     [td(f"{label}, {symbol}"), td(esc(fmt(e["value"], 4)) + esc(unit_text), "num")]
                     + [td(esc(f"{fmt(e['stderr'], 2)}{unit_text} ({_percent(e['stderr'], e['value'])})"), "num")]
                     + [td(esc(_percent(statistical, e["value"])), "num")]
-                    + [td(esc(_percent(v, e["value"])), "num") for v in shifts]
+                    + [
+                        td(esc(("±" if source == PIVOT and v else "") + _percent(v, e["value"])), "num")
+                        for source, v in zip(sources, shifts, strict=True)
+                    ]
                     + [td(esc(f"{top} ({100 * parts[top] / total:.0f} % of u²)") if total else "·")]
                 )
             misfit = any(MISFIT_MARK in w for w in joint.get("warnings") or [])
@@ -123,37 +128,47 @@ class BudgetSections(ReportData):
                 "where the trials disagree). Each rig value of Table 1 (m, L, A, V, ρ, ...): its stated 1σ "
                 "tolerance, propagated by refitting with the value 1σ larger (the sign: the way the coefficient "
                 "moves; one rig value moves every coefficient at once). Pivot: the estimated pivot's two error "
-                "axes in quadrature. u = √(sum of squares). The largest source is what to measure better first; "
-                "more trials shrink only the statistical part (What to film next)."
+                "axes in quadrature (±: no one sign). u = √(sum of squares). The largest source is what to measure "
+                "better first; more trials shrink only the statistical part (What to film next). u holds the "
+                "statistics and the stated tolerances only, not the equation's own form (the header): nor a centre "
+                "of buoyancy off the body's centre (the equation puts both at L: on the paper's rig a centimetre "
+                "changes the restoring torque by 3 % and m<sub>a</sub> by about 8 %)."
             )
             out.append(table_html(header, rows, caption=caption, table_id=f"budget-{rig}"))
             out.append(self._correlation_table(rig, entries, joint))
         return "".join(out) or "<p>No recommended joint fit: no uncertainty budget.</p>"
 
     def _correlation_table(self, rig: str, entries: dict, joint: dict) -> str:
-        """The recommended coefficients' correlation matrix, every error in it (the fit document's ``covariance``,
-        :func:`pendulum.fit.summary.combined_covariance`)."""
+        """The recommended coefficients' correlation with each other and with the rig values, every error in it (the
+        fit document's ``covariance``, :func:`pendulum.fit.summary.combined_covariance`)."""
         covariance = joint.get("covariance")
         if not covariance:
             return ""
-        names, corr = correlation_of(covariance, list(entries))
-        if len(names) < 2:
+        values = list(covariance.get("rig_values") or [])
+        names, corr = correlation_of(covariance, list(entries) + values)
+        coefficients = [n for n in names if n in entries]
+        if len(coefficients) < 2:
             return ""
-        symbols = [COEFFICIENTS[n][0] for n in names]
+        head = [COEFFICIENTS[n][0] if n in COEFFICIENTS else SYMBOLS.get(n, esc(n)) for n in names]
         rows = [
-            [td(symbols[a])]
+            [td(head[a])]
             + [
-                td(esc(with_minus_sign(f"{corr[a, b]:.2f}")) if is_finite(corr[a, b]) else "·", "num")
+                td(esc(with_minus_sign(f"{corr[a, b]:.3f}")) if is_finite(corr[a, b]) else "·", "num")
                 for b in range(len(names))
             ]
-            for a in range(len(names))
+            for a in range(len(coefficients))
         ]
         caption = self.table_caption(
-            f"Correlation of the recommended coefficients, rig {esc(rig)}: the statistical covariance (the fit's, "
-            "widened by S) plus each rig value's shifts in the budget above, taken together (a volume read too large "
-            "moves the added mass and the drag at once). Use it, with the standard uncertainties, to carry the "
-            "coefficients into a vehicle model: near ±1, two coefficients are known as a combination, not apart. "
-            "The covariance is in the fit's JSON (<code>covariance</code>; the statistical part alone: "
-            "<code>correlation</code>)."
+            f"Correlation of the recommended coefficients with each other and with the rig values they were fitted "
+            f"with, rig {esc(rig)} (columns after the coefficients: Table 1's m, L, A, V, ρ ...), every error in it: "
+            "the statistical covariance (widened by S) plus each rig value's shifts in the budget above, taken "
+            "together. What carrying the coefficients into a vehicle model needs, with the standard uncertainties, "
+            "where the model uses the same rig values: a volume read too large lowers m<sub>a</sub> and raises the "
+            "buoyancy at once, so a ratio such as (m − ρV)/(m + m<sub>a</sub>) is known far better than its parts "
+            "taken apart. Correlations near ±1 here come from a rig value all the coefficients share (one scale, "
+            "through the inertia), not from the records: whether the records tell two terms apart is their "
+            "statistical correlation (the model comparison's rule). C<sub>d</sub> carries A's tolerance, "
+            "C<sub>d</sub>A does not: a model using this A takes C<sub>d</sub>A. The covariance is in the fit's "
+            "JSON (<code>covariance</code>; the statistical correlation alone: <code>correlation</code>)."
         )
-        return table_html([""] + symbols, rows, caption=caption, table_id=f"correlation-{rig}")
+        return table_html([""] + head, rows, caption=caption, table_id=f"correlation-{rig}")

@@ -306,11 +306,10 @@ class CheckSections(ReportData):
             '<p class="subtitle">Equation of motion: (I<sub>p</sub> + m<sub>a</sub>L²) θ̈ = −(mg − B) L sin θ '
             "− ½ρC<sub>d</sub>AL³ θ̇|θ̇| − c θ̇ − τ<sub>f</sub> sgn θ̇; each variant keeps a subset of the "
             "damping terms (quadratic drag alone is the paper's equation (4), written there for the arc s = Lθ). "
-            "Tables 1–3 follow the paper the method comes from, <i>Identification of Hydrodynamics Coefficient of "
-            "Underwater Vehicle Using Free Decay Pendulum Method</i>; their values are these trials' fits, not the "
-            "paper's. Intervals are 95 % (statistical and rig-value systematic errors combined)."
-            + self._model_form_note()
-            + "</p></header>"
+            "Tables 1–3 follow the layout of the paper this tool grew from, <i>Identification of Hydrodynamics "
+            "Coefficient of Underwater Vehicle Using Free Decay Pendulum Method</i>: Table 1 the rig values as "
+            "configured, Tables 2–3 these trials' fits, not the paper's. Intervals are 95 % (statistical and "
+            "rig-value systematic errors combined)." + self._model_form_note() + "</p></header>"
         )
 
     def _model_form_note(self) -> str:

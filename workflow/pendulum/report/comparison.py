@@ -416,7 +416,8 @@ class ComparisonSections(ReportData):
             ]
             caption = self.table_caption(
                 f"Model comparison, rig {esc(rig)}: per variant the joint fit's RMS residual, the per-trial RMS over "
-                "the record's noise, the lag-1 autocorrelation of the per-trial residuals, ΔAIC and ΔBIC against "
+                "the record's noise (Table 2's; the RMS of each trial's own fit, the median over the trials), the "
+                "lag-1 autocorrelation of the per-trial residuals, ΔAIC and ΔBIC against "
                 f"the best variant ({esc(best['basis']) if best else 'no fits'}), and the consistency of the per-trial "
                 "estimates. Caveat: AIC and BIC treat the samples as independent; the residuals are autocorrelated "
                 "(lag-1 up to the value shown), so the effective number of samples is smaller and the differences "

@@ -389,12 +389,14 @@ class FigureSections(ReportData):
                 + ". On these log axes Coulomb friction "
                 "gives a constant loss, linear damping a slope 1 and quadratic drag a slope 2: a variant that lacks a "
                 "term misses one end of the curve. Right: the local drag coefficient of each half cycle, charging all "
-                "of its loss to quadratic drag, against its KC number"
+                "of its loss to quadratic drag, against its KC number (its speed from the energy at the half "
+                "cycle's mean amplitude and the variant's fitted inertia)"
                 + (f"; band: the {esc(variant)} joint C<sub>d</sub> (95 %)" if cd else "")
                 + ". Where the local value climbs at small KC, the loss there is not quadratic drag. Half cycles run "
                 "from one turning point of the fitted record to the next: the release swing, before the first "
                 "turning point, is not among them, so the largest KC of the coefficients table (the first fitted "
-                "swing's) lies beyond the right-hand panel."
+                "swing's, measured on the record) lies beyond the right-hand panel: a wide release's KC describes "
+                "its first swing, and every later half cycle runs at a smaller one."
             )
             out.append(figure_html(png, caption, alt=f"extinction curve and local drag coefficient, rig {rig}"))
         return "".join(out) or "<p>No half-cycle tables to show.</p>"

@@ -288,7 +288,8 @@ class TableSections(ReportData):
         caption = self.table_caption(
             "RMS residual (fitted − measured angle over the fitted samples) per trial and model variant, in "
             "radians, degrees and metres of arc at the body (Lθ, here in mm). The record noise is the angle "
-            "noise of the tracked record (σ from the fifth differences of the whole angle record, at least the "
+            "noise of the tracked record (σ from the fifth differences of the whole angle record as tracked, its "
+            "hold before the release included, at least the "
             "quantisation step's for a record its tracker quantised): it sees the frame-to-frame noise, not the "
             "tracking's slow errors (a bias that follows the body across the wall), so a variant that captures the "
             "physics leaves an RMS of one to a few times it (the demo's ±5° swings: 3×), a variant that misses some "
@@ -466,8 +467,10 @@ class TableSections(ReportData):
             "estimate and 95 % interval per trial and variant, and the joint fit of each rig (shared "
             "coefficients, statistical part widened by the consistency scale factor S). KC: Keulegan–Carpenter "
             "number U<sub>max</sub>T/D of the trial's first fitted swing as its record shows it (U<sub>max</sub> = "
-            "L|θ̇|, its largest over that cycle, T the cycle's period, longer than the small-swing one for a wide "
-            "release): the flow the trial made, one per trial whatever a variant fits (given on a variant's "
+            "L × the largest |θ̇| from the fit's start to the end of the record's first whole cycle, T that cycle's "
+            "period, from its first crossing of the vertical to its third, longer than the small-swing one for a "
+            "wide release; the extinction figure's half cycles give the smaller KC of the later swings): the flow "
+            "the trial made, one per trial whatever a variant fits (given on a variant's "
             "row only where the record shows too little of the swing and it comes from that variant's fitted "
             "curve); joint: the range. "
             + ("Rows ‘truth’: the synthetic trials' true values. " if self.truth else "")
