@@ -1032,6 +1032,7 @@ def test_the_correlation_of_the_recommended_coefficients_takes_every_error_in():
     # correlation 0.6 / (√0.14 · 2) = 0.802; cov(C_dA, V) = −0.8, −0.8 / (√0.21 · 2) = −0.873; the pivot no rig value
     with_rig = combined_covariance(entries, statistical, {"displaced_volume_m3": 2.0, "mass_kg": 0.1})
     assert with_rig["quantities"] == ["added_mass_kg", "drag_area_m2", "displaced_volume_m3"]  # m moves nothing
+    assert with_rig["at_bound"] == []
     names, corr = correlation_of(with_rig, ["added_mass_kg", "drag_area_m2", "displaced_volume_m3"])
     assert corr[0, 2] == pytest.approx(0.6 / (0.14**0.5 * 2)) and corr[1, 2] == pytest.approx(-0.8 / (0.21**0.5 * 2))
     # the pivot's axes in one column, in quadrature; the sources in Table 1's order, the pivot last

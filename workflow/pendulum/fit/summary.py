@@ -51,7 +51,7 @@ def combined_covariance(parameters: dict, statistical: dict, tolerances: dict | 
     statistical correlation (C_d = C_dA / A); the diagonal is each coefficient's ``stderr``². Rig values (those of
     ``tolerances``, their stated 1σ u_i, that move a coefficient): var u_i², cov(coefficient, value) = b_i u_i,
     independent of each other. The estimated pivot's inputs enter the coefficients' block only. A coefficient at
-    its bound is in it as fitted: its interval is one-sided (its entry's ``at_bound``)."""
+    its bound is in it as fitted, and listed under ``at_bound``: its interval is one-sided, no normal law's."""
     index = {n: k for k, n in enumerate(statistical["parameters"])}
     source = {n: index.get("drag_area_m2" if n == "drag_coefficient" else n) for n in parameters}
     names = [n for n in parameters if source[n] is not None]
@@ -71,6 +71,7 @@ def combined_covariance(parameters: dict, statistical: dict, tolerances: dict | 
     return {
         "quantities": names + rig,
         "rig_values": rig,
+        "at_bound": [n for n in names if parameters[n].get("at_bound")],  # their intervals are one-sided
         "matrix": cov.tolist(),
         "method": "coefficients: statistical covariance (each σ widened by the joint fit's scale factor S) plus, for "
         "each systematic input, the outer product of its 1σ shifts of the coefficients (error_budget); rig values: "

@@ -477,7 +477,10 @@ class TableSections(ReportData):
             + "“at bound” marks a coefficient that ended on its lower bound: the data prefer an unphysical "
             "value, and only the one-sided 95 % upper limit is a result. Per-trial intervals of the damping "
             "terms are somewhat optimistic on tracked video (about 1.3× narrow in the coverage study); prefer "
-            "the joint rows." + self.dagger_note()
+            "the joint rows. Every interval holds the rig values' systematic part, which moves all the trials "
+            "together (where it dominates, as a volume's tolerance does for m<sub>a</sub>, the trials' intervals "
+            "look alike): to compare trials, read the consistency figure's statistical bars; the sources are in "
+            "the uncertainty budget." + self.dagger_note()
         )
         out = table_html(header, rows, caption=caption, table_id="table3", row_attrs=attrs)
         if notes:
