@@ -204,9 +204,7 @@ def test_discovery_runs_to_the_end_on_the_real_wooden_bob(lower_kg):
     table, info, rig = air_record("wooden_bob", 0.03805, 0.015)
     settings = FitSettings(added_mass_lower_kg=lower_kg)
     record = load_record(table, "wooden_bob", rig, settings, tolerances={}, angle_info=info.to_dict())
-    discovery = Discovery(
-        [record], ["air_wooden"], ["quadratic_drag"], CANDIDATES, settings, noise_deg=[info.noise_deg]
-    )
+    discovery = Discovery([record], ["air_wooden"], ["quadratic_drag"], CANDIDATES, settings)
     doc = discovery.run()
     residuals, extinction = discovery.tables(doc)
     assert len(residuals) >= record.n_samples and len(extinction) > 10 and doc["verdict"]
@@ -228,14 +226,12 @@ def test_noise_floor_of_a_continuous_record_is_its_noise_not_its_sampling_densit
     grid (a tracker's integer clicks), the floor is the rounding noise, 0.05°/√12, within 10 %: the step
     itself where most third differences are zero (small swings), the fifth differences elsewhere (0.0140°
     at 60°)."""
-    from types import SimpleNamespace
-
-    from pendulum.discovery.diagnosis import noise_floor_rad
+    from pendulum.angles.swings import record_noise_floor_rad  # the angles stage's: every stage's noise floor
 
     rng = np.random.default_rng(int(release_deg))
     t = np.arange(600) / 30.0
     theta = np.radians(release_deg) * np.exp(-t / 8.0) * np.cos(2 * np.pi * t / 1.6)
-    noisy = SimpleNamespace(time_s=t, theta_rad=theta + rng.normal(0.0, np.radians(0.005), t.size))
-    assert math.degrees(noise_floor_rad(noisy)) == pytest.approx(0.005, rel=0.10)
-    clicked = SimpleNamespace(time_s=t, theta_rad=np.round(theta / np.radians(0.05)) * np.radians(0.05))
-    assert math.degrees(noise_floor_rad(clicked)) >= 0.9 * 0.05 / math.sqrt(12)
+    noisy = theta + rng.normal(0.0, np.radians(0.005), t.size)
+    assert math.degrees(record_noise_floor_rad(noisy, t)) == pytest.approx(0.005, rel=0.10)
+    clicked = np.round(theta / np.radians(0.05)) * np.radians(0.05)
+    assert math.degrees(record_noise_floor_rad(clicked, t)) >= 0.9 * 0.05 / math.sqrt(12)

@@ -531,7 +531,7 @@ def test_the_apples_unexplained_residual_is_placed_by_harmonic_of_its_swing(appl
     settings = FitSettings()
     record = load_record(table, "apple", APPLE_IN_AIR, settings, tolerances={}, angle_info=info.to_dict())
     candidates = ["linear_damping", "coulomb_friction", "history_force"]
-    discovery = Discovery([record], ["apple"], ["quadratic_drag"], candidates, settings, noise_deg=[info.noise_deg])
+    discovery = Discovery([record], ["apple"], ["quadratic_drag"], candidates, settings)  # its noise: the record's
     document = discovery.run()
     pattern = document["residual_pattern"]
     assert document["unexplained"] and document["named_effects"] == [], document["verdict"]

@@ -27,8 +27,7 @@ def work():
         sm.params.candidates,
         settings=settings,
         options=DiscoveryOptions(alpha=sm.params.alpha),
-        baseline_fits=group.starts,  # reused: start values, nuisance, kept samples
-        noise_deg=[group.angle_info[n].get("noise_deg") for n in names],
+        baseline_fits=group.starts,  # reused: start values, nuisance, kept samples; the records carry their noise
     )
     document = run.run()
     residuals, extinction = run.tables(document)

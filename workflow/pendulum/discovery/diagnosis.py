@@ -14,21 +14,13 @@ import pandas as pd
 from scipy import stats
 from scipy.optimize import brentq, nnls
 
-from pendulum.angles.swings import record_noise_floor_rad, swing_centre_track
+from pendulum.angles.swings import swing_centre_track
 from pendulum.fit.decay import half_cycles
 from pendulum.fit.group import GroupFit
 from pendulum.model.effects import TERMS
 
 WHITENESS_SPACING_S = 0.2  # residuals thinned to this spacing before the whiteness test (tracker noise decorrelates)
 WHITENESS_MAX_LAGS = 20
-
-
-def noise_floor_rad(record, noise_deg: float | None = None) -> float:
-    """σ of the record's sample noise: the angles stage's ``noise_deg`` (Table 2's record noise), else the same
-    figure recomputed (:func:`~pendulum.angles.swings.record_noise_floor_rad`)."""
-    if noise_deg is not None:
-        return math.radians(noise_deg)
-    return record_noise_floor_rad(record.theta_rad, record.time_s)
 
 
 def whiteness(fit: GroupFit, spacing_s: float = WHITENESS_SPACING_S, max_lags: int = WHITENESS_MAX_LAGS) -> dict:

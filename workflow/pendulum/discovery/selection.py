@@ -70,7 +70,7 @@ from pendulum.fit.group import (
     start_values,
 )
 from pendulum.fit.output_error import fit_trials
-from pendulum.fit.records import AngleRecord, FitSettings
+from pendulum.fit.records import AngleRecord, FitSettings, record_noise_rad
 
 
 def _fit_warning(document: dict, warning: str) -> str:
@@ -100,8 +100,8 @@ class Discovery:
 
     ``baseline_fits``: the baseline variant's fit documents (joint fits of the group's rigs, then per-trial
     ones), reused as start values, per-trial θ0, θ̇0, offset and the samples they kept; None: fitted here
-    (one joint fit per rig, as the workflow does). ``noise_deg``: each record's noise as the angles stage
-    measured it (None: recomputed).
+    (one joint fit per rig, as the workflow does). Each record's noise floor is its noise as the angles stage
+    measured it (:func:`pendulum.fit.records.record_noise_rad`).
     """
 
     def __init__(
@@ -113,13 +113,11 @@ class Discovery:
         settings: FitSettings | None = None,
         options: DiscoveryOptions | None = None,
         baseline_fits: list[dict] | None = None,
-        noise_deg: list | None = None,
     ):
         self.records, self.rigs = list(records), list(rigs)
         self.settings, self.options = settings or FitSettings(), options or DiscoveryOptions()
         self.baseline_terms = ordered(baseline_terms)
-        noise_deg = noise_deg or [None] * len(records)
-        self.floors = np.array([diagnosis.noise_floor_rad(r, noise_deg[k]) for k, r in enumerate(records)])
+        self.floors = np.array([record_noise_rad(r) for r in records])
         if baseline_fits is None:
             baseline_fits = [
                 fit_trials(

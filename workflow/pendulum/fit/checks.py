@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from pendulum.angles.swings import differences_sigma, noise_differences, record_noise_floor_rad
-from pendulum.fit.records import AngleRecord
+from pendulum.angles.swings import noise_differences
+from pendulum.fit.records import AngleRecord, record_noise_rad
 from pendulum.fit.uncertainty import lag1_autocorrelation
 from pendulum.model.rig import Rig
 
@@ -21,14 +21,6 @@ MIN_USABLE_FRACTION = 0.5  # of the samples after the release transient: less, a
 MAX_REST_OFFSET_DEG = 2.0  # with the vertical given or estimated from the swings the rest angle is ≈ 0
 MAX_ROUGHNESS_RATIO = 5.0  # RMS over robust σ of the residual's third differences; Gaussian noise: ≈ 1
 MIN_NOISE_TRIPLES = 20  # fewer runs of four consecutive samples: the noise cannot be told from jumps
-
-
-def record_noise_rad(time_s: np.ndarray, theta_rad: np.ndarray) -> float:
-    """The record's sample noise σ: robust (MAD) σ of :func:`noise_differences`.
-
-    0 when fewer than :data:`MIN_NOISE_TRIPLES` differences exist.
-    """
-    return differences_sigma(time_s, theta_rad, 3, MIN_NOISE_TRIPLES)
 
 
 def record_checks(record: AngleRecord, mask: np.ndarray, residual: np.ndarray, rest_offset_rad: float) -> dict:
@@ -253,9 +245,7 @@ def misfit_warning(record: AngleRecord, residual: np.ndarray) -> list[str]:
     Its coefficients then absorb the missing effect and no interval covers that; say so. On tracked
     video with the right model the ratio is 1–3.
     """
-    floor = record.noise_rad
-    if floor is None:
-        floor = record_noise_floor_rad(record.theta_rad, record.time_s)
+    floor = record_noise_rad(record)
     rms = float(np.sqrt(np.mean(residual**2)))
     if floor <= 0 or rms <= MISFIT_RATIO * floor:
         return []

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from pendulum.angles.record import InputError
-from pendulum.angles.swings import first_swing_rate, swing_extrema
+from pendulum.angles.swings import first_swing_rate, record_noise_floor_rad, swing_extrema
 from pendulum.model.rig import Rig, tolerances_alike
 
 
@@ -137,6 +137,14 @@ class AngleRecord:
             "period_s": rate[1],
             "keulegan_carpenter_number": speed * rate[1] / self.characteristic_length_m,
         }
+
+
+def record_noise_rad(record: AngleRecord) -> float:
+    """The record's sample noise σ as every stage says it: the angles stage's (``noise_rad``: Table 2's record noise),
+    else the same figure from its samples (:func:`~pendulum.angles.swings.record_noise_floor_rad`)."""
+    if record.noise_rad is not None:
+        return record.noise_rad
+    return record_noise_floor_rad(record.theta_rad, record.time_s)
 
 
 def keulegan_carpenter_number(fit: dict):
