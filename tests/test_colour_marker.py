@@ -200,6 +200,30 @@ def test_a_dot_slow_about_its_turning_points_is_no_repeated_frame_and_a_repeat_i
     assert (track.flag[repeated] == "duplicate").all()
 
 
+@pytest.mark.slow
+def test_a_short_periods_turning_point_is_no_repeated_frame_and_a_repeat_mid_swing_is(tmp_path, monkeypatch):
+    """A clock of 0.6 s filmed at 30 fps (18 frames a cycle): its dot turns where a parabola through the last six
+    positions still expects a step of 2 px, and the turning point falls on a frame, whose dot stands where it stood
+    the frame before; each such frame (every half period: 12 in 4 s) was flagged ``duplicate`` until 2026-12-07 (a
+    helper's clock at 30 fps: 2 of 1,844 frames). A frame the camera repeats mid-swing (7 px a frame) still is."""
+    from dataclasses import replace
+
+    from pendulum.tracking.method import track_trial
+    from pendulum.tracking.settings import TrackerSettings
+
+    module = sys.modules[__name__]
+    monkeypatch.setattr(module, "FPS", 30.0)
+    monkeypatch.setattr(module, "CLOCKS", ((200.0, 3.0, 0.6, 0.0), CLOCKS[1]))
+    path = tmp_path / "short_period.mp4"
+    truth = _clip(path, n_frames=120, repeat=[45])  # 45: five half periods, mid-swing
+    steps = np.abs(np.diff(np.asarray(truth[0])[:, 0]))
+    assert steps[44] > 7.0 and (steps[[4, 13, 22, 31, 40]] < 0.01).all()  # mid-swing; turning points on frames
+    settings = replace(TrackerSettings(), polarity="auto", marker_radius_px=None, start_px=truth[0][0])
+    track = track_trial(path, settings)
+    assert track.frame[track.flag == "duplicate"].tolist() == [45]
+    assert (track.flag == "ok").sum() >= 117, track.flag.value_counts().to_dict()
+
+
 def test_the_dot_is_read_from_its_colour_against_the_brass_around_it(tmp_path):
     """The view's line runs from the brass's colour to the dot's, and puts the dot 150 grey levels over its
     surround whatever its shading; where nothing at start_px differs in colour from around it there is no colour

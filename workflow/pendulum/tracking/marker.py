@@ -362,15 +362,15 @@ def track_video(
                 cap = max(6.0 * r, 1.5 * max_step + 2.0 * r)
                 speed = min(step + settings.max_lost_step_radii * (gap - 1) * r, cap)
             if window is not None and window[0] == index - 1 and len(history) >= 3 and history[-3][0] == f1 - 2:
-                # The marker should have moved (constant-acceleration step ≥ 0.5 px), yet its window
-                # did not change: a repeated frame (re-encoded, so not bit-identical), whose content
-                # belongs to the previous time stamp.
+                # The marker should have moved (a constant-acceleration step ≥ 0.5 px, and two frames or more
+                # from its turning point: a short period's turn comes sooner than a parabola through six frames
+                # says), yet its window did not change: a repeated frame (re-encoded), its content the one before's.
+                ux, uy = x0 - history[-3][1], y0 - history[-3][2]  # the step before the last
                 if len(history) == 6 and history[0][0] == f1 - 5:  # the step of a parabola through six
                     expected = math.hypot(*(STEP_WEIGHTS @ np.array([h[1:] for h in history])))
                 else:  # through three: 3.7 times the positions' noise (1.0 times through six)
-                    xm, ym = history[-3][1], history[-3][2]
-                    expected = math.hypot(2 * vx - (x0 - xm), 2 * vy - (y0 - ym))
-                if expected >= 0.5:
+                    expected = math.hypot(2 * vx - ux, 2 * vy - uy)
+                if expected >= 0.5 and math.hypot(2 * vx - ux, 2 * vy - uy) >= math.hypot(vx - ux, vy - uy):
                     duplicate |= float(np.abs(image[window[1]].astype(np.float32) - window[2]).mean()) < 0.5
         coverage_expected = scene_behind is not None and marker_grey is not None
         m = measure_marker(
