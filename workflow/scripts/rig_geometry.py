@@ -61,12 +61,20 @@ def tilt_warning(tracks: dict, lens_change: float | None = None) -> tuple[dict |
     )
 
 
+def map_lines(lines: list, calibration) -> list:
+    """A tracks summary's rod lines (rows ``[frame, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]``) as
+    rows ``[x_near, y_near, x_far, y_far, body_x, body_y]`` mapped like the marker centres."""
+    a = np.asarray(lines, float)[:, 1:7]
+    points = [map_track(pd.DataFrame({"x_px": a[:, k], "y_px": a[:, k + 1]}), calibration) for k in (0, 2, 4)]
+    return np.column_stack([c for p in points for c in (p.x_px, p.y_px)]).tolist()
+
+
 def work():
     calibration = None
     if "calibration" in sm.input.keys():
         calibration = require_ok(read_json(sm.input.calibration), "calibration")
         log.info("rig %s: %s", rig, ImageToPlane(calibration).describe())
-    tracks, failed, pictures, refused, lens_change = {}, {}, {}, {}, {}
+    tracks, failed, pictures, refused, lens_change, rod_lines = {}, {}, {}, {}, {}, {}
     for path, summary_path in zip(sm.input.tracks, sm.input.summaries, strict=True):
         summary = read_json(summary_path)
         name = Path(path).stem
@@ -81,6 +89,8 @@ def work():
         else:
             tracks[name] = map_track(pd.read_csv(path), calibration)
             lens_change[name] = uncalibrated_size_change(summary.get("marker"), calibration)
+            if (summary.get("rod") or {}).get("lines"):
+                rod_lines[name] = map_lines(summary["rod"]["lines"], calibration)
     pivot = map_point(sm.params.pivot_px, calibration)
     if not tracks and pivot is None:
         if failed or refused:  # nothing to measure on this rig: the trials' own errors say why (trials.csv)
@@ -94,7 +104,7 @@ def work():
             f"rig {rig}: no usable track to estimate the pivot from (no trial of the rig is pooled); give pivot_px "
             "(and vertical_deg) in config or in the trials' sidecars"
         )
-    geometry = estimate_rig_geometry(tracks, pivot_px=pivot, vertical_deg=sm.params.vertical_deg)
+    geometry = estimate_rig_geometry(tracks, pivot_px=pivot, vertical_deg=sm.params.vertical_deg, rod_lines=rod_lines)
     kept = [k for k in tracks if k not in geometry["rejected_trials"]]
     geometry["unlike_picture"] = {}  # a trial's angles say it in place of a moved camera (off_rig_circle)
     for name in sorted(geometry["rejected_trials"]):

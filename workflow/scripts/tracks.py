@@ -19,6 +19,7 @@ from pendulum.io import script_logger, write_csv, write_json, write_png
 from pendulum.status import empty_table, failure_image, require_ok, run_stage
 from pendulum.tracking.camera_motion import path_through_lens, steady_camera
 from pendulum.tracking.method import track_trial, usable_fraction
+from pendulum.tracking.rod import rod_lines, worth_measuring
 from pendulum.tracking.settings import TrackerSettings
 from pendulum.tracking.timing_notes import break_sentence, slip_sentence
 
@@ -106,6 +107,11 @@ def work():
         log.info("%s: set aside as no body, moving in place in most samples: %s", video, aside)
     if (track.attrs.get("body") or {}).get("warning"):
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
+    rod = None  # a rod's (or thread's) lines, for the pivot where the arc bends too little to place it
+    if worth_measuring(path):
+        rod = rod_lines(video, track)
+        found = f"in {len(rod['lines'])} of {rod['frames_tried']} frames" if rod["lines"] else rod.get("reason")
+        log.info("%s: the arc bends too little to place its pivot well: a rod's line looked for: %s", video, found)
     write_csv(track, sm.output.track)
     drawn = drawn_sheet(track, frames)
     write_png(drawn if drawn is not None else failure_image("no contact sheet"), sm.output.sheet)
@@ -125,6 +131,7 @@ def work():
             "marker": track.attrs.get("marker"),  # polarity, radius and start used (given or detected)
             "detection": track.attrs.get("detection"),  # what detection found (None: all given)
             "body": track.attrs.get("body"),  # the body tracker's scene facts (None: a marker was tracked)
+            "rod": rod,  # its lines where the arc bends too little (pendulum.tracking.rod; None: not looked for)
             "decoder": track.attrs.get("video", {}),
             "settings": settings.__dict__,
             "warnings": warnings,

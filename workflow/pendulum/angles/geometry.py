@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
+from pendulum.angles.rod import join_rod
 from pendulum.angles.swings import swing_centre_rad
 from pendulum.tracking.path_shape import arc_span_deg
 
@@ -446,8 +447,27 @@ def pivot_uncertainty(pivot_covariance_px2, radius_px: float, vertical_deg: floa
     }
 
 
-def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertical_deg=None) -> dict:
-    """Pivot (circle through the pooled marker paths, outlying tracks left out) and vertical.
+def _swing_vertical_deg(tracks: dict[str, pd.DataFrame], pivot_px) -> tuple[float, int]:
+    """The median oscillation centre (:func:`swing_centre_rad`, about each path's circular mean angle: a camera
+    upside down gives about 180°) of the tracks' clean swings about ``pivot_px``, and how many had one (0°, 0:
+    none)."""
+    centres = []
+    for track in tracks.values():
+        th = image_angle_rad(track.x_px.where(track.flag == "ok"), track.y_px.where(track.flag == "ok"), pivot_px)
+        # about the path's circular mean, so a swing across ±180° is not cut in two where atan2 wraps
+        mean = circular_mean_rad(th[np.isfinite(th)])
+        found = swing_centre_rad(wrapped_rad(th - mean))
+        if found is not None:
+            centres.append(found[0] + mean)
+    if not centres:
+        return 0.0, 0
+    middle = circular_mean_rad(centres)  # the median of the centres about it, in [−180°, 180°)
+    return math.degrees(float(wrapped_rad(middle + np.median(wrapped_rad(np.asarray(centres) - middle))))), len(centres)
+
+
+def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertical_deg=None, rod_lines=None) -> dict:
+    """Pivot (circle through the pooled marker paths, outlying tracks left out; joined with where the rod's lines
+    meet, ``rod_lines`` per trial, :func:`pendulum.angles.rod.join_rod`, where the arc bends too little) and vertical.
 
     The vertical is the median oscillation centre (:func:`swing_centre_rad`, any
     amplitude, about each path's circular mean angle: a camera upside down gives about 180°) of the
@@ -478,23 +498,10 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         result["pivot_source"] = "given"
     result["pivot_px"] = [float(pivot_px[0]), float(pivot_px[1])]
     if vertical_deg is None:
-        centres = []
-        for track in tracks.values():
-            th = image_angle_rad(track.x_px.where(track.flag == "ok"), track.y_px.where(track.flag == "ok"), pivot_px)
-            # about the path's circular mean, so a swing across ±180° (a camera upside down: the body above
-            # its pivot in the image) is not cut in two where atan2 wraps
-            mean = circular_mean_rad(th[np.isfinite(th)])
-            found = swing_centre_rad(wrapped_rad(th - mean))
-            if found is not None:
-                centres.append(found[0] + mean)
-        if centres:
-            middle = circular_mean_rad(centres)  # the median of the centres about it, in [−180°, 180°)
-            vertical_deg = math.degrees(
-                float(wrapped_rad(middle + np.median(wrapped_rad(np.asarray(centres) - middle))))
-            )
-            result["vertical_source"] = f"estimated: median oscillation centre of {len(centres)} trial(s)"
+        vertical_deg, found = _swing_vertical_deg(tracks, pivot_px)
+        if found:
+            result["vertical_source"] = f"estimated: median oscillation centre of {found} trial(s)"
         else:
-            vertical_deg = 0.0
             why = (
                 "no usable track"
                 if not tracks
@@ -518,6 +525,11 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         result["pivot_track_bias_px"] = round(bias_px, 4)  # in the covariance beside the circle fit's own
         result["slow_departure_px"] = round(measured, 4)  # the tracks' own, measured (slow_bias_px)
         result.update(pivot_uncertainty(result["pivot_covariance_px2"], circle["radius_px"], vertical_deg))
+        lines = [line for name in sorted(tracks) for line in (rod_lines or {}).get(name, [])]  # the pooled trials'
+        if lines and result.get("shared") is not False and join_rod(result, lines):
+            if result["vertical_source"] != "given":  # about the joined pivot
+                result["vertical_deg"] = vertical_deg = _swing_vertical_deg(tracks, result["pivot_px"])[0]
+            result.update(pivot_uncertainty(result["pivot_covariance_px2"], result["rod"]["arm_px"], vertical_deg))
         scale = result["angle_scale_stderr_pct"]
         if scale > MAX_ANGLE_SCALE_STDERR_PCT and result.get("shared") is not False:  # else no trial uses it
             sagitta = arc_sagitta_px(circle["radius_px"], circle["arc_span_deg"])
