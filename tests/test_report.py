@@ -795,6 +795,11 @@ def test_table1_gives_the_pivot_most_trials_share_and_counts_the_others(document
     assert text.startswith("640.30 ± 0.010, 70.590 ± 0.024") and "2 other trial(s) their own" in text, text
     documents.rig_trials = lambda rig: ["d0", "apple", "clock"]  # no pivot that most share
     assert documents.estimated_geometry_text("rig", "pivot_px").startswith("not one for all trials")
+    # a clock's pivot joined with where its rod's lines meet (pendulum.angles.rod): said
+    documents.docs[("clock", "angles")]["pivot_rod_lines"] = 57
+    documents.rig_trials = lambda rig: ["clock"]
+    text = documents.estimated_geometry_text("rig", "pivot_px")
+    assert text.endswith("(estimated from the tracked paths and a rod's lines in 57 frames)"), text
 
 
 def test_a_term_that_trades_against_another_is_called_indistinguishable_not_unsupported(documents):

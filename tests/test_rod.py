@@ -73,6 +73,7 @@ def clock(tmp_path_factory):
     return path, _clip(path)
 
 
+@pytest.mark.slow
 def test_a_clocks_rod_places_its_pivot_where_its_arc_cannot(clock):
     """The rod's lines meet within 1 % of the arm of the true pivot along it (0.3 px across), and the
     covariance says so (within 3σ); the arc's own circle, from the same positions, is tens of pixels off."""
@@ -99,6 +100,7 @@ def test_a_clocks_rod_places_its_pivot_where_its_arc_cannot(clock):
     assert abs(cy - PIVOT[1]) > 5 * abs(off[1])  # the arc's pivot, from positions 0.05 px noisy
 
 
+@pytest.mark.slow
 def test_no_rod_or_a_fixed_line_gives_no_rods_pivot(tmp_path):
     """A bob on a thread too faint to see draws no line; a bright line fixed on the wall draws lines that do not
     turn with the body: no rod's pivot either way, and the reason said."""

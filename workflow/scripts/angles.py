@@ -33,7 +33,7 @@ def read_json(path):
 
 
 def work():
-    track_summary, path, plane_calibrated, size_change = None, None, None, None
+    track_summary, path, plane_calibrated, size_change, rod = None, None, None, None, None
     warnings = []  # about the angle measurement (shown in the report's tracking-quality notes)
     if "table" in sm.input.keys():
         source = sm.input.table
@@ -66,6 +66,9 @@ def work():
             if pivot is None:
                 used, own = trial_geometry(track, geometry, vertical, trial)
                 pivot, pivot_cov, vertical = used["pivot_px"], used["pivot_covariance_px2"], used["vertical_deg"]
+                if not own and (geometry.get("rod") or {}).get("used"):  # the rig's pivot, joined with its rod's
+                    rod = geometry["rod"]
+                    notes.append(f"pivot: {geometry['pivot_source']} (results/geometry)")
                 for warning in [own, *used["warnings"]] if own else []:
                     log.warning("trial %s: %s", trial, warning)
                     notes.append(warning)
@@ -126,6 +129,8 @@ def work():
     if track_summary is not None:
         document["method"] = (track_summary.get("method") or {}).get("used", "marker")
         document["path"] = path
+        if rod:  # the pivot joined with where the rod's lines meet (the report's Table 1 says so)
+            document["pivot_rod_lines"] = rod["lines"]
         if size_change:  # an uncalibrated view that scales the angles (the report's summary says so)
             document["uncalibrated_size_change"] = size_change
     write_json({**document, "warnings": warnings}, sm.output.summary)

@@ -17,6 +17,7 @@ from pendulum.camera.calibration import Lens
 from pendulum.camera.video import VideoError, track_over_sheet
 from pendulum.io import script_logger, write_csv, write_json, write_png
 from pendulum.status import empty_table, failure_image, require_ok, run_stage
+from pendulum.tracking import samples
 from pendulum.tracking.camera_motion import path_through_lens, steady_camera
 from pendulum.tracking.method import track_trial, usable_fraction
 from pendulum.tracking.rod import rod_lines, worth_measuring
@@ -60,7 +61,7 @@ def calibrated_lens():
 def work():
     # a video the frames stage could not read is not tracked again: its failure is said once, by that stage
     frames = require_ok(json.loads(Path(sm.input.frames_summary).read_text()), "frames")
-    track = track_trial(video, settings, progress=log.info)
+    track = track_trial(video, settings, progress=log.info, keep_samples=True)  # for a rod's lines (below)
     method = track.attrs.get("method", {})
     log.info("%s: tracked the %s (%s)", video, method.get("used"), method.get("reason"))
     measured_track = track
@@ -109,9 +110,10 @@ def work():
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     rod = None  # a rod's (or thread's) lines, for the pivot where the arc bends too little to place it
     if worth_measuring(path):
-        rod = rod_lines(video, track)
+        rod = rod_lines(video, track)  # in the frames the tracker sampled, where it did
         found = f"in {len(rod['lines'])} of {rod['frames_tried']} frames" if rod["lines"] else rod.get("reason")
         log.info("%s: the arc bends too little to place its pivot well: a rod's line looked for: %s", video, found)
+    samples.release()
     write_csv(track, sm.output.track)
     drawn = drawn_sheet(track, frames)
     write_png(drawn if drawn is not None else failure_image("no contact sheet"), sm.output.sheet)

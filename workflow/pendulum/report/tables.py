@@ -253,9 +253,10 @@ class TableSections(ReportData):
             if covariance is None:
                 return ", ".join(fmt(x, 5) for x in angles[key]) + f" (the trial's own{suffix})"
             sigmas = [math.sqrt(max(float(covariance[i][i]), 0.0)) for i in (0, 1)]
+            rod = f" and a rod's lines in {angles['pivot_rod_lines']} frames" if angles.get("pivot_rod_lines") else ""
             return (
                 ", ".join(f"{fmt(x, 5)} ± {fmt(s, 2)}" for x, s in zip(angles[key], sigmas, strict=True))
-                + f" (estimated from the tracked paths{suffix})"
+                + f" (estimated from the tracked paths{rod}{suffix})"
             )
         return "not given: estimated from the tracked paths"
 

@@ -42,20 +42,22 @@ def usable_fraction(track: pd.DataFrame) -> float:
     return float((track.flag == "ok").sum()) / free if free else 0.0
 
 
-def track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:
+def track_trial(path, settings: TrackerSettings, progress=None, keep_samples: bool = False) -> pd.DataFrame:
     """The track by ``settings.method`` (module docstring); ``attrs["method"]``: ``used``, ``reason``, ``tried``.
     Its ``time_s`` is put right where the camera lost or repeated frames under even time stamps
     (:func:`pendulum.tracking.timing.correct_slips`; ``attrs["timing"]``), then put at the camera's
     ``settings.capture_fps`` where the file plays at another rate (:func:`~pendulum.tracking.timing.at_capture_rate`).
 
     Raises :class:`~pendulum.camera.video.VideoError` when no method gives a record; the message holds
-    what each one said. The clip's sampled frames, shared by the searches, are let go at the end.
+    what each one said. The clip's sampled frames, shared by the searches, are let go at the end (``keep_samples``:
+    kept for the caller, who lets them go: :func:`pendulum.tracking.samples.release`).
     """
     try:
         track = centre_by_outline(_track_trial(path, settings, progress), settings)  # a sphere seen in part
         return at_capture_rate(correct_slips(track), settings.capture_fps)
     finally:
-        samples.release()
+        if not keep_samples:
+            samples.release()
 
 
 def _track_trial(path, settings: TrackerSettings, progress=None) -> pd.DataFrame:

@@ -28,9 +28,10 @@ import pandas as pd
 
 from pendulum.camera.video import VideoError
 from pendulum.tracking.arcs import fit_circle
-from pendulum.tracking.samples import spread_frames
+from pendulum.tracking.samples import held_spread, spread_frames
 
-ROD_FRAMES = 40  # frames spread (40 to 79 of them) over the clip's first SPAN_FRAMES from its first usable one
+ROD_FRAMES = 40  # frames spread (40 to 79 of them) over the clip's first SPAN_FRAMES from its first usable one (or
+# those the marker search or the body tracker decoded already, over its first 1,800 or all)
 SPAN_FRAMES = 600  # 10 s at 60 fps: many swings of a pendulum whose arc bends little (a clock's: 1–2 s)
 STRIP_HALF_PX = 24.0  # the strip's reach to either side of the line towards the first pivot
 CHUNK_PX = 12  # the strip's rows averaged into one profile across it
@@ -79,9 +80,8 @@ def _chunk_place(profile: np.ndarray, offsets: np.ndarray, sign: float) -> float
         hi += 1
     if lo == 0 or hi == q.size - 1:
         return None
-    w = q[lo - 1 : hi + 2] - peak / 2  # the half-peak crossings interpolated: edges a pixel apart count
-    w = np.clip(w, 0.0, None)
-    return float((w * offsets[lo - 1 : hi + 2]).sum() / w.sum())
+    w = q[lo : hi + 1] - peak / 2  # each sample by its height above half the peak
+    return float((w * offsets[lo : hi + 1]).sum() / w.sum())
 
 
 def _strip_line(image: np.ndarray, body, towards, start_px: float, sign: float):
@@ -153,7 +153,9 @@ def rod_lines(video, track: pd.DataFrame) -> dict:
     shift = dict(zip(ok.frame, ok[["x_px", "y_px"]].to_numpy(float) - seen, strict=True))
     cx, cy, _ = fit_circle(seen[:, 0], seen[:, 1])
     try:
-        frames, _ = spread_frames(video, ROD_FRAMES, int(ok.frame.iloc[0]) + SPAN_FRAMES)
+        frames = (
+            held_spread(video, ROD_FRAMES) or spread_frames(video, ROD_FRAMES, int(ok.frame.iloc[0]) + SPAN_FRAMES)[0]
+        )
     except VideoError as error:
         return {**result, "reason": str(error)}
     start = max(START_RADII * _body_radius_px(track), MIN_START_PX)

@@ -97,6 +97,17 @@ def frame_count(path) -> int | None:
     return held["decoded"]
 
 
+def held_spread(path, n: int) -> list[tuple[int, np.ndarray]] | None:
+    """The clip's held luma samples (:func:`spread_frames`'s, of its first frames or all of them), n to 2n − 1 of
+    them, without decoding; None where the frames held are another clip's, another view's or fewer."""
+    held = _held.get("clip")
+    key = _key(path)
+    if key is None or held is None or held["key"] != key or held["n"] < n:
+        return None
+    wanted = set(spread_indices(held["decoded"], n))
+    return [(i, image) for i, image in held["frames"] if i in wanted]
+
+
 def release() -> None:
     """Let the last clip's frames go (a trial's tracking is done)."""
     _held.clear()
