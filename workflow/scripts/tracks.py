@@ -110,7 +110,11 @@ def work():
         log.warning("%s: %s", video, track.attrs["body"]["warning"])
     rod = None  # a rod's (or thread's) lines, for the pivot where the arc bends too little to place it
     if worth_measuring(path):
-        rod = rod_lines(video, track)  # in the frames the tracker sampled, where it did
+        try:
+            rod = rod_lines(video, track)  # in the frames the tracker sampled, where it did
+        except (ValueError, cv2.error, np.linalg.LinAlgError, VideoError) as error:  # the track stands without it
+            rod = {"lines": [], "reason": f"not measured: {error}"}
+            log.warning("%s: a rod's lines could not be measured: %s", video, error)
         found = f"in {len(rod['lines'])} of {rod['frames_tried']} frames" if rod["lines"] else rod.get("reason")
         log.info("%s: the arc bends too little to place its pivot well: a rod's line looked for: %s", video, found)
     samples.release()

@@ -35,6 +35,7 @@ def rod_pivot(lines) -> dict:
     coordinates): ``pivot_px``, ``pivot_covariance_px2``, ``lines``, ``rms_px`` (the lines' RMS distance from it)
     and ``turn_slope``; with ``reason`` where they do not make a rod's pivot (module docstring)."""
     a = np.asarray(lines, float).reshape(-1, 6)
+    a = a[np.isfinite(a).all(axis=1)]
     near, far, body = a[:, 0:2], a[:, 2:4], a[:, 4:6]
     d = far - near
     d /= np.hypot(d[:, 0], d[:, 1])[:, None]

@@ -144,7 +144,7 @@ def rod_lines(video, track: pd.DataFrame) -> dict:
     ``lines`` rows ``[frame, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]`` (the line's ends nearest the
     body and farthest from it, the body's tracked centre), ``polarity``, and how many frames were tried; ``lines``
     empty and ``reason`` where fewer than :data:`MIN_LINES` frames draw one."""
-    ok = track[track.flag == "ok"]
+    ok = track[(track.flag == "ok") & np.isfinite(track.x_px) & np.isfinite(track.y_px)]
     result: dict = {"lines": [], "frames_tried": 0, "polarity": None, "chunk_px": CHUNK_PX}
     if len(ok) < 3 * MIN_LINES:
         return {**result, "reason": "too few usable frames"}
@@ -152,6 +152,8 @@ def rod_lines(video, track: pd.DataFrame) -> dict:
     seen = pd.DataFrame({"x": ok.get("x_image_px", ok.x_px), "y": ok.get("y_image_px", ok.y_px)}).to_numpy(float)
     shift = dict(zip(ok.frame, ok[["x_px", "y_px"]].to_numpy(float) - seen, strict=True))
     cx, cy, _ = fit_circle(seen[:, 0], seen[:, 1])
+    if not (np.isfinite(seen).all() and math.isfinite(cx) and math.isfinite(cy)):
+        return {**result, "reason": "no circle through the track to look towards"}
     try:
         frames = (
             held_spread(video, ROD_FRAMES) or spread_frames(video, ROD_FRAMES, int(ok.frame.iloc[0]) + SPAN_FRAMES)[0]
