@@ -24,9 +24,26 @@ def _centre(k: int, amplitude_deg: float = AMPLITUDE_DEG) -> tuple[float, float]
     return PIVOT[0] + ARM_PX * math.sin(theta), PIVOT[1] + ARM_PX * math.cos(theta)
 
 
-def _clip(path, rod_grey: float | None = 200.0, fixed_line: bool = False, amplitude_deg: float = AMPLITUDE_DEG):
+def _rod_cover(xs, ys, cx, cy, shift=(0.0, 0.0), half_px: float = 2.0, soft_px: float = 1.0):
+    """How much of each pixel a rod from the pivot to (cx, cy), moved by ``shift``, covers: ``half_px`` wide to each
+    side of its axis, its edges ramped over ``soft_px``."""
+    px, py = PIVOT[0] + shift[0], PIVOT[1] + shift[1]
+    ax, ay = cx - PIVOT[0], cy - PIVOT[1]
+    t = np.clip(((xs - px) * ax + (ys - py) * ay) / (ax * ax + ay * ay), 0.0, 1.0)
+    return np.clip((half_px + soft_px / 2 - np.hypot(xs - px - t * ax, ys - py - t * ay)) / soft_px, 0.0, 1.0)
+
+
+def _clip(
+    path,
+    rod_grey: float | None = 200.0,
+    fixed_line: bool = False,
+    amplitude_deg: float = AMPLITUDE_DEG,
+    shadow=None,
+    rod_half_px: float = 2.0,
+):
     """The clip and the bob's centre per frame; ``rod_grey`` None: no rod drawn (a thread too faint to see);
-    ``fixed_line``: a bright vertical line on the wall beside the swing, and no rod."""
+    ``fixed_line``: a bright vertical line on the wall beside the swing, and no rod; ``shadow`` (dx, dy): the rod's
+    soft shadow on the wall, 45 grey levels dark, moved by that much (a lamp above and to one side)."""
     from pendulum.synthetic.experiment import write_video
 
     rng = np.random.default_rng(3)
@@ -38,11 +55,10 @@ def _clip(path, rod_grey: float | None = 200.0, fixed_line: bool = False, amplit
     for k in range(N_FRAMES):
         cx, cy = _centre(k, amplitude_deg)
         image = grain.copy()
-        if rod_grey is not None:  # a 4 px rod, its edges antialiased over a pixel
-            ax, ay = cx - PIVOT[0], cy - PIVOT[1]
-            t = np.clip(((xs - PIVOT[0]) * ax + (ys - PIVOT[1]) * ay) / (ax * ax + ay * ay), 0.0, 1.0)
-            cover = np.clip(2.5 - np.hypot(xs - PIVOT[0] - t * ax, ys - PIVOT[1] - t * ay), 0.0, 1.0)
-            image += cover * (rod_grey - image)
+        if shadow is not None:
+            image -= 45.0 * _rod_cover(xs, ys, cx, cy, shadow, half_px=rod_half_px + 1.0, soft_px=4.0)
+        if rod_grey is not None:  # a rod 2 × rod_half_px wide, its edges antialiased over a pixel
+            image += _rod_cover(xs, ys, cx, cy, half_px=rod_half_px) * (rod_grey - image)
         bob = np.clip(BOB_PX + 0.5 - np.hypot(xs - cx, ys - cy), 0.0, 1.0)
         image += bob * (175.0 - image)
         dot = np.clip(6.5 - np.hypot(xs - cx, ys - cy), 0.0, 1.0)
@@ -77,7 +93,7 @@ def clock(tmp_path_factory):
 def test_a_clocks_rod_places_its_pivot_where_its_arc_cannot(clock):
     """The rod's lines meet within 1 % of the arm of the true pivot along it (0.3 px across), and the
     covariance says so (within 3σ); the arc's own circle, from the same positions, is tens of pixels off."""
-    from pendulum.angles.rod import rod_pivot
+    from pendulum.angles.rod import best_rod
     from pendulum.tracking.arcs import fit_circle
     from pendulum.tracking.rod import rod_lines, worth_measuring
 
@@ -88,10 +104,9 @@ def test_a_clocks_rod_places_its_pivot_where_its_arc_cannot(clock):
     assert worth_measuring({"radius_px": radius, "arc_span_deg": span})
     assert not worth_measuring({"radius_px": ARM_PX, "arc_span_deg": 60.0})  # a wide swing's arc bends 67 px
     found = rod_lines(path, track)
-    assert found["polarity"] == "bright"
-    assert len(found["lines"]) >= 0.9 * found["frames_tried"], found
-    rod = rod_pivot([line[1:7] for line in found["lines"]])
-    assert "reason" not in rod, rod
+    assert found["polarities"]["bright"] >= 0.9 * found["frames_tried"], found
+    rod = best_rod([line[1:8] for line in found["lines"]])
+    assert "reason" not in rod and rod["polarity"] == "bright", rod
     assert abs(rod["turn_slope"] - 1.0) < 0.02
     off = np.subtract(rod["pivot_px"], PIVOT)
     sd = np.sqrt(np.diag(rod["pivot_covariance_px2"]))
@@ -104,19 +119,43 @@ def test_a_clocks_rod_places_its_pivot_where_its_arc_cannot(clock):
 def test_no_rod_or_a_fixed_line_gives_no_rods_pivot(tmp_path):
     """A bob on a thread too faint to see draws no line; a bright line fixed on the wall draws lines that do not
     turn with the body: no rod's pivot either way, and the reason said."""
-    from pendulum.angles.rod import rod_pivot
-    from pendulum.tracking.rod import MIN_LINES, rod_lines
+    from pendulum.angles.rod import best_rod
+    from pendulum.tracking.rod import rod_lines
 
     truth = _clip(tmp_path / "bare.mp4", rod_grey=None)
     found = rod_lines(tmp_path / "bare.mp4", _track(truth))
     assert found["lines"] == [] and "fewer than" in found["reason"]
     truth = _clip(tmp_path / "line.mp4", rod_grey=None, fixed_line=True)
     found = rod_lines(tmp_path / "line.mp4", _track(truth))
-    if len(found["lines"]) >= MIN_LINES:
-        rod = rod_pivot([line[1:7] for line in found["lines"]])
+    if found["lines"]:
+        rod = best_rod([line[1:8] for line in found["lines"]])
         assert "reason" in rod, rod
     else:
         assert "fewer than" in found["reason"]
+
+
+@pytest.mark.slow
+def test_a_light_rods_dark_shadow_is_not_taken_for_it(tmp_path):
+    """A light rod (25 grey levels over the wall's mean, 4 px) and its soft dark shadow cast 20 px down and 4 px
+    aside (a lamp above): the shadow draws more lines than the rod (68 against 65), and they meet 14 px along the
+    arm from the pivot, turning 3 % less than the body about there; they were taken, being more (a helper's render,
+    2026-12-07: the scale 3.6 % off, ± 1.1 % said). The rod's lines are taken; the shadow beside them pulls their
+    place (the pivot 9.6 px, 1.9 % of the arm, off along it), which its σ says: 1.5 % of the arm at least."""
+    from pendulum.angles.rod import BESIDE_SCALE, best_rod, rod_pivot
+    from pendulum.tracking.rod import rod_lines
+
+    path = tmp_path / "shadow.mp4"
+    truth = _clip(path, rod_grey=95.0 + 25.0, shadow=(4.0, 20.0))
+    found = rod_lines(path, _track(truth))
+    assert found["polarities"]["dark"] > found["polarities"]["bright"] >= 0.8 * found["frames_tried"], found
+    lines = np.asarray([line[1:8] for line in found["lines"]])
+    shadow = rod_pivot(lines[lines[:, 0] == -1, 1:])
+    assert abs(shadow["turn_slope"] - 1.0) > 0.02 and "not the body's rod" in shadow["reason"], shadow
+    rod = best_rod(lines)
+    assert "reason" not in rod and rod["polarity"] == "bright" and rod["beside_px"] < 6.0, rod
+    off = np.subtract(rod["pivot_px"], PIVOT)
+    sd = np.sqrt(np.diag(rod["pivot_covariance_px2"]))
+    assert sd[1] >= 0.99 * BESIDE_SCALE * rod["arm_px"] and abs(off[1]) <= 2.0 * sd[1] and abs(off[0]) <= 1.0, (off, sd)
 
 
 def _lines_through(pivot, arm_px: float, angles_deg) -> list[list[float]]:
@@ -149,7 +188,7 @@ def test_the_rods_pivot_joins_the_arcs_by_their_inverse_covariances():
             "pivot_source": "estimated",
             "warnings": [],
         }
-        assert join_rod(geometry, lines) is used
+        assert join_rod(geometry, [[1.0, *line] for line in lines]) is used
         assert geometry["pivot_px"][1] == pytest.approx(joined_y, abs=1e-3)
         assert geometry["rod"]["used"] is used
         assert geometry["rod"]["sigmas_from_arc"] == pytest.approx(abs(arc_y + 30.0) / math.sqrt(407.26), abs=0.01)
@@ -160,7 +199,7 @@ def test_the_rods_pivot_joins_the_arcs_by_their_inverse_covariances():
     # an arc that places the pivot well enough keeps it
     geometry = {"pivot_px": [100.0, 0.0], "pivot_covariance_px2": [[0.01, 0.0], [0.0, 0.04]]}
     geometry.update(angle_scale_stderr_pct=0.04, pivot_source="estimated", warnings=[])
-    assert join_rod(geometry, lines) is False and geometry["pivot_px"] == [100.0, 0.0]
+    assert join_rod(geometry, [[1.0, *line] for line in lines]) is False and geometry["pivot_px"] == [100.0, 0.0]
     assert "well enough" in geometry["rod"]["reason"]
 
 
@@ -187,7 +226,7 @@ def test_a_rig_of_a_narrow_swing_takes_its_pivot_from_the_rod_and_says_no_scale_
     alone = estimate_rig_geometry({"t": track})
     assert alone["angle_scale_stderr_pct"] > 2.0 and any("pivot_px" in w for w in alone["warnings"])
     lines = _lines_through(pivot + [0.0, 1.0], 500.0, np.degrees(theta[::15]))  # a rod 1 px off: a floor
-    joined = estimate_rig_geometry({"t": track}, rod_lines={"t": lines})
+    joined = estimate_rig_geometry({"t": track}, rod_lines={"t": [[-1.0, *line] for line in lines]})
     assert joined["rod"]["used"], joined["rod"]
     assert abs(joined["pivot_px"][1] - pivot[1]) <= 5.0 and abs(joined["pivot_px"][0] - pivot[0]) <= 0.5
     assert joined["angle_scale_stderr_pct"] < 1.0 and not joined["warnings"]

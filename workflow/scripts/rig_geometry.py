@@ -62,11 +62,11 @@ def tilt_warning(tracks: dict, lens_change: float | None = None) -> tuple[dict |
 
 
 def map_lines(lines: list, calibration) -> list:
-    """A tracks summary's rod lines (rows ``[frame, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]``) as
-    rows ``[x_near, y_near, x_far, y_far, body_x, body_y]`` mapped like the marker centres."""
-    a = np.asarray(lines, float)[:, 1:7]
-    points = [map_track(pd.DataFrame({"x_px": a[:, k], "y_px": a[:, k + 1]}), calibration) for k in (0, 2, 4)]
-    return np.column_stack([c for p in points for c in (p.x_px, p.y_px)]).tolist()
+    """A tracks summary's rod lines (rows ``[frame, sign, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]``)
+    as rows ``[sign, x_near, y_near, x_far, y_far, body_x, body_y]``, their points mapped like the marker centres."""
+    a = np.asarray(lines, float)
+    points = [map_track(pd.DataFrame({"x_px": a[:, k], "y_px": a[:, k + 1]}), calibration) for k in (2, 4, 6)]
+    return np.column_stack([a[:, 1], *(c for p in points for c in (p.x_px, p.y_px))]).tolist()
 
 
 def work():

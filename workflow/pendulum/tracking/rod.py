@@ -10,12 +10,13 @@ is ``ok``): a strip of the picture along the line from the body towards a first 
 :data:`STRIP_HALF_PX` to either side, from :data:`START_RADII` body radii out to the frame's border (or nine tenths
 of the way to that pivot); its profile across, averaged over :data:`CHUNK_PX` along it; in each chunk the rod's
 place is the centroid of its lobe above half the lobe's peak, where that peak stands :data:`MIN_PEAK_SIGMAS` times
-the profile's own scatter above it (the rod brighter than what is around it, or darker: the sign that draws more
-lines); a straight line through those places, chunks off it (the body, an edge crossing the strip) left out. A frame
-draws a line where :data:`MIN_CHUNKS` chunks or more and :data:`MIN_KEPT_SHARE` of those measured lie on it within
-:data:`MAX_LINE_RMS_PX` RMS. No background is taken away: a rod that swings a few pixels near its pivot is part of
-any background learnt from the frames, and taking it away there turned the lines less than the rod (a helper's
-clocks: the pivot 72 px off along the arm against 1.5 px without).
+the profile's own scatter above it (the rod brighter than what is around it, or darker: each sign's lines kept where
+it draws enough, and the rig geometry takes the one whose lines turn with the body); a straight line through those
+places, chunks off it (the body, an edge crossing the strip) left out. A frame draws a line where :data:`MIN_CHUNKS`
+chunks or more and :data:`MIN_KEPT_SHARE` of those measured lie on it within :data:`MAX_LINE_RMS_PX` RMS. No
+background is taken away: a rod that swings a few pixels near its pivot is part of any background learnt from the
+frames, and taking it away there turned the lines less than the rod (a helper's clocks: the pivot 72 px off along
+the arm against 1.5 px without).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ START_RADII = 2.0  # the strip starts this many body radii from the body's centr
 MIN_START_PX = 10.0
 BORDER_PX = 3.0  # ... and stops this far inside the frame
 MIN_PEAK_SIGMAS = 2.5  # a chunk's lobe peak over its profile's robust scatter: a rod seen there
+LOBE_LEVEL = 0.5  # of its peak: the part of a chunk's lobe whose centroid is the rod's place
 MIN_CHUNKS = 8
 MIN_KEPT_SHARE = 0.6
 MAX_LINE_RMS_PX = 1.0
@@ -74,13 +76,13 @@ def _chunk_place(profile: np.ndarray, offsets: np.ndarray, sign: float) -> float
     if peak <= MIN_PEAK_SIGMAS * max(scatter, 0.5):
         return None
     lo, hi = i, i
-    while lo > 0 and q[lo - 1] > peak / 2:
+    while lo > 0 and q[lo - 1] > LOBE_LEVEL * peak:
         lo -= 1
-    while hi < q.size - 1 and q[hi + 1] > peak / 2:
+    while hi < q.size - 1 and q[hi + 1] > LOBE_LEVEL * peak:
         hi += 1
     if lo == 0 or hi == q.size - 1:
         return None
-    w = q[lo : hi + 1] - peak / 2  # each sample by its height above half the peak
+    w = q[lo : hi + 1] - LOBE_LEVEL * peak  # each sample by its height above that level
     return float((w * offsets[lo : hi + 1]).sum() / w.sum())
 
 
@@ -141,11 +143,12 @@ def _strip_line(image: np.ndarray, body, towards, start_px: float, sign: float):
 def rod_lines(video, track: pd.DataFrame) -> dict:
     """The rod's (or thread's) line in a spread of the clip's frames (module docstring), in the track's
     coordinates (the image as stored, a creeping camera's motion taken out as from the body's positions):
-    ``lines`` rows ``[frame, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]`` (the line's ends nearest the
-    body and farthest from it, the body's tracked centre), ``polarity``, and how many frames were tried; ``lines``
-    empty and ``reason`` where fewer than :data:`MIN_LINES` frames draw one."""
+    ``lines`` rows ``[frame, sign, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]`` (the rod brighter than
+    what is around it, +1, or darker, −1: each sign that draws :data:`MIN_LINES` or more; the line's ends nearest
+    the body and farthest from it; the body's tracked centre), ``polarities`` (lines per sign) and how many frames
+    were tried; ``lines`` empty and ``reason`` where no sign draws :data:`MIN_LINES`."""
     ok = track[(track.flag == "ok") & np.isfinite(track.x_px) & np.isfinite(track.y_px)]
-    result: dict = {"lines": [], "frames_tried": 0, "polarity": None, "chunk_px": CHUNK_PX}
+    result: dict = {"lines": [], "frames_tried": 0, "polarities": {}, "chunk_px": CHUNK_PX}
     if len(ok) < 3 * MIN_LINES:
         return {**result, "reason": "too few usable frames"}
     # measured where the body was seen (x_image_px: before a creeping camera was taken out), said where the track is
@@ -164,23 +167,20 @@ def rod_lines(video, track: pd.DataFrame) -> dict:
     by_frame = dict(zip(ok.frame, map(tuple, seen), strict=True))
     tried = [(i, image, by_frame[i]) for i, image in frames if i in by_frame]
     result["frames_tried"] = len(tried)
-    found = {}
+    rows, counts = [], {}
     for sign, polarity in ((1.0, "bright"), (-1.0, "dark")):
-        rows = []
+        drawn = []
         for i, image, body in tried:
             line = _strip_line(np.asarray(image, np.float32), body, (cx, cy), start, sign)
             if line is not None:
-                near, far, rms, _ = line
+                (nx, ny), (fx, fy), rms, _ = line
                 dx, dy = shift[i]
-                rows.append(
-                    [int(i), near[0] + dx, near[1] + dy, far[0] + dx, far[1] + dy, body[0] + dx, body[1] + dy, rms]
-                )
-        found[polarity] = rows
-    polarity = max(found, key=lambda p: (len(found[p]), -np.median([r[-1] for r in found[p]] or [math.inf])))
-    if len(found[polarity]) < MIN_LINES:
-        return {
-            **result,
-            "reason": f"a rod's line in {len(found[polarity])} of {len(tried)} frames (fewer than {MIN_LINES})",
-        }
-    rows = [[r[0], *(round(float(v), 3) for v in r[1:])] for r in found[polarity]]
-    return {**result, "lines": rows, "polarity": polarity}
+                drawn.append([int(i), sign, nx + dx, ny + dy, fx + dx, fy + dy, body[0] + dx, body[1] + dy, rms])
+        counts[polarity] = len(drawn)
+        if len(drawn) >= MIN_LINES:  # each kept: a light rod's dark shadow may draw more (pendulum.angles.rod)
+            rows += [[r[0], int(r[1]), *(round(float(v), 3) for v in r[2:])] for r in drawn]
+    result["polarities"] = counts
+    if not rows:
+        most = max(counts.values(), default=0)
+        return {**result, "reason": f"a rod's line in {most} of {len(tried)} frames (fewer than {MIN_LINES})"}
+    return {**result, "lines": rows}
