@@ -114,11 +114,25 @@ def test_a_clocks_rod_places_its_pivot_where_its_arc_cannot(clock):
     assert abs(off[1]) <= 3 * sd[1] and sd[1] <= 0.02 * ARM_PX
     assert abs(cy - PIVOT[1]) > 5 * abs(off[1])  # the arc's pivot, from positions 0.05 px noisy
 
+    # a slow bias of 1.5 px outward at the swing's ends, over twice the arc's 0.7 px sagitta: the circle's centre
+    # falls below the arc, and the strips are turned to its mirror (none were drawn, 2026-12-07's review)
+    theta = np.arctan2(truth[:, 0] - PIVOT[0], truth[:, 1] - PIVOT[1])
+    outward = 1.5 * (theta / np.radians(AMPLITUDE_DEG)) ** 2
+    biased = _track(truth + outward[:, None] * np.column_stack([np.sin(theta), np.cos(theta)]))
+    assert fit_circle(biased.x_px.to_numpy(), biased.y_px.to_numpy())[1] > truth[:, 1].max()
+    rod = best_rod([line[1:8] for line in rod_lines(path, biased)["lines"]])
+    assert abs(rod["pivot_px"][1] - PIVOT[1]) <= 0.01 * ARM_PX, rod
+    # released late (held in the first 100 frames): its lines in the frames after, 40 or more
+    late = track.assign(flag=np.where(track.frame < 100, "held", "ok"))
+    found = rod_lines(path, late)
+    assert found["frames_tried"] >= 40 and min(line[0] for line in found["lines"]) >= 100, found["polarities"]
+
 
 @pytest.mark.slow
 def test_no_rod_or_a_fixed_line_gives_no_rods_pivot(tmp_path):
-    """A bob on a thread too faint to see draws no line; a bright line fixed on the wall draws lines that do not
-    turn with the body: no rod's pivot either way, and the reason said."""
+    """A bob on a thread too faint to see draws no line; a bright line fixed on the wall draws lines in some frames
+    that meet nowhere one rod's would (far from one point, or not turning with the body): no rod's pivot either
+    way, and the reason said."""
     from pendulum.angles.rod import best_rod
     from pendulum.tracking.rod import rod_lines
 
@@ -193,6 +207,17 @@ def test_the_rods_pivot_joins_the_arcs_by_their_inverse_covariances():
         assert geometry["rod"]["used"] is used
         assert geometry["rod"]["sigmas_from_arc"] == pytest.approx(abs(arc_y + 30.0) / math.sqrt(407.26), abs=0.01)
         assert bool(geometry["warnings"]) is not used
+    # a camera upside down (the body above the pivot in the picture): the lines' turn measured about the arm's
+    # middle, not across ±180° (where two clusters of angles made any lines' slope 1, 2026-12-07's review)
+    flipped = np.asarray(_lines_through(np.array([100.0, -30.0]), 500.0, 180.0 + np.linspace(-3, 3, 20)))
+    assert rod_pivot(flipped)["turn_slope"] == pytest.approx(1.0, abs=1e-6)
+    pivot = np.array([100.0, -30.0])
+    shadow_like = []  # lines through the pivot that turn 0.97 as far as the body, upside down
+    for a in np.radians(180.0 + np.linspace(-3, 3, 20)):
+        u_line = np.array([math.sin(np.pi + 0.97 * (a - np.pi)), math.cos(np.pi + 0.97 * (a - np.pi))])
+        u_body = np.array([math.sin(a), math.cos(a)])
+        shadow_like.append([*(pivot + 450.0 * u_line), *(pivot + 100.0 * u_line), *(pivot + 500.0 * u_body)])
+    assert "not the body's rod" in rod_pivot(shadow_like)["reason"]
     # lines shifted sideways by 3 px at random (a thread that bows, two things taken for one rod) make no pivot
     shifted = np.asarray(lines) + np.random.default_rng(0).normal(0.0, 3.0, (len(lines), 1)) * [1, 0, 1, 0, 0, 0]
     assert "no one straight rod" in rod_pivot(shifted)["reason"]

@@ -117,7 +117,6 @@ def work():
             log.warning("%s: a rod's lines could not be measured: %s", video, error)
         found = f"in {len(rod['lines'])} of {rod['frames_tried']} frames" if rod["lines"] else rod.get("reason")
         log.info("%s: the arc bends too little to place its pivot well: a rod's line looked for: %s", video, found)
-    samples.release()
     write_csv(track, sm.output.track)
     drawn = drawn_sheet(track, frames)
     write_png(drawn if drawn is not None else failure_image("no contact sheet"), sm.output.sheet)
@@ -161,4 +160,5 @@ def write_failed(document):
 
 
 run_stage("tracks", log, work, write_failed)
+samples.release()  # the frames track_trial kept for the rod's lines
 log.info("%s: done in %.1f s", video, time.perf_counter() - started)

@@ -526,7 +526,9 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         result["slow_departure_px"] = round(measured, 4)  # the tracks' own, measured (slow_bias_px)
         result.update(pivot_uncertainty(result["pivot_covariance_px2"], circle["radius_px"], vertical_deg))
         lines = [line for name in sorted(tracks) for line in (rod_lines or {}).get(name, [])]  # the pooled trials'
-        if lines and result.get("shared") is not False and join_rod(result, lines):
+        if lines and result.get("shared") is False:
+            result["rod"] = {"used": False, "reason": "the trials share no pivot: each is measured about its own arc's"}
+        elif lines and join_rod(result, lines):
             if result["vertical_source"] != "given":  # about the joined pivot
                 result["vertical_deg"] = vertical_deg = _swing_vertical_deg(tracks, result["pivot_px"])[0]
             result.update(pivot_uncertainty(result["pivot_covariance_px2"], result["rod"]["arm_px"], vertical_deg))

@@ -26,7 +26,7 @@ ROD_FLOOR_PX = 0.1  # ... and to this in every direction (lines drawn exactly th
 # (1 − s) of the arm off the body's pivot along it, the angles' scale as far off: a light rod's dark shadow, cast
 # downwards, 0.960 and 0.969 in a helper's renders (its lines meet 20 px along a 640 px arm from the pivot); their
 # rods 0.9992–1.0007, another helper's clocks' 0.9975–1.0053
-MAX_TURN_MISMATCH = 0.01
+MAX_TURN_MISMATCH = 0.01  # or three of the slope's standard errors where more (a swing of ±1°: 0.007 each)
 MAX_MEET_RMS_PX = 1.0  # the lines' RMS distance from where they meet: one straight rod's (a helper's clocks: 0.04–0.3)
 MIN_TURN_DEG = 0.5  # the body's angles about the rod's pivot spread over this at least (their SD)
 # A line of the other sign alongside the rod's (its shadow on a wall close behind): the rod's place is pulled by it,
@@ -63,8 +63,9 @@ def rod_pivot(lines) -> dict:
     along = np.median(arm, axis=0)
     along /= np.hypot(*along)
     covariance += (ROD_SCALE_FLOOR * arm_px) ** 2 * np.outer(along, along) + ROD_FLOOR_PX**2 * np.eye(2)
-    body_rad = np.arctan2(arm[:, 0], arm[:, 1])
-    line_rad = np.arctan2(-d[:, 0], -d[:, 1])  # the line from its far end (the pivot's side) towards the body
+    middle = math.atan2(along[0], along[1])  # angles about the arm's middle direction (a camera upside down: ±π)
+    body_rad = (np.arctan2(arm[:, 0], arm[:, 1]) - middle + math.pi) % (2 * math.pi) - math.pi
+    line_rad = np.arctan2(-d[:, 0], -d[:, 1]) - middle  # the line from its far end (the pivot's side) to the body
     line_rad = body_rad + (line_rad - body_rad + math.pi) % (2 * math.pi) - math.pi
     result = {
         "pivot_px": [float(pivot[0]), float(pivot[1])],
@@ -83,9 +84,11 @@ def rod_pivot(lines) -> dict:
     spread_deg = math.degrees(float(np.std(body_rad)))
     if spread_deg < MIN_TURN_DEG:
         return {**result, "reason": f"the body turns by only {spread_deg:.2f}° (SD) about where the lines meet"}
-    slope = float(np.polyfit(body_rad, line_rad, 1)[0])
-    result["turn_slope"] = round(slope, 4)
-    if abs(slope - 1.0) > MAX_TURN_MISMATCH:
+    (slope, _), cov = np.polyfit(body_rad, line_rad, 1, cov="unscaled")
+    residual_turn = line_rad - np.polyval([slope, _], body_rad)
+    slope_se = math.sqrt(float(cov[0, 0]) * float(np.sum(residual_turn**2)) / max(a.shape[0] - 2, 1))
+    result.update(turn_slope=round(float(slope), 4), turn_slope_se=round(slope_se, 4))
+    if abs(slope - 1.0) > max(MAX_TURN_MISMATCH, 3.0 * slope_se):  # a narrow swing's slope is itself uncertain
         return {**result, "reason": f"the lines turn {slope:.3f} times as far as the body: not the body's rod"}
     along_px = max(ROD_SCALE_FLOOR, abs(slope - 1.0)) * arm_px  # the scale the slope leaves in doubt, if more
     covariance += (along_px**2 - (ROD_SCALE_FLOOR * arm_px) ** 2) * np.outer(along, along)

@@ -5,18 +5,20 @@ over the arc's sagitta s = R (1 − cos(φ/2)): a clock's 4° swing at R = 615 p
 known to ± 30–50 % (:func:`pendulum.angles.geometry.track_bias_covariance`). A rod, or a thread, points at the
 pivot in every frame: the lines it draws at the swing's angles meet there (:mod:`pendulum.angles.rod`).
 
-Per frame (:func:`rod_lines`, a spread of the clip's first :data:`SPAN_FRAMES` from its first usable one, whose body
-is ``ok``): a strip of the picture along the line from the body towards a first pivot (the path's circle),
-:data:`STRIP_HALF_PX` to either side, from :data:`START_RADII` body radii out to the frame's border (or nine tenths
-of the way to that pivot); its profile across, averaged over :data:`CHUNK_PX` along it; in each chunk the rod's
-place is the centroid of its lobe above half the lobe's peak, where that peak stands :data:`MIN_PEAK_SIGMAS` times
-the profile's own scatter above it (the rod brighter than what is around it, or darker: each sign's lines kept where
-it draws enough, and the rig geometry takes the one whose lines turn with the body); a straight line through those
-places, chunks off it (the body, an edge crossing the strip) left out. A frame draws a line where :data:`MIN_CHUNKS`
-chunks or more and :data:`MIN_KEPT_SHARE` of those measured lie on it within :data:`MAX_LINE_RMS_PX` RMS. No
-background is taken away: a rod that swings a few pixels near its pivot is part of any background learnt from the
-frames, and taking it away there turned the lines less than the rod (a helper's clocks: the pivot 72 px off along
-the arm against 1.5 px without).
+Per frame (:func:`rod_lines`, in the tracker's own samples or :data:`ROD_FRAMES` spread over the :data:`SPAN_FRAMES`
+from the first usable frame, :func:`_rod_frames`, whose body is ``ok``): a strip of the picture along the line from
+the body towards a first pivot (the path's circle's centre, else its mirror through the path's middle: a bias larger
+than a flat arc's sagitta puts the centre on the wrong side), :data:`STRIP_HALF_PX` to either side, from
+:data:`START_RADII` body radii out to the frame's border (or nine tenths of the way to that pivot); its profile
+across, averaged over :data:`CHUNK_PX` along it; in each chunk the rod's place is the centroid of its lobe above
+half the lobe's peak, where that peak stands :data:`MIN_PEAK_SIGMAS` times the profile's own scatter above it (the
+rod brighter than what is around it, or darker: each sign's lines kept where it draws enough, and the rig geometry
+takes the one whose lines turn with the body); a straight line through those places, chunks off it (the body, an
+edge crossing the strip) left out. A frame draws a line where :data:`MIN_CHUNKS` chunks or more and
+:data:`MIN_KEPT_SHARE` of those measured lie on it within :data:`MAX_LINE_RMS_PX` RMS. No background is taken away:
+a rod that swings a few pixels near its pivot is part of any background learnt from the frames, and taking it away
+there turned the lines less than the rod (a helper's clocks: the pivot 72 px off along the arm against 1.5 px
+without).
 """
 
 from __future__ import annotations
@@ -27,13 +29,12 @@ import cv2
 import numpy as np
 import pandas as pd
 
-from pendulum.camera.video import VideoError
+from pendulum.camera.video import VideoError, iter_luma
 from pendulum.tracking.arcs import fit_circle
-from pendulum.tracking.samples import held_spread, spread_frames
+from pendulum.tracking.samples import held_spread
 
-ROD_FRAMES = 40  # frames spread (40 to 79 of them) over the clip's first SPAN_FRAMES from its first usable one (or
-# those the marker search or the body tracker decoded already, over its first 1,800 or all)
-SPAN_FRAMES = 600  # 10 s at 60 fps: many swings of a pendulum whose arc bends little (a clock's: 1–2 s)
+ROD_FRAMES = 40  # frames: the marker search's or the body tracker's samples (40 to 79), else one in SPAN_FRAMES / 40
+SPAN_FRAMES = 600  # ... from the first usable frame: 10 s at 60 fps, many swings of a clock's pendulum (1–2 s)
 STRIP_HALF_PX = 24.0  # the strip's reach to either side of the line towards the first pivot
 CHUNK_PX = 12  # the strip's rows averaged into one profile across it
 START_RADII = 2.0  # the strip starts this many body radii from the body's centre (at least MIN_START_PX)
@@ -158,29 +159,53 @@ def rod_lines(video, track: pd.DataFrame) -> dict:
     if not (np.isfinite(seen).all() and math.isfinite(cx) and math.isfinite(cy)):
         return {**result, "reason": "no circle through the track to look towards"}
     try:
-        frames = (
-            held_spread(video, ROD_FRAMES) or spread_frames(video, ROD_FRAMES, int(ok.frame.iloc[0]) + SPAN_FRAMES)[0]
-        )
+        frames = _rod_frames(video, set(ok.frame), int(ok.frame.iloc[0]))
     except VideoError as error:
         return {**result, "reason": str(error)}
     start = max(START_RADII * _body_radius_px(track), MIN_START_PX)
     by_frame = dict(zip(ok.frame, map(tuple, seen), strict=True))
-    tried = [(i, image, by_frame[i]) for i, image in frames if i in by_frame]
+    tried = [(i, np.asarray(image, np.float32), by_frame[i]) for i, image in frames if i in by_frame]
     result["frames_tried"] = len(tried)
-    rows, counts = [], {}
-    for sign, polarity in ((1.0, "bright"), (-1.0, "dark")):
-        drawn = []
-        for i, image, body in tried:
-            line = _strip_line(np.asarray(image, np.float32), body, (cx, cy), start, sign)
-            if line is not None:
-                (nx, ny), (fx, fy), rms, _ = line
-                dx, dy = shift[i]
-                drawn.append([int(i), sign, nx + dx, ny + dy, fx + dx, fy + dy, body[0] + dx, body[1] + dy, rms])
-        counts[polarity] = len(drawn)
-        if len(drawn) >= MIN_LINES:  # each kept: a light rod's dark shadow may draw more (pendulum.angles.rod)
-            rows += [[r[0], int(r[1]), *(round(float(v), 3) for v in r[2:])] for r in drawn]
-    result["polarities"] = counts
-    if not rows:
-        most = max(counts.values(), default=0)
-        return {**result, "reason": f"a rod's line in {most} of {len(tried)} frames (fewer than {MIN_LINES})"}
-    return {**result, "lines": rows}
+    centre = np.array([cx, cy])
+    # towards the circle's centre, else its mirror through the path's middle: a bias larger than a flat arc's
+    # sagitta puts the centre on the wrong side (a 4° arc on 500 px bends 0.3 px)
+    tally = {}  # the first direction's lines per sign, said where neither direction draws enough
+    for towards in (centre, 2 * seen.mean(axis=0) - centre):
+        rows, counts = [], {}
+        for sign, polarity in ((1.0, "bright"), (-1.0, "dark")):
+            drawn = []
+            for i, image, body in tried:
+                line = _strip_line(image, body, towards, start, sign)
+                if line is not None:
+                    (nx, ny), (fx, fy), rms, _ = line
+                    dx, dy = shift[i]
+                    drawn.append([int(i), sign, nx + dx, ny + dy, fx + dx, fy + dy, body[0] + dx, body[1] + dy, rms])
+            counts[polarity] = len(drawn)
+            if len(drawn) >= MIN_LINES:  # each kept: a light rod's dark shadow may draw more (pendulum.angles.rod)
+                rows += [[r[0], int(r[1]), *(round(float(v), 3) for v in r[2:])] for r in drawn]
+        if rows:
+            return {**result, "lines": rows, "polarities": counts}
+        tally = tally or counts
+    most = max(tally.values(), default=0)
+    return {
+        **result,
+        "polarities": tally,
+        "reason": f"a rod's line in {most} of {len(tried)} frames (fewer than {MIN_LINES})",
+    }
+
+
+def _rod_frames(video, usable: set, first: int) -> list:
+    """The frames to look for the rod in: the tracker's own samples (:func:`held_spread`) where half of
+    :data:`ROD_FRAMES` or more are usable, else :data:`ROD_FRAMES` spread over the :data:`SPAN_FRAMES` from the first
+    usable one (to the last: a short clip) (a release late in the clip, after the samples)."""
+    held = held_spread(video, ROD_FRAMES)
+    if held and sum(i in usable for i, _ in held) >= ROD_FRAMES // 2:
+        return held
+    last = min(first + SPAN_FRAMES, max(usable) + 1)
+    stride, kept = max((last - first) // ROD_FRAMES, 1), []
+    for index, _t, image in iter_luma(video):
+        if index >= last:
+            break
+        if index >= first and (index - first) % stride == 0 and index in usable:
+            kept.append((index, image.copy()))
+    return kept
