@@ -183,18 +183,18 @@ def _lines_through(pivot, arm_px: float, angles_deg) -> list[list[float]]:
 
 def test_the_rods_pivot_joins_the_arcs_by_their_inverse_covariances():
     """By hand: exact lines through (100, −30) on a 500 px arm: the rod's pivot there, its covariance the floors
-    (0.5 % of the arm along it, 0.1 px every way): diag(0.01, 6.26). An arc's pivot at (100, 0) with covariance
-    diag(0.01, 400), a pixel every way added (diag(1.01, 401)), is 30 / √407.26 = 1.49 σ away: joined at
-    y = (0/401 − 30/6.26) / (1/401 + 1/6.26) = −29.539 px; at (100, 40), 3.47 σ (χ² 12.03, under 13.82):
-    y = −28.924; at (100, 60), 4.46 σ: not used, and said."""
+    (0.5 % of the arm along it, a pixel every way): diag(1, 7.25). An arc's pivot at (100, 0) with covariance
+    diag(0.01, 400), a pixel every way added (diag(1.01, 401)), is 30 / √408.25 = 1.48 σ away: joined at
+    y = (0/401 − 30/7.25) / (1/401 + 1/7.25) = −29.467 px; at (100, 40), 3.46 σ (χ² 12.00, under 13.82):
+    y = −28.757; at (100, 60), 4.45 σ: not used, and said."""
     from pendulum.angles.rod import join_rod, rod_pivot
 
     lines = _lines_through(np.array([100.0, -30.0]), 500.0, np.linspace(-3, 3, 20))
     rod = rod_pivot(lines)
     assert np.allclose(rod["pivot_px"], [100.0, -30.0], atol=1e-9)
-    assert np.allclose(rod["pivot_covariance_px2"], [[0.01, 0.0], [0.0, 6.26]], atol=1e-9)
+    assert np.allclose(rod["pivot_covariance_px2"], [[1.0, 0.0], [0.0, 7.25]], atol=1e-9)
     assert rod["turn_slope"] == pytest.approx(1.0, abs=1e-6)
-    for arc_y, used, joined_y in ((0.0, True, -29.5389), (40.0, True, -28.9240), (60.0, False, 60.0)):
+    for arc_y, used, joined_y in ((0.0, True, -29.4674), (40.0, True, -28.7566), (60.0, False, 60.0)):
         geometry = {
             "pivot_px": [100.0, arc_y],
             "pivot_covariance_px2": [[0.01, 0.0], [0.0, 400.0]],
@@ -205,7 +205,7 @@ def test_the_rods_pivot_joins_the_arcs_by_their_inverse_covariances():
         assert join_rod(geometry, [[1.0, *line] for line in lines]) is used
         assert geometry["pivot_px"][1] == pytest.approx(joined_y, abs=1e-3)
         assert geometry["rod"]["used"] is used
-        assert geometry["rod"]["sigmas_from_arc"] == pytest.approx(abs(arc_y + 30.0) / math.sqrt(407.26), abs=0.01)
+        assert geometry["rod"]["sigmas_from_arc"] == pytest.approx(abs(arc_y + 30.0) / math.sqrt(408.25), abs=0.01)
         assert bool(geometry["warnings"]) is not used
     # a camera upside down (the body above the pivot in the picture): the lines' turn measured about the arm's
     # middle, not across ±180° (where two clusters of angles made any lines' slope 1, 2026-12-07's review)

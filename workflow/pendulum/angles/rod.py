@@ -21,12 +21,15 @@ import math
 import numpy as np
 
 ROD_SCALE_FLOOR = 0.005  # of the arm: the rod's pivot along the arm at best to this (1σ)
-ROD_FLOOR_PX = 0.1  # ... and to this in every direction (lines drawn exactly through one point)
+# ... and to this in every direction, as the arc's (ARC_FLOOR_PX): two pivots each known across its own arm to a
+# tenth of a pixel, their arms 1.7° apart, were joined 27 px along the arm from both (a helper's render)
+ROD_FLOOR_PX = 1.0
 # The lines' turn against the body's about where they meet: a slope of 1 ± this. A slope s off 1 puts that point
 # (1 − s) of the arm off the body's pivot along it, the angles' scale as far off: a light rod's dark shadow, cast
 # downwards, 0.960 and 0.969 in a helper's renders (its lines meet 20 px along a 640 px arm from the pivot); their
 # rods 0.9992–1.0007, another helper's clocks' 0.9975–1.0053
-MAX_TURN_MISMATCH = 0.01  # or three of the slope's standard errors where more (a swing of ±1°: 0.007 each)
+MAX_TURN_MISMATCH = 0.01  # or three of the slope's standard errors where more (a swing of ±1°: 0.007 each), up to
+MAX_TURN_MISMATCH_NOISY = 0.02  # this (a light rod's shadow whose lines scatter: 0.960 ± 0.016)
 MAX_MEET_RMS_PX = 1.0  # the lines' RMS distance from where they meet: one straight rod's (a helper's clocks: 0.04–0.3)
 MIN_TURN_DEG = 0.5  # the body's angles about the rod's pivot spread over this at least (their SD)
 # A line of the other sign alongside the rod's (its shadow on a wall close behind): the rod's place is pulled by it,
@@ -88,9 +91,9 @@ def rod_pivot(lines) -> dict:
     residual_turn = line_rad - np.polyval([slope, _], body_rad)
     slope_se = math.sqrt(float(cov[0, 0]) * float(np.sum(residual_turn**2)) / max(a.shape[0] - 2, 1))
     result.update(turn_slope=round(float(slope), 4), turn_slope_se=round(slope_se, 4))
-    if abs(slope - 1.0) > max(MAX_TURN_MISMATCH, 3.0 * slope_se):  # a narrow swing's slope is itself uncertain
+    if abs(slope - 1.0) > min(max(MAX_TURN_MISMATCH, 3.0 * slope_se), MAX_TURN_MISMATCH_NOISY):
         return {**result, "reason": f"the lines turn {slope:.3f} times as far as the body: not the body's rod"}
-    along_px = max(ROD_SCALE_FLOOR, abs(slope - 1.0)) * arm_px  # the scale the slope leaves in doubt, if more
+    along_px = max(ROD_SCALE_FLOOR, abs(slope - 1.0), slope_se) * arm_px  # the scale the slope leaves in doubt
     covariance += (along_px**2 - (ROD_SCALE_FLOOR * arm_px) ** 2) * np.outer(along, along)
     result["pivot_covariance_px2"] = covariance.tolist()
     return result
