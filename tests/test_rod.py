@@ -256,3 +256,31 @@ def test_a_rig_of_a_narrow_swing_takes_its_pivot_from_the_rod_and_says_no_scale_
     assert abs(joined["pivot_px"][1] - pivot[1]) <= 5.0 and abs(joined["pivot_px"][0] - pivot[0]) <= 0.5
     assert joined["angle_scale_stderr_pct"] < 1.0 and not joined["warnings"]
     assert "rod" in joined["pivot_source"] and joined["arc_pivot_px"] == alone["pivot_px"]
+
+
+def test_a_trial_measured_about_its_own_pivot_takes_its_own_rods_lines():
+    """Two clocks filmed side by side under one rig (given `start_px` alone, each trial on the default rig) share no
+    pivot: each trial is measured about its own, and its own rod's lines (its tracks JSON's, through map_lines) join
+    its own arc's there too (2026-12-07's review: the arc's alone, ± 30–50 %)."""
+    from pendulum.angles.geometry import trial_geometry
+    from pendulum.camera.view import map_lines
+
+    pivot = np.array([330.0, -190.0])
+    k = np.arange(600)
+    theta = np.radians(3.0) * np.sin(2 * np.pi * k / 42.0)
+    radius = 500.0 + 0.3 * (theta / np.radians(3.0)) ** 2
+    track = pd.DataFrame(
+        {"frame": k, "x_px": pivot[0] + radius * np.sin(theta), "y_px": pivot[1] + radius * np.cos(theta), "flag": "ok"}
+    )
+    rows = [
+        [int(f), -1, *line, 0.05]
+        for f, line in zip(k[::15], _lines_through(pivot, 500.0, np.degrees(theta[::15])), strict=True)
+    ]
+    lines = map_lines(rows, None)
+    assert np.allclose(lines, [[-1.0, *row[2:8]] for row in rows])
+    rig = {"shared": False, "pivot_px": [0.0, 0.0], "vertical_deg": 0.0, "circle": None}
+    used, own = trial_geometry(track, rig, name="clock", rod_lines=lines)
+    assert own is not None and used["rod"]["used"], used.get("rod")
+    assert np.allclose(used["pivot_px"], pivot, atol=3.0) and used["angle_scale_stderr_pct"] < 1.0
+    alone, _ = trial_geometry(track, rig, name="clock")
+    assert alone["angle_scale_stderr_pct"] > 2.0 and "rod" not in alone

@@ -16,7 +16,14 @@ from pendulum.angles.record import (
     vertical_turned_with_the_picture,
 )
 from pendulum.angles.swings import missing_period
-from pendulum.camera.view import ImageToPlane, calibration_warnings, map_point, map_track, uncalibrated_size_change
+from pendulum.camera.view import (
+    ImageToPlane,
+    calibration_warnings,
+    map_lines,
+    map_point,
+    map_track,
+    uncalibrated_size_change,
+)
 from pendulum.io import script_logger, write_csv, write_json
 from pendulum.status import empty_table, require_ok, run_stage
 
@@ -64,11 +71,15 @@ def work():
             geometry = require_ok(read_json(sm.input.geometry), "geometry")
             warnings += [f"rig geometry: {w}" for w in geometry.get("warnings", [])]
             if pivot is None:
-                used, own = trial_geometry(track, geometry, vertical, trial)
+                lines = (track_summary.get("rod") or {}).get("lines")  # its own rod's, for a pivot of its own
+                used, own = trial_geometry(
+                    track, geometry, vertical, trial, map_lines(lines, calibration) if lines else None
+                )
                 pivot, pivot_cov, vertical = used["pivot_px"], used["pivot_covariance_px2"], used["vertical_deg"]
-                if not own and (geometry.get("rod") or {}).get("used"):  # the rig's pivot, joined with its rod's
-                    rod = geometry["rod"]
-                    notes.append(f"pivot: {geometry['pivot_source']} (results/geometry)")
+                joined = used if own else geometry  # the pivot used: the trial's own, or the rig's
+                if (joined.get("rod") or {}).get("used"):  # joined with where a rod's lines meet
+                    rod = joined["rod"]
+                    notes.append(f"pivot: {joined['pivot_source']}" + ("" if own else " (results/geometry)"))
                 for warning in [own, *used["warnings"]] if own else []:
                     log.warning("trial %s: %s", trial, warning)
                     notes.append(warning)

@@ -16,6 +16,7 @@ from pendulum.angles.geometry import (
 from pendulum.camera.view import (
     ImageToPlane,
     frames_unlike_calibration,
+    map_lines,
     map_point,
     map_track,
     path_tilt,
@@ -59,14 +60,6 @@ def tilt_warning(tracks: dict, lens_change: float | None = None) -> tuple[dict |
         "against the camera, which compresses the angles (not corrected); film a checkerboard held in the swing "
         "plane (cameras: plane_video) or face the plane squarely"
     )
-
-
-def map_lines(lines: list, calibration) -> list:
-    """A tracks summary's rod lines (rows ``[frame, sign, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]``)
-    as rows ``[sign, x_near, y_near, x_far, y_far, body_x, body_y]``, their points mapped like the marker centres."""
-    a = np.asarray(lines, float)
-    points = [map_track(pd.DataFrame({"x_px": a[:, k], "y_px": a[:, k + 1]}), calibration) for k in (2, 4, 6)]
-    return np.column_stack([a[:, 1], *(c for p in points for c in (p.x_px, p.y_px))]).tolist()
 
 
 def work():

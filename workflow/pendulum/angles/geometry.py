@@ -353,11 +353,13 @@ def off_rig_circle(track: pd.DataFrame, geometry: dict, name: str | None = None)
     return None
 
 
-def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None, name=None) -> tuple[dict, str | None]:
+def trial_geometry(
+    track: pd.DataFrame, geometry: dict, vertical_deg=None, name=None, rod_lines=None
+) -> tuple[dict, str | None]:
     """The pivot and vertical one trial's angles use: its rig's pooled ones (``geometry``), or, where its path is
     off the rig's circle (:func:`off_rig_circle`), its own (:func:`estimate_rig_geometry` of this track alone;
-    ``vertical_deg`` given is kept; ``name``: the trial's, for its reason). Returns ``{pivot_px,
-    pivot_covariance_px2, vertical_deg, warnings}`` and why its own was used (None when the rig's)."""
+    ``vertical_deg`` given is kept; ``name``: the trial's, for its reason; ``rod_lines``: its own rod's). Returns
+    ``{pivot_px, pivot_covariance_px2, vertical_deg, warnings}`` and why its own was used (None when the rig's)."""
     problem = off_rig_circle(track, geometry, name)
     if problem is None:
         vertical = vertical_deg if vertical_deg is not None else geometry["vertical_deg"]
@@ -367,7 +369,7 @@ def trial_geometry(track: pd.DataFrame, geometry: dict, vertical_deg=None, name=
             "vertical_deg": vertical,
             "warnings": [],
         }, None
-    own = estimate_rig_geometry({"trial": track}, vertical_deg=vertical_deg)
+    own = estimate_rig_geometry({"trial": track}, vertical_deg=vertical_deg, rod_lines={"trial": rod_lines or []})
     what = "pivot" if vertical_deg is not None else "pivot and vertical"
     return own, f"{problem}: its {what} estimated from its own track instead"
 
@@ -527,7 +529,7 @@ def estimate_rig_geometry(tracks: dict[str, pd.DataFrame], pivot_px=None, vertic
         result.update(pivot_uncertainty(result["pivot_covariance_px2"], circle["radius_px"], vertical_deg))
         lines = [line for name in sorted(tracks) for line in (rod_lines or {}).get(name, [])]  # the pooled trials'
         if lines and result.get("shared") is False:
-            result["rod"] = {"used": False, "reason": "the trials share no pivot: each is measured about its own arc's"}
+            result["rod"] = {"used": False, "reason": "the trials share no pivot: each is measured about its own"}
         elif lines and join_rod(result, lines):
             if result["vertical_source"] != "given":  # about the joined pivot
                 result["vertical_deg"] = vertical_deg = _swing_vertical_deg(tracks, result["pivot_px"])[0]

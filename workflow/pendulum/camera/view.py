@@ -147,6 +147,17 @@ def map_track(track, document: dict | None):
     return out
 
 
+def map_lines(lines, document: dict | None) -> list:
+    """A tracks summary's rod lines (rows ``[frame, sign, x_near, y_near, x_far, y_far, body_x, body_y, rms_px]``,
+    :func:`pendulum.tracking.rod.rod_lines`) as rows ``[sign, x_near, y_near, x_far, y_far, body_x, body_y]``, their
+    points mapped like the marker centres (unchanged without a document)."""
+    a = np.asarray(lines, float).reshape(-1, 9)
+    columns = [a[:, 1]]
+    for k in (2, 4, 6):
+        columns += list(ImageToPlane(document)(a[:, k], a[:, k + 1]) if document else (a[:, k], a[:, k + 1]))
+    return np.column_stack(columns).tolist()
+
+
 def map_point(point, document: dict | None):
     """One image point (e.g. a pivot_px given in image pixels) mapped like the marker centres."""
     if point is None or not document:
