@@ -65,7 +65,7 @@ def rod_pivot(lines) -> dict:
     arm_px = float(np.median(np.hypot(arm[:, 0], arm[:, 1])))
     along = np.median(arm, axis=0)
     along /= np.hypot(*along)
-    covariance += (ROD_SCALE_FLOOR * arm_px) ** 2 * np.outer(along, along) + ROD_FLOOR_PX**2 * np.eye(2)
+    covariance += ROD_FLOOR_PX**2 * np.eye(2)
     middle = math.atan2(along[0], along[1])  # angles about the arm's middle direction (a camera upside down: ±π)
     body_rad = (np.arctan2(arm[:, 0], arm[:, 1]) - middle + math.pi) % (2 * math.pi) - math.pi
     line_rad = np.arctan2(-d[:, 0], -d[:, 1]) - middle  # the line from its far end (the pivot's side) to the body
@@ -93,9 +93,8 @@ def rod_pivot(lines) -> dict:
     result.update(turn_slope=round(float(slope), 4), turn_slope_se=round(slope_se, 4))
     if abs(slope - 1.0) > min(max(MAX_TURN_MISMATCH, 3.0 * slope_se), MAX_TURN_MISMATCH_NOISY):
         return {**result, "reason": f"the lines turn {slope:.3f} times as far as the body: not the body's rod"}
-    along_px = max(ROD_SCALE_FLOOR, abs(slope - 1.0), slope_se) * arm_px  # the scale the slope leaves in doubt
-    covariance += (along_px**2 - (ROD_SCALE_FLOOR * arm_px) ** 2) * np.outer(along, along)
-    result["pivot_covariance_px2"] = covariance.tolist()
+    along_px = max(ROD_SCALE_FLOOR, abs(slope - 1.0), slope_se) * arm_px  # the floor, or the scale the slope doubts
+    result["pivot_covariance_px2"] = (covariance + along_px**2 * np.outer(along, along)).tolist()
     return result
 
 

@@ -152,10 +152,9 @@ def map_lines(lines, document: dict | None) -> list:
     :func:`pendulum.tracking.rod.rod_lines`) as rows ``[sign, x_near, y_near, x_far, y_far, body_x, body_y]``, their
     points mapped like the marker centres (unchanged without a document)."""
     a = np.asarray(lines, float).reshape(-1, 9)
-    columns = [a[:, 1]]
-    for k in (2, 4, 6):
-        columns += list(ImageToPlane(document)(a[:, k], a[:, k + 1]) if document else (a[:, k], a[:, k + 1]))
-    return np.column_stack(columns).tolist()
+    points = a[:, 2:8].reshape(-1, 2)  # each row's three points
+    x, y = ImageToPlane(document)(points[:, 0], points[:, 1]) if document else points.T
+    return np.column_stack([a[:, 1], np.column_stack([x, y]).reshape(-1, 6)]).tolist()
 
 
 def map_point(point, document: dict | None):
